@@ -1,0 +1,1 @@
+//! symcorr-correspond: filled by its issue.

@@ -1,0 +1,1 @@
+//! symcorr-kinect: filled by its issue.

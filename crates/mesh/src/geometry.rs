@@ -1,0 +1,210 @@
+//! Per-element geometry and connectivity of a [`TriMesh`].
+
+use crate::TriMesh;
+
+/// `a - b`.
+#[inline]
+pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// Cross product `a × b`.
+#[inline]
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Dot product.
+#[inline]
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Euclidean norm.
+#[inline]
+pub fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+impl TriMesh {
+    /// Area of every triangle.
+    pub fn triangle_areas(&self) -> Vec<f64> {
+        (0..self.num_triangles())
+            .map(|t| {
+                let [a, b, c] = self.corners(t);
+                0.5 * norm(cross(sub(b, a), sub(c, a)))
+            })
+            .collect()
+    }
+
+    /// Total surface area.
+    pub fn total_area(&self) -> f64 {
+        self.triangle_areas().iter().sum()
+    }
+
+    /// Unit normal of every triangle (zero vector for a zero-area triangle).
+    pub fn triangle_normals(&self) -> Vec<[f64; 3]> {
+        (0..self.num_triangles())
+            .map(|t| {
+                let [a, b, c] = self.corners(t);
+                let n = cross(sub(b, a), sub(c, a));
+                let l = norm(n);
+                if l > 0.0 {
+                    [n[0] / l, n[1] / l, n[2] / l]
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect()
+    }
+
+    /// Area-weighted unit vertex normals (zero vector for an isolated vertex).
+    pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
+        let mut acc = vec![[0.0; 3]; self.num_vertices()];
+        for t in 0..self.num_triangles() {
+            let [a, b, c] = self.corners(t);
+            let n = cross(sub(b, a), sub(c, a));
+            for &v in &self.triangles[t] {
+                let s = &mut acc[v as usize];
+                s[0] += n[0];
+                s[1] += n[1];
+                s[2] += n[2];
+            }
+        }
+        for n in &mut acc {
+            let l = norm(*n);
+            if l > 0.0 {
+                *n = [n[0] / l, n[1] / l, n[2] / l];
+            }
+        }
+        acc
+    }
+
+    /// Axis-aligned bounding box `(min, max)`.
+    pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Unique undirected edges `(i, j)` with `i < j`, sorted.
+    pub fn edges(&self) -> Vec<[u32; 2]> {
+        let mut e: Vec<[u32; 2]> = self
+            .triangles
+            .iter()
+            .flat_map(|t| {
+                [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
+                    .map(|(a, b)| if a < b { [a, b] } else { [b, a] })
+            })
+            .collect();
+        e.sort_unstable();
+        e.dedup();
+        e
+    }
+
+    /// For every vertex, its neighbouring vertices (sorted, unique).
+    pub fn vertex_neighbors(&self) -> Vec<Vec<u32>> {
+        let mut adj = vec![Vec::new(); self.num_vertices()];
+        for [a, b] in self.edges() {
+            adj[a as usize].push(b);
+            adj[b as usize].push(a);
+        }
+        for a in &mut adj {
+            a.sort_unstable();
+        }
+        adj
+    }
+
+    /// For every vertex, the triangles that contain it (ascending).
+    pub fn vertex_triangles(&self) -> Vec<Vec<u32>> {
+        let mut vt = vec![Vec::new(); self.num_vertices()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for &v in tri {
+                vt[v as usize].push(t as u32);
+            }
+        }
+        vt
+    }
+
+    /// Connected components over triangles: `(component id per vertex, number of components)`.
+    /// Isolated vertices (in no triangle) each form their own component.
+    pub fn connected_components(&self) -> (Vec<u32>, usize) {
+        let n = self.num_vertices();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(p: &mut [u32], mut x: u32) -> u32 {
+            while p[x as usize] != x {
+                p[x as usize] = p[p[x as usize] as usize];
+                x = p[x as usize];
+            }
+            x
+        }
+        for t in &self.triangles {
+            for k in 1..3 {
+                let (a, b) = (find(&mut parent, t[0]), find(&mut parent, t[k]));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+        let mut id = vec![u32::MAX; n];
+        let mut comp = vec![0u32; n];
+        let mut count = 0u32;
+        for v in 0..n {
+            let r = find(&mut parent, v as u32) as usize;
+            if id[r] == u32::MAX {
+                id[r] = count;
+                count += 1;
+            }
+            comp[v] = id[r];
+        }
+        (comp, count as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra() -> TriMesh {
+        TriMesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn tetra_area_edges_components() {
+        let m = tetra();
+        let expected = 1.5 + 3f64.sqrt() / 2.0;
+        assert!((m.total_area() - expected).abs() < 1e-12);
+        assert_eq!(m.edges().len(), 6);
+        assert_eq!(m.connected_components().1, 1);
+        assert!(m.vertex_neighbors().iter().all(|n| n.len() == 3));
+    }
+
+    #[test]
+    fn outward_normals_on_tetra() {
+        let m = tetra();
+        let c = [0.25, 0.25, 0.25];
+        for (t, n) in m.triangle_normals().iter().enumerate() {
+            let p = m.corners(t)[0];
+            assert!(dot(*n, sub(p, c)) > 0.0, "triangle {t} faces inward");
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! symcorr-spectral: filled by its issue.
