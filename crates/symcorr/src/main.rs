@@ -1,1 +1,36 @@
-fn main() {}
+//! The `symcorr` command. Each subcommand lives in its own module under `cli/`; this file only
+//! parses arguments and maps errors to exit codes (DESIGN.md: 0 success, 1 user error with one
+//! line on stderr, 2 usage error — clap exits with 2 itself).
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod cli;
+
+/// Skeleton-aware human shape correspondence.
+#[derive(Parser)]
+#[command(name = "symcorr", version, about, long_about = None)]
+struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Laplace–Beltrami spectrum of a mesh: counts, repair report, eigenvalues, timings.
+    Spectrum(cli::spectrum::SpectrumArgs),
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    let result = match args.command {
+        Command::Spectrum(a) => cli::spectrum::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("symcorr: {e}");
+            ExitCode::from(1)
+        }
+    }
+}

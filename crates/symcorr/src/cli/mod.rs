@@ -1,0 +1,15 @@
+//! One module per subcommand. Each exposes `XArgs` (clap `Args`) and `run(XArgs) -> Result<(), CliError>`.
+
+pub mod spectrum;
+
+/// A user error: printed as one line on stderr, exit status 1.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct CliError(pub String);
+
+impl CliError {
+    /// Wraps any error with a context prefix, e.g. the file it concerns.
+    pub fn with(context: impl std::fmt::Display, e: impl std::fmt::Display) -> Self {
+        CliError(format!("{context}: {e}"))
+    }
+}
