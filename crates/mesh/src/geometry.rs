@@ -159,13 +159,13 @@ impl TriMesh {
         let mut id = vec![u32::MAX; n];
         let mut comp = vec![0u32; n];
         let mut count = 0u32;
-        for v in 0..n {
+        for (v, c) in comp.iter_mut().enumerate() {
             let r = find(&mut parent, v as u32) as usize;
             if id[r] == u32::MAX {
                 id[r] = count;
                 count += 1;
             }
-            comp[v] = id[r];
+            *c = id[r];
         }
         (comp, count as usize)
     }

@@ -15,6 +15,7 @@
 
 mod error;
 pub mod geometry;
+pub mod io;
 
 pub use error::MeshError;
 

@@ -1,0 +1,283 @@
+//! Reading and writing mesh files: OFF, OBJ, PLY (ascii and binary), glTF/GLB.
+//!
+//! Vertex `i` of the file is vertex `i` of the returned [`TriMesh`] in every format (for glTF:
+//! the vertices of the triangle primitives, concatenated in mesh / primitive / node order).
+//! Polygons are fan-triangulated `(v0, v_k, v_k+1)`. The format is chosen by the file
+//! extension (case-insensitive) unless given explicitly. Writers are atomic: they write a
+//! temporary file in the target's directory and rename it over the target, so a failed write
+//! never leaves a half-written file.
+
+use std::path::{Path, PathBuf};
+
+use crate::{MeshError, TriMesh};
+
+mod off;
+mod text;
+
+/// A mesh file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Format {
+    /// Object File Format (`.off`), incl. `COFF` with per-vertex colours.
+    Off,
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+    /// Stanford PLY (`.ply`), ascii or binary (little/big endian) when reading.
+    Ply,
+    /// glTF 2.0 JSON (`.gltf`) with embedded (base64) or external buffers.
+    Gltf,
+    /// Binary glTF 2.0 (`.glb`).
+    Glb,
+}
+
+impl Format {
+    /// The format named by a path's extension (case-insensitive), if any.
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "off" => Some(Format::Off),
+            "obj" => Some(Format::Obj),
+            "ply" => Some(Format::Ply),
+            "gltf" => Some(Format::Gltf),
+            "glb" => Some(Format::Glb),
+            _ => None,
+        }
+    }
+
+    fn from_path_or_err(path: &Path) -> Result<Format, MeshError> {
+        Format::from_path(path).ok_or_else(|| MeshError::UnknownFormat {
+            file: path.display().to_string(),
+            extension: path
+                .extension()
+                .map(|e| e.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        })
+    }
+}
+
+/// How PLY files are encoded when written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PlyEncoding {
+    /// `binary_little_endian 1.0` (the default: compact and exact).
+    #[default]
+    BinaryLittleEndian,
+    /// `ascii 1.0` (f64 written in shortest round-trip form, so still exact).
+    Ascii,
+}
+
+/// A mesh read from a file, with its per-vertex colours if the file had them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedMesh {
+    /// The triangle mesh (vertex order as in the file).
+    pub mesh: TriMesh,
+    /// Per-vertex RGB colours (`COFF`, PLY `red/green/blue`, glTF `COLOR_0`), one per vertex.
+    pub colors: Option<Vec<[u8; 3]>>,
+}
+
+/// Where the bytes being parsed came from: a name for error messages and, for glTF, the
+/// directory against which external buffer URIs resolve.
+pub(crate) struct Source {
+    pub name: String,
+    #[allow(dead_code)] // read by the glTF reader (external buffers); transient until it lands
+    pub dir: Option<PathBuf>,
+}
+
+impl Source {
+    pub(crate) fn parse_err(&self, line: usize, message: impl Into<String>) -> MeshError {
+        MeshError::Parse {
+            file: self.name.clone(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn malformed(
+        &self,
+        element: impl Into<String>,
+        message: impl Into<String>,
+    ) -> MeshError {
+        MeshError::Malformed {
+            file: self.name.clone(),
+            element: element.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Builds the final mesh, attaching the file name to whole-mesh errors.
+    pub(crate) fn finish(
+        &self,
+        positions: Vec<[f64; 3]>,
+        triangles: Vec<[u32; 3]>,
+        colors: Option<Vec<[u8; 3]>>,
+    ) -> Result<LoadedMesh, MeshError> {
+        if let Some(c) = &colors {
+            if c.len() != positions.len() {
+                return Err(MeshError::InFile {
+                    file: self.name.clone(),
+                    source: Box::new(MeshError::ColorCount {
+                        colors: c.len(),
+                        vertices: positions.len(),
+                    }),
+                });
+            }
+        }
+        let mesh = TriMesh::new(positions, triangles).map_err(|e| MeshError::InFile {
+            file: self.name.clone(),
+            source: Box::new(e),
+        })?;
+        Ok(LoadedMesh { mesh, colors })
+    }
+}
+
+/// Reads a mesh file, choosing the format by extension (`.off`, `.obj`, `.ply`, `.gltf`, `.glb`).
+///
+/// ```
+/// use symcorr_mesh::{io, TriMesh};
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("tri.off");
+/// let mesh = TriMesh::new(
+///     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+///     vec![[0, 1, 2]],
+/// ).unwrap();
+/// io::write(&path, &mesh, None).unwrap();
+/// let loaded = io::read(&path).unwrap();
+/// assert_eq!(loaded.mesh, mesh);
+/// assert!(loaded.colors.is_none());
+/// ```
+pub fn read(path: impl AsRef<Path>) -> Result<LoadedMesh, MeshError> {
+    let path = path.as_ref();
+    read_with_format(path, Format::from_path_or_err(path)?)
+}
+
+/// Reads a mesh file in the given format, whatever its extension.
+pub fn read_with_format(path: impl AsRef<Path>, format: Format) -> Result<LoadedMesh, MeshError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
+        file: path.display().to_string(),
+        source,
+    })?;
+    let src = Source {
+        name: path.display().to_string(),
+        dir: Some(
+            path.parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_else(|| PathBuf::from(".")),
+        ),
+    };
+    parse(&bytes, format, &src)
+}
+
+/// Parses a mesh from memory. Errors name the file `<memory>`; a `.gltf` with external
+/// (non-`data:`) buffer URIs cannot be resolved and is an error.
+pub fn read_from_bytes(bytes: &[u8], format: Format) -> Result<LoadedMesh, MeshError> {
+    let src = Source {
+        name: "<memory>".to_string(),
+        dir: None,
+    };
+    parse(bytes, format, &src)
+}
+
+fn parse(bytes: &[u8], format: Format, src: &Source) -> Result<LoadedMesh, MeshError> {
+    match format {
+        Format::Off => off::read(bytes, src),
+        Format::Obj | Format::Ply | Format::Gltf | Format::Glb => {
+            Err(src.malformed("file", format!("{format:?} reading is not implemented yet")))
+        }
+    }
+}
+
+/// Options for [`write_with`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WriteOptions {
+    /// The format; `None` chooses by extension.
+    pub format: Option<Format>,
+    /// PLY encoding (ignored for other formats).
+    pub ply_encoding: PlyEncoding,
+}
+
+/// Writes a mesh (and optional per-vertex colours) atomically, choosing the format by extension.
+/// PLY is written binary little-endian; use [`write_with`] for ascii.
+///
+/// ```
+/// use symcorr_mesh::{io, TriMesh};
+/// let dir = tempfile::tempdir().unwrap();
+/// let mesh = TriMesh::new(
+///     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+///     vec![[0, 1, 2]],
+/// ).unwrap();
+/// let colors = [[255, 0, 0], [0, 255, 0], [0, 0, 255]];
+/// io::write(dir.path().join("tri.off"), &mesh, Some(&colors)).unwrap();
+/// let back = io::read(dir.path().join("tri.off")).unwrap();
+/// assert_eq!(back.colors.as_deref(), Some(&colors[..]));
+/// ```
+pub fn write(
+    path: impl AsRef<Path>,
+    mesh: &TriMesh,
+    colors: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
+    write_with(path, mesh, colors, &WriteOptions::default())
+}
+
+/// Writes a mesh atomically with explicit [`WriteOptions`].
+pub fn write_with(
+    path: impl AsRef<Path>,
+    mesh: &TriMesh,
+    colors: Option<&[[u8; 3]]>,
+    options: &WriteOptions,
+) -> Result<(), MeshError> {
+    let path = path.as_ref();
+    let format = match options.format {
+        Some(f) => f,
+        None => Format::from_path_or_err(path)?,
+    };
+    let bytes = write_to_bytes(mesh, colors, format, options.ply_encoding).map_err(|e| {
+        MeshError::InFile {
+            file: path.display().to_string(),
+            source: Box::new(e),
+        }
+    })?;
+    write_atomic(path, &bytes)
+}
+
+/// Encodes a mesh in memory in the given format.
+pub fn write_to_bytes(
+    mesh: &TriMesh,
+    colors: Option<&[[u8; 3]]>,
+    format: Format,
+    ply_encoding: PlyEncoding,
+) -> Result<Vec<u8>, MeshError> {
+    if let Some(c) = colors {
+        if c.len() != mesh.num_vertices() {
+            return Err(MeshError::ColorCount {
+                colors: c.len(),
+                vertices: mesh.num_vertices(),
+            });
+        }
+    }
+    let _ = ply_encoding;
+    match format {
+        Format::Off => Ok(off::write(mesh, colors)),
+        Format::Obj | Format::Ply | Format::Gltf | Format::Glb => Err(MeshError::Malformed {
+            file: "<output>".to_string(),
+            element: "file".to_string(),
+            message: format!("{format:?} writing is not implemented yet"),
+        }),
+    }
+}
+
+/// Writes `bytes` to a temporary file next to `path`, syncs it, then renames it over `path`.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
+    use std::io::Write;
+    let io_err = |source| MeshError::Io {
+        file: path.display().to_string(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(io_err)?;
+    tmp.write_all(bytes).map_err(io_err)?;
+    tmp.as_file().sync_all().map_err(io_err)?;
+    tmp.persist(path).map_err(|e| io_err(e.error))?;
+    Ok(())
+}
