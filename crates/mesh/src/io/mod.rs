@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use crate::{MeshError, TriMesh};
 
 mod off;
+mod ply;
 mod text;
 
 /// A mesh file format.
@@ -179,7 +180,8 @@ pub fn read_from_bytes(bytes: &[u8], format: Format) -> Result<LoadedMesh, MeshE
 fn parse(bytes: &[u8], format: Format, src: &Source) -> Result<LoadedMesh, MeshError> {
     match format {
         Format::Off => off::read(bytes, src),
-        Format::Obj | Format::Ply | Format::Gltf | Format::Glb => {
+        Format::Ply => ply::read(bytes, src),
+        Format::Obj | Format::Gltf | Format::Glb => {
             Err(src.malformed("file", format!("{format:?} reading is not implemented yet")))
         }
     }
@@ -253,10 +255,10 @@ pub fn write_to_bytes(
             });
         }
     }
-    let _ = ply_encoding;
     match format {
         Format::Off => Ok(off::write(mesh, colors)),
-        Format::Obj | Format::Ply | Format::Gltf | Format::Glb => Err(MeshError::Malformed {
+        Format::Ply => Ok(ply::write(mesh, colors, ply_encoding)),
+        Format::Obj | Format::Gltf | Format::Glb => Err(MeshError::Malformed {
             file: "<output>".to_string(),
             element: "file".to_string(),
             message: format!("{format:?} writing is not implemented yet"),
