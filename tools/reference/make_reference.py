@@ -10,7 +10,7 @@ Run from the repository root (or anywhere):
   tools/.venv/bin/python tools/reference/make_reference.py
 
 Nothing is random; re-running reproduces the mesh bit for bit and the numbers up to the
-last few ulps of the iterative solvers (ARPACK start vector is fixed with v0).
+last few ulps of the iterative solvers (ARPACK start vector is fixed with a seeded v0).
 """
 
 import json
@@ -148,7 +148,9 @@ def eigs(L, m, k):
     """k smallest of L phi = lambda M phi, shift-invert about SIGMA; sorted ascending; M-normalised."""
     n = L.shape[0]
     M = sp.diags(m).tocsc()
-    v0 = np.ones(n) / math.sqrt(n)  # fixed ARPACK start vector => deterministic
+    # Fixed ARPACK start vector => deterministic. Not the constant vector: that is an exact eigenvector
+    # (an invariant Krylov space), which makes ARPACK restart from its own internal random vector.
+    v0 = np.random.default_rng(12345).standard_normal(n)
     lam, phi = spla.eigsh(L, k=k, M=M, sigma=SIGMA, which="LM", v0=v0)
     order = np.argsort(lam)
     lam, phi = lam[order], phi[:, order]
@@ -348,7 +350,7 @@ def main():
         "stiffness_row_sums_max_abs": "max_i |sum_j L_ij| (should be ~1e-15: L 1 = 0).",
         "stiffness_symmetry_max_abs": "max |L - L^T| (0 by construction).",
         "eigenvalues": f"The {K_REF} smallest eigenvalues of the generalised problem L phi = lambda M phi, ascending, "
-                       f"from scipy.sparse.linalg.eigsh(L, k={K_REF}, M=M, sigma={SIGMA}, which='LM', v0=ones/sqrt(n)) "
+                       f"from scipy.sparse.linalg.eigsh(L, k={K_REF}, M=M, sigma={SIGMA}, which='LM', v0=numpy.random.default_rng(12345).standard_normal(n)) "
                        "(ARPACK shift-invert, default tol=0 i.e. machine precision). eigenvalues[0] ~ 0 (constant mode). "
                        "For a unit sphere these would be l(l+1); this mesh is deformed so all are simple.",
         "eigenvalue_min_relative_gap": "min over i>=1 of (lambda_{i+1} - lambda_i)/lambda_{i+1} among the 31 smallest: all 30 "
@@ -390,7 +392,7 @@ def main():
         "body_triangles": "Number of triangles of body.off (after fan triangulation; it is already triangles).",
         "body_total_area": "Total area of body.off in dm^2.",
         "body_eigenvalues": f"The {K_BODY} smallest eigenvalues of L phi = lambda M phi on fixtures/body/body.off, same operators "
-                            f"and same eigsh call (k={K_BODY}, sigma={SIGMA}, v0 = ones/sqrt(n)), ascending, in 1/dm^2.",
+                            f"and same eigsh call (k={K_BODY}, sigma={SIGMA}, same v0 recipe), ascending, in 1/dm^2.",
         "body_eigen_residual_max": "max_i ||L phi_i - lambda_i M phi_i|| / ||M phi_i|| for the body pairs.",
         "generator": "Versions and platform that produced the file.",
     }

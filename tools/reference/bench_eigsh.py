@@ -1,0 +1,210 @@
+#!/usr/bin/env python3
+"""Side-by-side timing: scipy eigsh vs `symcorr spectrum` on the same mesh, in one run.
+
+  tools/.venv/bin/python tools/reference/bench_eigsh.py [--mesh fixtures/body/body.off] [--k 100]
+      [--repeats 3] [--symcorr PATH] [--build] [--blas-threads 2]
+
+scipy: builds the cotan stiffness L and lumped mass M with numpy (tools/reference/meshutil.py),
+then times scipy.sparse.linalg.eigsh(L, k, M=M, sigma=-1e-8) exactly as issue 2 writes it (ARPACK's
+default start vector; best of --repeats; the SuperLU factorisation of L - sigma M happens inside
+eigsh and is included). The Laplacian build and a stand-alone splu factorisation are reported too.
+
+symcorr: runs `symcorr spectrum MESH --k K --json` --repeats times (default binary
+target/release/symcorr; --build runs `cargo build --release -p symcorr` first) and takes the best
+factorization + lanczos from its `timings_s`. scipy and symcorr runs are interleaved so that load
+from other processes hits both alike. If the binary is missing or fails, that column is skipped with
+a message. Eigenvalues are compared: max relative difference over i >= 1 (lambda_0 ~ 0 shown apart).
+
+BLAS threads default to 2 (the machine's cores). On a machine busy with other work OpenBLAS's two
+spinning threads can make eigsh 5-10x slower; the script prints the load average and warns.
+"""
+
+import os
+import sys
+
+# Match the 2-core machine; must happen before numpy/scipy load their BLAS, hence the early argv peek.
+# (--blas-threads 1 is worth trying on a busy machine: OpenBLAS's 2 spinning threads then collapse.)
+_threads = "2"
+for _i, _a in enumerate(sys.argv):
+    if _a == "--blas-threads" and _i + 1 < len(sys.argv):
+        _threads = sys.argv[_i + 1]
+    elif _a.startswith("--blas-threads="):
+        _threads = _a.split("=", 1)[1]
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = _threads
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import subprocess  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+import scipy.sparse as sp  # noqa: E402
+import scipy.sparse.linalg as spla  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import meshutil as mu  # noqa: E402
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+SIGMA = -1e-8
+
+
+def machine_info():
+    cpu = "unknown"
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {
+        "nproc": os.cpu_count(),
+        "cpu": cpu,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "threads": {v: os.environ.get(v) for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")},
+    }
+
+
+def best_of(fn, repeats):
+    best, out = float("inf"), None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def scipy_setup(mesh, repeats):
+    t0 = time.perf_counter()
+    V, F = mu.read_off(mesh)
+    t_load = time.perf_counter() - t0
+    t_lap, (L, m) = best_of(lambda: (mu.cotan_laplacian(V, F), mu.lumped_mass(V, F)), repeats)
+    M = sp.diags(m).tocsc()
+    t_splu, _ = best_of(lambda: spla.splu((L - SIGMA * M).tocsc()), repeats)
+    return {"n": len(V), "load": t_load, "laplacian": t_lap, "splu": t_splu, "L": L, "M": M}
+
+
+def scipy_eigsh_once(s, k):
+    """Exactly the call of issue 2: eigsh(L, k, M=M, sigma=-1e-8) (default which='LM', ARPACK's own start vector)."""
+    t0 = time.perf_counter()
+    lam, _ = spla.eigsh(s["L"], k, M=s["M"], sigma=SIGMA)
+    return time.perf_counter() - t0, np.sort(lam)
+
+
+def find_symcorr(path, build):
+    if build:
+        print("building: cargo build --release -p symcorr ...", flush=True)
+        r = subprocess.run(["cargo", "build", "--release", "-p", "symcorr"], cwd=ROOT)
+        if r.returncode != 0:
+            print(f"symcorr: cargo build failed (exit {r.returncode}); skipping the symcorr column")
+            return None
+    exe = path or os.path.join(ROOT, "target", "release", "symcorr")
+    if not (os.path.isfile(exe) and os.access(exe, os.X_OK)):
+        print(f"symcorr: no binary at {exe} (build it with `cargo build --release -p symcorr` or pass --build); "
+              "skipping the symcorr column")
+        return None
+    return exe
+
+
+def symcorr_once(exe, mesh, k):
+    """One `symcorr spectrum MESH --k K --json` run -> dict, or an error string."""
+    t0 = time.perf_counter()
+    r = subprocess.run([exe, "spectrum", mesh, "--k", str(k), "--json"], capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if r.returncode != 0:
+        return f"exited {r.returncode}: {r.stderr.strip()[:500]}"
+    try:
+        out = json.loads(r.stdout)
+        lam = np.sort(np.asarray(out["eigenvalues"], dtype=np.float64))
+        ts = {key: float(v) for key, v in out.get("timings_s", {}).items() if isinstance(v, (int, float))}
+    except (ValueError, KeyError, TypeError) as exc:
+        return f"unreadable JSON ({exc}); first 300 chars: {r.stdout[:300]!r}"
+    if "factorization" in ts and "lanczos" in ts:
+        solve, how = ts["factorization"] + ts["lanczos"], "factorization + lanczos"
+    else:
+        solve = wall - ts.get("load", 0.0) - ts.get("laplacian", 0.0)
+        how = f"process wall - load - laplacian (timings_s has only {sorted(ts)})"
+    return {"wall": wall, "solve": solve, "how": how, "timings": ts, "eigenvalues": lam}
+
+
+def loadavg():
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mesh", default=os.path.join(ROOT, "fixtures", "body", "body.off"))
+    ap.add_argument("--k", type=int, default=100)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--symcorr", default=None, help="path to the symcorr binary (default target/release/symcorr)")
+    ap.add_argument("--build", action="store_true", help="run `cargo build --release -p symcorr` first")
+    ap.add_argument("--blas-threads", default="2", help="OMP/OPENBLAS/MKL_NUM_THREADS for scipy (default 2 = nproc)")
+    args = ap.parse_args()
+    if not args.mesh.lower().endswith(".off"):
+        ap.error("this script reads OFF meshes only")
+
+    info = machine_info()
+    print(f"machine: {info['nproc']} cores, {info['cpu']}; python {info['python']}, numpy {info['numpy']}, "
+          f"scipy {info['scipy']}; threads {info['threads']}")
+    rel = os.path.relpath(args.mesh, ROOT)
+    exe = find_symcorr(args.symcorr, args.build)
+    load_before = loadavg()
+
+    s = scipy_setup(args.mesh, args.repeats)
+    # Interleave scipy and symcorr runs so a busy machine (other builds) hurts both alike.
+    scipy_times, scipy_lam, y_runs, y_error = [], None, [], None
+    for _ in range(args.repeats):
+        t, scipy_lam = scipy_eigsh_once(s, args.k)
+        scipy_times.append(t)
+        if exe and y_error is None:
+            r = symcorr_once(exe, args.mesh, args.k)
+            if isinstance(r, str):
+                y_error = r
+            else:
+                y_runs.append(r)
+    load_after = loadavg()
+    if y_error:
+        print(f"symcorr: {y_error}; skipping the symcorr column")
+    y = min(y_runs, key=lambda r: r["solve"]) if (y_runs and not y_error) else None
+    t_eig = min(scipy_times)
+
+    print(f"mesh: {rel}, {s['n']} vertices, k = {args.k}, best of {args.repeats}; "
+          f"1-min load average {load_before:.2f} before, {load_after:.2f} after"
+          + ("  (WARNING: machine busy, timings unreliable)" if max(load_before, load_after) > 2.5 else ""))
+    print(f"scipy: Laplacian+mass build (numpy) {s['laplacian']:.4f} s; splu(L - sigma M) alone {s['splu']:.4f} s; "
+          f"eigsh(L, {args.k}, M=M, sigma={SIGMA}) per run " + ", ".join(f"{t:.3f}" for t in scipy_times)
+          + " s (factorisation included)")
+
+    print()
+    print(f"{'':28s} {'scipy':>10s} {'symcorr':>10s} {'scipy/symcorr':>14s}")
+    y_lap = y["timings"].get("laplacian") if y else None
+    print(f"{'Laplacian + mass (s)':28s} {s['laplacian']:10.4f} "
+          + (f"{y_lap:10.4f} {s['laplacian'] / y_lap:14.2f}" if y_lap else f"{'-':>10s} {'-':>14s}"))
+    print(f"{'eigenpairs, k=' + str(args.k) + ' (s)':28s} {t_eig:10.4f} "
+          + (f"{y['solve']:10.4f} {t_eig / y['solve']:14.2f}" if y else f"{'-':>10s} {'-':>14s}"))
+    if y:
+        a, b = scipy_lam, y["eigenvalues"]
+        if len(a) != len(b):
+            print(f"eigenvalue count differs: scipy {len(a)}, symcorr {len(b)}")
+        else:
+            rel_diff = np.abs(a[1:] - b[1:]) / np.abs(a[1:])
+            print(f"{'max rel. eigenvalue diff':28s} {rel_diff.max():10.2e}  (i >= 1, worst at i = "
+                  f"{int(np.argmax(rel_diff)) + 1}; |lambda_0| scipy {abs(a[0]):.1e}, symcorr {abs(b[0]):.1e})")
+        print(f"symcorr eigenpair seconds per run ({y['how']}): " + ", ".join(f"{r['solve']:.4f}" for r in y_runs))
+        print("symcorr timings_s of the best run: " + ", ".join(f"{key} {v:.4f}" for key, v in y["timings"].items())
+              + f"; process wall {y['wall']:.4f} s")
+    else:
+        print("(symcorr column skipped)")
+
+
+if __name__ == "__main__":
+    main()
