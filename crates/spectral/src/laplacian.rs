@@ -58,6 +58,9 @@ pub struct Laplacian {
     pub mass: Vec<f64>,
     /// Index into `stiffness`'s value array of each diagonal entry.
     diag_index: Vec<usize>,
+    /// Connected component of each vertex (over triangles) and their number.
+    component: Vec<u32>,
+    num_components: usize,
 }
 
 /// Cotangent of the angle between `u` and `v`, clamped (see [`COT_CLAMP`]).
@@ -136,10 +139,13 @@ impl Laplacian {
             return Err(SpectralError::ZeroMass { vertex });
         }
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let (component, num_components) = mesh.connected_components();
         Ok(Laplacian {
             stiffness: SparseColMat::new(symbolic, val),
             mass,
             diag_index,
+            component,
+            num_components,
         })
     }
 
@@ -151,6 +157,17 @@ impl Laplacian {
     /// Always false (a Laplacian has at least one vertex); for clippy's `len` convention.
     pub fn is_empty(&self) -> bool {
         self.mass.is_empty()
+    }
+
+    /// Connected component of every vertex (`0..num_components`) and the number of components.
+    /// Each component contributes one zero eigenvalue (its constant function).
+    pub fn components(&self) -> (&[u32], usize) {
+        (&self.component, self.num_components)
+    }
+
+    /// Total area (sum of the lumped mass).
+    pub fn total_area(&self) -> f64 {
+        self.mass.iter().sum()
     }
 
     /// `L·x` for one vector.

@@ -10,8 +10,10 @@
 //!   degenerate triangles (doubled area < 1e-12·longest edge²) are ignored. A vertex left with
 //!   zero mass is an error ([`SpectralError::ZeroMass`]) — repair the mesh first.
 
+mod eigen;
 mod laplacian;
 
+pub use eigen::{eigenpairs, EigenOptions, Eigenpairs};
 pub use laplacian::{Laplacian, SystemFactor, COT_CLAMP, DEGENERATE_REL};
 
 use thiserror::Error;
