@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use crate::{MeshError, TriMesh};
 
+mod obj;
 mod off;
 mod ply;
 mod text;
@@ -181,7 +182,8 @@ fn parse(bytes: &[u8], format: Format, src: &Source) -> Result<LoadedMesh, MeshE
     match format {
         Format::Off => off::read(bytes, src),
         Format::Ply => ply::read(bytes, src),
-        Format::Obj | Format::Gltf | Format::Glb => {
+        Format::Obj => obj::read(bytes, src),
+        Format::Gltf | Format::Glb => {
             Err(src.malformed("file", format!("{format:?} reading is not implemented yet")))
         }
     }
@@ -258,7 +260,8 @@ pub fn write_to_bytes(
     match format {
         Format::Off => Ok(off::write(mesh, colors)),
         Format::Ply => Ok(ply::write(mesh, colors, ply_encoding)),
-        Format::Obj | Format::Gltf | Format::Glb => Err(MeshError::Malformed {
+        Format::Obj => Ok(obj::write(mesh, colors)),
+        Format::Gltf | Format::Glb => Err(MeshError::Malformed {
             file: "<output>".to_string(),
             element: "file".to_string(),
             message: format!("{format:?} writing is not implemented yet"),
