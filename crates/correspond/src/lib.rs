@@ -1,1 +1,232 @@
-//! symcorr-correspond: filled by its issue.
+//! The matching stages of the paper "Symmetry-Aware Human Shape Correspondence Using Skeleton"
+//! and the evaluation metrics (DESIGN.md, Algorithms 3–6 and Metrics).
+//!
+//! Each stage is a plain function on plain data, so that it can be tested alone and reused by
+//! refinements (DESIGN.md, Algorithm 7):
+//!
+//! 1. [`candidates`] (§3.1): the target vertices nearest in descriptor space (si-HKS).
+//! 2. [`skeleton_filter`] (§3.2): drop candidates on a different body segment.
+//! 3. [`base_profile`] + [`select`] (§3.3, eq. 7–8): keep the candidate whose normalised summed
+//!    geodesic distance to the base vertex set is closest to the template point's.
+//! 4. [`evaluate`], [`cumulative_curve`], [`table1_row`]: the paper's measurements.
+//!
+//! [`match_points`] runs 1–3 for a set of template points; [`farthest_point_sample`] picks the
+//! sparse mode's points. The spectral inputs (descriptors, base-set geodesics) and the segment
+//! labels are computed by symcorr-spectral and symcorr-attach; the `symcorr` crate wires them.
+//!
+//! ```
+//! use symcorr_attach::Segment::{ThighLeft, ThighRight};
+//! use symcorr_correspond::{match_points, Descriptors, MatchOptions, Side};
+//! // Two vertices per mesh with identical descriptors (a perfect left/right symmetry): only
+//! // the segments tell them apart.
+//! let d = Descriptors::new(2, 1, vec![1.0, 1.0]).unwrap();
+//! let labels = [ThighLeft, ThighRight];
+//! let profile = [0.3, 0.3];
+//! let side = Side { descriptors: &d, labels: &labels, profile: &profile };
+//! let out = match_points(&side, &side, &[0, 1], &MatchOptions::default()).unwrap();
+//! assert_eq!(out.matches[0].target, 0);
+//! assert_eq!(out.matches[1].target, 1);
+//! ```
+//!
+//! # Decisions the design leaves open
+//! * **Candidate rule.** Both rules of §3.1 are offered ([`CandidateOptions`]): the `N` nearest
+//!   and/or a threshold. The threshold is *relative* (`d ≤ t·d₁(p)`, `d₁` the nearest
+//!   descriptor distance) because si-HKS values have no natural scale. Default: the
+//!   [`DEFAULT_NEAREST`] nearest, no threshold — measured on the generated bodies (see the
+//!   `symcorr` crate docs and README for the sweep).
+//! * **Selection.** Eq. 8 uses `|D̂(c) − D̂(p)|` with `D̂(v) = mean_b g(v, b) / √area` (mean
+//!   over the base set, so sets of different sizes compare). Ties go to the nearer descriptor.
+//! * **Confidence** of a match: `1 / (1 + d/d̃ + g/g̃)` — descriptor distance and eq. 8 gap,
+//!   each over its median in the match set ([`assign_confidence`]).
+//! * **Fallback.** If the filter removes every candidate, the nearest target vertex of the same
+//!   segment by descriptor is used and counted ([`FilterStats::fallbacks`]); if the target has
+//!   no vertex of that segment at all, the point keeps its unfiltered candidates
+//!   ([`FilterStats::segment_missing`]).
+//! * **Sparse sample.** Euclidean farthest-point sampling ([`farthest_point_sample`]).
+//! * **Metric geodesics**: edge-path Dijkstra stopped when the ground-truth vertex is settled
+//!   (see [`metrics`](crate::evaluate)).
+
+mod candidates;
+mod filter;
+mod metrics;
+mod sample;
+mod selection;
+
+pub use candidates::{candidates, Candidate, CandidateOptions, Descriptors};
+pub use filter::{skeleton_filter, FilterStats};
+pub use metrics::{
+    cumulative_curve, evaluate, table1_row, within, EdgeGraph, Evaluation, FLIP_MIN_SEPARATION,
+};
+pub use sample::farthest_point_sample;
+pub use selection::{assign_confidence, base_profile, select, Match};
+
+use std::time::Instant;
+use symcorr_attach::Segment;
+
+/// Default number of nearest candidates per template point (§3.1), chosen by measurement.
+pub const DEFAULT_NEAREST: usize = 20;
+
+/// Errors of the matching stages.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CorrespondError {
+    /// An argument is inconsistent or out of range (the message says which).
+    #[error("invalid argument: {0}")]
+    InvalidArgument(String),
+}
+
+/// Everything the matching stages need about one mesh.
+#[derive(Debug, Clone, Copy)]
+pub struct Side<'a> {
+    /// Point descriptors (si-HKS), one row per vertex.
+    pub descriptors: &'a Descriptors,
+    /// Segment label per vertex (symcorr-attach).
+    pub labels: &'a [Segment],
+    /// Base-set profile `D̂` per vertex ([`base_profile`]).
+    pub profile: &'a [f64],
+}
+
+impl Side<'_> {
+    fn check(&self, name: &str) -> Result<(), CorrespondError> {
+        let n = self.descriptors.len();
+        if self.labels.len() != n || self.profile.len() != n {
+            return Err(CorrespondError::InvalidArgument(format!(
+                "{name}: {n} descriptors, {} labels, {} profile values",
+                self.labels.len(),
+                self.profile.len()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Options of [`match_points`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct MatchOptions {
+    /// The candidate rule (§3.1).
+    pub candidates: CandidateOptions,
+    /// Apply the skeleton filter (§3.2). `false` is the ablation: the paper's method without
+    /// its contribution.
+    pub skeleton_filter: bool,
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        MatchOptions {
+            candidates: CandidateOptions::default(),
+            skeleton_filter: true,
+        }
+    }
+}
+
+/// The result of [`match_points`].
+#[derive(Debug, Clone)]
+pub struct PointMatches {
+    /// One match per template point that had a candidate, in the order of the points.
+    pub matches: Vec<Match>,
+    /// What the skeleton filter did (all zero when it was off).
+    pub filter: FilterStats,
+    /// Mean number of candidates per point before the filter.
+    pub mean_candidates: f64,
+    /// Seconds per stage: `candidates`, `skeleton_filter`, `selection`.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+/// Stages 1–3 for the template points `points`: candidates, skeleton filter, selection.
+///
+/// Errors: [`CorrespondError::InvalidArgument`] if a side's tables disagree in length, the
+/// descriptors differ in length between sides, or a point is out of range.
+pub fn match_points(
+    template: &Side<'_>,
+    target: &Side<'_>,
+    points: &[u32],
+    options: &MatchOptions,
+) -> Result<PointMatches, CorrespondError> {
+    template.check("template")?;
+    target.check("target")?;
+    let mut timings = Vec::new();
+    let t = Instant::now();
+    let mut cands = candidates(
+        template.descriptors,
+        target.descriptors,
+        points,
+        &options.candidates,
+    )?;
+    timings.push(("candidates", t.elapsed().as_secs_f64()));
+    let mean_candidates =
+        cands.iter().map(Vec::len).sum::<usize>() as f64 / cands.len().max(1) as f64;
+    let t = Instant::now();
+    let filter = if options.skeleton_filter {
+        skeleton_filter(
+            &mut cands,
+            points,
+            template.labels,
+            target.labels,
+            template.descriptors,
+            target.descriptors,
+        )
+    } else {
+        FilterStats::default()
+    };
+    timings.push(("skeleton_filter", t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    let matches = select(&cands, points, template.profile, target.profile);
+    timings.push(("selection", t.elapsed().as_secs_f64()));
+    Ok(PointMatches {
+        matches,
+        filter,
+        mean_candidates,
+        timings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Segment::*;
+
+    #[test]
+    fn ablation_flips_symmetric_points_and_the_filter_fixes_them() {
+        // Target vertex 0 (left) and 1 (right) have identical descriptors and profiles; the
+        // template's left point is slightly nearer the right one in descriptor space.
+        let t = Descriptors::new(1, 1, vec![0.0]).unwrap();
+        let u = Descriptors::new(2, 1, vec![0.011, 0.01]).unwrap();
+        let tl = [ThighLeft];
+        let ul = [ThighLeft, ThighRight];
+        let tp = [0.5];
+        let up = [0.5, 0.5];
+        let ts = Side {
+            descriptors: &t,
+            labels: &tl,
+            profile: &tp,
+        };
+        let us = Side {
+            descriptors: &u,
+            labels: &ul,
+            profile: &up,
+        };
+        let off = MatchOptions {
+            skeleton_filter: false,
+            ..MatchOptions::default()
+        };
+        assert_eq!(
+            match_points(&ts, &us, &[0], &off).unwrap().matches[0].target,
+            1
+        );
+        let on = match_points(&ts, &us, &[0], &MatchOptions::default()).unwrap();
+        assert_eq!(on.matches[0].target, 0);
+        assert_eq!(on.filter.removed, 1);
+        assert_eq!(on.timings.len(), 3);
+    }
+
+    #[test]
+    fn mismatched_tables_are_errors() {
+        let d = Descriptors::new(2, 1, vec![0.0, 1.0]).unwrap();
+        let s = Side {
+            descriptors: &d,
+            labels: &[Torso],
+            profile: &[0.0, 0.0],
+        };
+        assert!(match_points(&s, &s, &[0], &MatchOptions::default()).is_err());
+    }
+}

@@ -1,0 +1,129 @@
+//! Skeleton filter (paper §3.2): a candidate on a different body segment than the template
+//! point is dropped — this is what keeps a left limb from matching a right one.
+
+use crate::{Candidate, Descriptors};
+use symcorr_attach::Segment;
+
+/// What the filter did, over all points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FilterStats {
+    /// Template points filtered.
+    pub points: usize,
+    /// Candidates kept (same segment).
+    pub kept: usize,
+    /// Candidates removed (different segment).
+    pub removed: usize,
+    /// Points where no candidate survived and the nearest target vertex *of the same segment*
+    /// by descriptor was used instead (the issue's fallback).
+    pub fallbacks: usize,
+    /// Points whose segment does not occur on the target at all (e.g. a partial scan); their
+    /// candidates are left unfiltered.
+    pub segment_missing: usize,
+}
+
+/// Applies the skeleton filter in place: `cands[i]` are the candidates of template point
+/// `points[i]`; afterwards every list holds only target vertices with the point's segment.
+///
+/// If no candidate survives, the list becomes the single target vertex of the same segment
+/// whose descriptor is nearest (counted in [`FilterStats::fallbacks`]). If the target has no
+/// vertex of that segment, the list is left as it was ([`FilterStats::segment_missing`]).
+///
+/// ```
+/// use symcorr_attach::Segment::{ThighLeft, ThighRight};
+/// use symcorr_correspond::{skeleton_filter, Candidate, Descriptors};
+/// let d = Descriptors::new(2, 1, vec![0.0, 0.1]).unwrap();
+/// let mut c = vec![vec![Candidate { vertex: 1, distance: 0.0 }, Candidate { vertex: 0, distance: 0.1 }]];
+/// let s = skeleton_filter(&mut c, &[0], &[ThighLeft, ThighRight], &[ThighLeft, ThighRight], &d, &d);
+/// assert_eq!(c[0][0].vertex, 0);
+/// assert_eq!(s.removed, 1);
+/// ```
+///
+/// Panics if `points`, `cands` and the label/descriptor tables disagree in length (a caller
+/// bug, not bad input: the pipeline builds them together).
+pub fn skeleton_filter(
+    cands: &mut [Vec<Candidate>],
+    points: &[u32],
+    template_labels: &[Segment],
+    target_labels: &[Segment],
+    template: &Descriptors,
+    target: &Descriptors,
+) -> FilterStats {
+    assert_eq!(cands.len(), points.len(), "one candidate list per point");
+    // Target vertices per segment, for the fallback search.
+    let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); 17];
+    for (v, s) in target_labels.iter().enumerate() {
+        by_segment[s.index()].push(v as u32);
+    }
+    let mut stats = FilterStats {
+        points: points.len(),
+        ..FilterStats::default()
+    };
+    for (list, &p) in cands.iter_mut().zip(points) {
+        let seg = template_labels[p as usize];
+        let before = list.len();
+        let pool = &by_segment[seg.index()];
+        if pool.is_empty() {
+            stats.segment_missing += 1;
+            stats.kept += before;
+            continue;
+        }
+        list.retain(|c| target_labels[c.vertex as usize] == seg);
+        stats.kept += list.len();
+        stats.removed += before - list.len();
+        if list.is_empty() {
+            stats.fallbacks += 1;
+            let best = pool
+                .iter()
+                .map(|&q| Candidate {
+                    vertex: q,
+                    distance: template.distance(p as usize, target, q as usize),
+                })
+                .min_by(|a, b| a.distance.total_cmp(&b.distance));
+            // Invariant: the pool is non-empty (checked above).
+            list.extend(best);
+        }
+    }
+    stats
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Segment::*;
+
+    #[test]
+    fn fallback_picks_nearest_of_the_same_segment() {
+        let t = Descriptors::new(1, 1, vec![0.0]).unwrap();
+        let u = Descriptors::new(4, 1, vec![0.1, 0.2, 0.9, 0.5]).unwrap();
+        let labels_u = [ShinRight, ShinRight, ShinLeft, ShinLeft];
+        let mut c = vec![vec![
+            Candidate {
+                vertex: 0,
+                distance: 0.1,
+            },
+            Candidate {
+                vertex: 1,
+                distance: 0.2,
+            },
+        ]];
+        let s = skeleton_filter(&mut c, &[0], &[ShinLeft], &labels_u, &t, &u);
+        assert_eq!(s.fallbacks, 1);
+        assert_eq!(s.removed, 2);
+        assert_eq!(c[0].len(), 1);
+        assert_eq!(c[0][0].vertex, 3);
+        assert!((c[0][0].distance - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn missing_segment_leaves_candidates() {
+        let t = Descriptors::new(1, 1, vec![0.0]).unwrap();
+        let u = Descriptors::new(2, 1, vec![0.1, 0.2]).unwrap();
+        let mut c = vec![vec![Candidate {
+            vertex: 1,
+            distance: 0.2,
+        }]];
+        let s = skeleton_filter(&mut c, &[0], &[Head], &[Torso, Torso], &t, &u);
+        assert_eq!(s.segment_missing, 1);
+        assert_eq!(c[0].len(), 1);
+    }
+}
