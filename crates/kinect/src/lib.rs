@@ -1,1 +1,66 @@
-//! symcorr-kinect: filled by its issue.
+//! Kinect ingestion for symcorr: joint dumps and logs → canonical [`Skeleton`]s, depth frames →
+//! scan meshes, and (feature `openni2`) OpenNI2 devices and `.oni` recordings.
+//!
+//! * [`joints`]: `symcorr.joints/1` JSON (read/write; skeletons `kinect_v1`, `nite`, `kinect_v2`),
+//!   Kinect SDK v1 text dumps, NTU RGB+D `.skeleton` files; format detected from the content.
+//! * [`mapping`]: the NiTE 15-joint and Kinect v2 25-joint tables and the interpolation rules.
+//! * [`camera`]: [`Intrinsics`] and the single projection/unprojection convention.
+//! * [`depth`]: [`DepthFrame`] and PNG-16 reading/writing.
+//!
+//! ## Decisions the design leaves open
+//!
+//! * Joint logs are always held in metres; `symcorr.joints/1` may say `"units": "mm"` and is
+//!   converted on reading. The writer always writes the canonical 20 joints (`kinect_v1`, `m`),
+//!   and an extra per-frame `"interpolated": [joint names]` list when an importer interpolated any.
+//! * A `kinect_v1` JSON frame must name all 20 joints (missing → error); `nite` and `kinect_v2`
+//!   frames may lack joints, which are interpolated ([`mapping`]).
+//! * Files without timestamps get `time_s = frame / 30`.
+//! * Writes are atomic: a temporary file next to the target, then a rename.
+//!
+//! [`Skeleton`]: symcorr_attach::Skeleton
+
+pub mod camera;
+pub mod depth;
+mod error;
+mod geom;
+pub mod joints;
+pub mod mapping;
+pub mod ntu;
+pub mod sdk_text;
+
+pub use camera::Intrinsics;
+pub use depth::{read_depth_png16, write_depth_png16, DepthFrame};
+pub use error::KinectError;
+pub use joints::{
+    read_joints, read_joints_with_format, write_joints_json, JointFormat, JointFrame, JointLog,
+};
+pub use mapping::SkeletonKind;
+
+use std::io::Write;
+use std::path::Path;
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename, so that
+/// a failure never leaves a half-written `path`.
+pub(crate) fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), KinectError> {
+    let file = path.display().to_string();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(KinectError::io(&file, e));
+    }
+    Ok(())
+}

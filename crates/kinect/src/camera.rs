@@ -1,0 +1,189 @@
+//! The depth camera model: pinhole intrinsics and THE projection between Kinect camera space and
+//! depth pixels. Every part of symcorr (scan meshing here, the virtual Kinect of the fixture
+//! generator) goes through [`Intrinsics::project`] / [`Intrinsics::unproject`], so there is one
+//! definition of the conventions.
+//!
+//! ## Conventions
+//!
+//! Kinect camera space (Microsoft Kinect SDK): right-handed, metres, origin at the depth sensor,
+//! **+x to the sensor's left**, **+y up**, **+z out of the sensor into the scene** (depth).
+//! A subject facing the sensor has their own right side at +x.
+//!
+//! Depth pixels `(u, v)`: `u` is the column (0 at the left edge of the image, growing rightwards),
+//! `v` the row (0 at the top, growing downwards); pixel centres are at integer `(u, v)`.
+//! The projection is the Kinect SDK v1's own (`NuiTransformSkeletonToDepthImage`):
+//!
+//! ```text
+//! u = cx + fx · x / z        (+x, the sensor's left, appears on the image's right: the image is
+//!                             mirrored, as SDK v1 delivers it; a subject facing the sensor sees
+//!                             their right hand on the image's right, as in a mirror)
+//! v = cy − fy · y / z        (+y up in space means v grows downward)
+//! ```
+//!
+//! and `unproject(u, v, z) = ((u − cx)·z/fx, (cy − v)·z/fy, z)`.
+//!
+//! symcorr never uses OpenNI's `CoordinateConverter` (whose world X grows with u as well, but
+//! whose y/z units are millimetres); depth frames from any source are unprojected with these
+//! intrinsics.
+
+use crate::error::KinectError;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The `format` tag of an intrinsics JSON file.
+pub const INTRINSICS_FORMAT: &str = "symcorr.intrinsics/1";
+
+/// Pinhole intrinsics of a depth camera, in pixels. JSON form:
+/// `{"format":"symcorr.intrinsics/1","width":640,"height":480,"fx":580.0,"fy":580.0,"cx":319.5,"cy":239.5}`.
+///
+/// ```
+/// use symcorr_kinect::Intrinsics;
+/// let k = Intrinsics::kinect_v1();
+/// let p = [0.3, -0.2, 2.0];
+/// let [u, v] = k.project(p);
+/// assert!(u > k.cx && v > k.cy); // +x → right of centre (mirrored image), −y → below centre
+/// let q = k.unproject(u, v, p[2]);
+/// assert!((q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "IntrinsicsJson", into = "IntrinsicsJson")]
+pub struct Intrinsics {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Focal length along u, pixels.
+    pub fx: f64,
+    /// Focal length along v, pixels.
+    pub fy: f64,
+    /// Principal point column, pixels.
+    pub cx: f64,
+    /// Principal point row, pixels.
+    pub cy: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IntrinsicsJson {
+    format: String,
+    width: u32,
+    height: u32,
+    fx: f64,
+    fy: f64,
+    cx: f64,
+    cy: f64,
+}
+
+impl TryFrom<IntrinsicsJson> for Intrinsics {
+    type Error = String;
+    fn try_from(j: IntrinsicsJson) -> Result<Self, String> {
+        if j.format != INTRINSICS_FORMAT {
+            return Err(format!(
+                "format is {:?}, expected {INTRINSICS_FORMAT:?}",
+                j.format
+            ));
+        }
+        let k = Intrinsics {
+            width: j.width,
+            height: j.height,
+            fx: j.fx,
+            fy: j.fy,
+            cx: j.cx,
+            cy: j.cy,
+        };
+        k.validate().map_err(|e| e.to_string())?;
+        Ok(k)
+    }
+}
+
+impl From<Intrinsics> for IntrinsicsJson {
+    fn from(k: Intrinsics) -> Self {
+        IntrinsicsJson {
+            format: INTRINSICS_FORMAT.to_string(),
+            width: k.width,
+            height: k.height,
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+        }
+    }
+}
+
+impl Intrinsics {
+    /// Nominal Kinect v1 (Xbox 360 / Kinect for Windows) depth camera at 640×480:
+    /// fx = fy = 571.26 px, cx = 320, cy = 240.
+    ///
+    /// Source: Kinect for Windows SDK v1.8 `NuiImageCamera.h`:
+    /// `NUI_CAMERA_DEPTH_NOMINAL_FOCAL_LENGTH_IN_PIXELS = 285.63` for 320×240 (so ×2 at
+    /// 640×480; it matches the nominal 58.5° horizontal field of view), and
+    /// `NuiTransformSkeletonToDepthImage` puts the optical axis at half the width and height.
+    pub fn kinect_v1() -> Intrinsics {
+        Intrinsics {
+            width: 640,
+            height: 480,
+            fx: 571.26,
+            fy: 571.26,
+            cx: 320.0,
+            cy: 240.0,
+        }
+    }
+
+    /// Checks sizes (> 0) and that focal lengths are finite and positive and the principal point
+    /// finite.
+    pub fn validate(&self) -> Result<(), KinectError> {
+        if self.width == 0 || self.height == 0 {
+            return Err(KinectError::Intrinsics(format!(
+                "image size {}x{} is empty",
+                self.width, self.height
+            )));
+        }
+        if !(self.fx.is_finite() && self.fx > 0.0 && self.fy.is_finite() && self.fy > 0.0) {
+            return Err(KinectError::Intrinsics(format!(
+                "focal lengths fx={} fy={} must be finite and positive",
+                self.fx, self.fy
+            )));
+        }
+        if !(self.cx.is_finite() && self.cy.is_finite()) {
+            return Err(KinectError::Intrinsics(format!(
+                "principal point ({}, {}) must be finite",
+                self.cx, self.cy
+            )));
+        }
+        Ok(())
+    }
+
+    /// Projects a camera-space point (metres) to pixel coordinates `[u, v]` (see the module docs).
+    /// Points with z ≤ 0 give non-finite or meaningless pixels; callers check `z > 0`.
+    pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
+        [
+            self.cx + self.fx * p[0] / p[2],
+            self.cy - self.fy * p[1] / p[2],
+        ]
+    }
+
+    /// The camera-space point (metres) seen at pixel `(u, v)` with depth `depth_m` (its z).
+    pub fn unproject(&self, u: f64, v: f64, depth_m: f64) -> [f64; 3] {
+        [
+            (u - self.cx) * depth_m / self.fx,
+            (self.cy - v) * depth_m / self.fy,
+            depth_m,
+        ]
+    }
+
+    /// Reads a `symcorr.intrinsics/1` JSON file.
+    pub fn read(path: impl AsRef<Path>) -> Result<Intrinsics, KinectError> {
+        let file = path.as_ref().display().to_string();
+        let text = std::fs::read_to_string(path.as_ref()).map_err(|e| KinectError::io(&file, e))?;
+        serde_json::from_str(&text).map_err(|e| KinectError::Json {
+            file,
+            message: e.to_string(),
+        })
+    }
+
+    /// Writes a `symcorr.intrinsics/1` JSON file atomically.
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<(), KinectError> {
+        let text = serde_json::to_string(self).unwrap_or_default();
+        crate::atomic_write(path.as_ref(), text.as_bytes())
+    }
+}

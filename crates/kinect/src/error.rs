@@ -1,0 +1,85 @@
+use thiserror::Error;
+
+/// Everything that can go wrong reading joint dumps, depth frames and recordings, or building a
+/// scan mesh.
+///
+/// File errors carry the file name (`<memory>` for in-memory input) and, for text formats, the
+/// 1-based line; for JSON the frame index (0-based, as in the file's `frames` array).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum KinectError {
+    /// The file could not be opened, read or written.
+    #[error("{file}: {source}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A text file (Kinect SDK text dump, NTU `.skeleton`) is malformed at a line (1-based).
+    #[error("{file}:{line}: {message}")]
+    Parse {
+        file: String,
+        line: usize,
+        message: String,
+    },
+    /// A JSON file is not valid JSON or does not have the expected shape.
+    #[error("{file}: {message}")]
+    Json { file: String, message: String },
+    /// A frame of a joint file is invalid (missing or non-finite joint, bad confidence, ...).
+    #[error("{file}: frame {frame}: {message}")]
+    Frame {
+        file: String,
+        frame: usize,
+        message: String,
+    },
+    /// A `symcorr.joints/1` file names a skeleton this crate does not know.
+    #[error(
+        "{file}: unknown skeleton {name:?}; expected \"kinect_v1\", \"nite\" or \"kinect_v2\""
+    )]
+    UnknownSkeleton { file: String, name: String },
+    /// The joint file format could not be recognised from the content.
+    #[error("{file}: unrecognised joint file format: {message}")]
+    UnknownFormat { file: String, message: String },
+    /// No usable frame: the file has no frames, or no frame has the requested/any body.
+    #[error("{file}: {message}")]
+    NoBody { file: String, message: String },
+    /// A PNG depth image is malformed or not 16-bit greyscale.
+    #[error("{file}: {message}")]
+    Png { file: String, message: String },
+    /// A depth frame does not match the size its intrinsics (or the call) expect.
+    #[error("depth frame is {width}x{height} with {values} values, expected {expected}")]
+    DepthSize {
+        width: u32,
+        height: u32,
+        values: usize,
+        expected: String,
+    },
+    /// Invalid camera intrinsics.
+    #[error("invalid intrinsics: {0}")]
+    Intrinsics(String),
+    /// A replay request that the log cannot satisfy (frame out of range, empty window, ...).
+    #[error("{0}")]
+    Replay(String),
+    /// Building the scan mesh failed (e.g. nothing left after background removal).
+    #[error("scan: {0}")]
+    Scan(String),
+    /// An error from the mesh crate.
+    #[error(transparent)]
+    Mesh(#[from] symcorr_mesh::MeshError),
+    /// An OpenNI2 call failed; `message` is OpenNI2's extended error text (`oniGetExtendedError`).
+    #[error("OpenNI2 {call} failed (status {status}): {message}")]
+    OpenNi {
+        call: String,
+        status: i32,
+        message: String,
+    },
+}
+
+impl KinectError {
+    pub(crate) fn io(file: &str, source: std::io::Error) -> Self {
+        KinectError::Io {
+            file: file.to_string(),
+            source,
+        }
+    }
+}

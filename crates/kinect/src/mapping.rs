@@ -1,0 +1,383 @@
+//! Mapping of other trackers' skeletons (NiTE 15 joints, Kinect v2 25 joints) onto the canonical
+//! Kinect v1 20-joint skeleton, and interpolation of joints a source lacks.
+//!
+//! ## NiTE (OpenNI/NiTE 2, 15 joints) → Kinect v1
+//!
+//! | NiTE | Kinect v1 | note |
+//! |---|---|---|
+//! | head | head | |
+//! | neck | shoulder_center | NiTE's neck sits where v1 puts the shoulder centre |
+//! | torso | spine | NiTE's torso centre; v1's spine joint is the closest |
+//! | shoulder_*, elbow_* | shoulder_*, elbow_* | |
+//! | hand_* | hand_* | NiTE has no wrist/hand split |
+//! | hip_*, knee_* | hip_*, knee_* | |
+//! | foot_* | ankle_* | NiTE's foot joint sits at the ankle |
+//! | — | hip_center | interpolated: midpoint of the hips |
+//! | — | wrist_* | interpolated: 80 % of the way elbow → hand |
+//! | — | foot_* | extrapolated: ankle + 0.3·shin length along the facing direction |
+//!
+//! ## Kinect v2 (25 joints) → Kinect v1
+//!
+//! | Kinect v2 | Kinect v1 |
+//! |---|---|
+//! | spine_base (0) | hip_center |
+//! | spine_mid (1) | spine |
+//! | spine_shoulder (20) | shoulder_center |
+//! | head (3) | head |
+//! | shoulder/elbow/wrist/hand/hip/knee/ankle/foot left/right (4–19) | same name, same index |
+//! | neck (2), hand_tip_* (21, 23), thumb_* (22, 24) | dropped (neck is used for shoulder_center only if spine_shoulder is missing) |
+//!
+//! ## Interpolation rules (any source)
+//!
+//! A canonical joint that is missing is estimated from its bone-chain neighbours, in this order
+//! of preference, and flagged in [`Skeleton::interpolated`](symcorr_attach::Skeleton) with
+//! confidence `0.5 × min(confidence of the joints used)`:
+//! hip_center = mid(hips); shoulder_center = mid(shoulders); spine = 30 % hip_center → shoulder_center;
+//! head = shoulder_center + 0.5·(shoulder_center − spine); wrist = 80 % elbow → hand;
+//! hand = wrist + 0.25·(wrist − elbow); elbow = mid(shoulder, wrist or hand); knee = mid(hip, ankle);
+//! ankle = knee + (knee − hip) (shin ≈ thigh); foot = ankle + 0.3·|knee − ankle| · facing, where
+//! facing = (left − right) × up from the hips (or shoulders) and up = shoulder_center − hip_center
+//! (DESIGN.md: left/right are the subject's sides; in Kinect camera space a subject facing the
+//! sensor faces −z).
+
+use crate::geom::{add, cross, lerp, norm, normalize, scale, sub};
+use symcorr_attach::{Joint, Skeleton};
+
+/// The skeleton a tracker reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SkeletonKind {
+    /// Kinect for Windows SDK v1: 20 joints (the canonical skeleton).
+    KinectV1,
+    /// OpenNI NiTE: 15 joints.
+    Nite,
+    /// Kinect for Windows SDK v2 / NTU RGB+D: 25 joints.
+    KinectV2,
+}
+
+impl SkeletonKind {
+    /// The name used in `symcorr.joints/1` (`"kinect_v1"`, `"nite"`, `"kinect_v2"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SkeletonKind::KinectV1 => "kinect_v1",
+            SkeletonKind::Nite => "nite",
+            SkeletonKind::KinectV2 => "kinect_v2",
+        }
+    }
+
+    /// Parses a `symcorr.joints/1` skeleton name.
+    pub fn from_name(name: &str) -> Option<SkeletonKind> {
+        match name {
+            "kinect_v1" => Some(SkeletonKind::KinectV1),
+            "nite" => Some(SkeletonKind::Nite),
+            "kinect_v2" => Some(SkeletonKind::KinectV2),
+            _ => None,
+        }
+    }
+
+    /// The joint names of this skeleton in its native order.
+    pub fn joint_names(self) -> &'static [&'static str] {
+        match self {
+            SkeletonKind::KinectV1 => &KINECT_V1_NAMES,
+            SkeletonKind::Nite => &NITE_NAMES,
+            SkeletonKind::KinectV2 => &KINECT_V2_NAMES,
+        }
+    }
+
+    /// The canonical joint a native joint (by index in [`SkeletonKind::joint_names`]) maps to,
+    /// or `None` if it is dropped.
+    pub fn canonical(self, native: usize) -> Option<Joint> {
+        match self {
+            SkeletonKind::KinectV1 => Joint::ALL.get(native).copied(),
+            SkeletonKind::Nite => NITE_TO_V1.get(native).copied(),
+            SkeletonKind::KinectV2 => KINECT_V2_TO_V1.get(native).copied().flatten(),
+        }
+    }
+}
+
+const KINECT_V1_NAMES: [&str; 20] = [
+    "hip_center",
+    "spine",
+    "shoulder_center",
+    "head",
+    "shoulder_left",
+    "elbow_left",
+    "wrist_left",
+    "hand_left",
+    "shoulder_right",
+    "elbow_right",
+    "wrist_right",
+    "hand_right",
+    "hip_left",
+    "knee_left",
+    "ankle_left",
+    "foot_left",
+    "hip_right",
+    "knee_right",
+    "ankle_right",
+    "foot_right",
+];
+
+/// NiTE's 15 joints in `nite::JointType` order.
+pub const NITE_NAMES: [&str; 15] = [
+    "head",
+    "neck",
+    "shoulder_left",
+    "shoulder_right",
+    "elbow_left",
+    "elbow_right",
+    "hand_left",
+    "hand_right",
+    "torso",
+    "hip_left",
+    "hip_right",
+    "knee_left",
+    "knee_right",
+    "foot_left",
+    "foot_right",
+];
+
+const NITE_TO_V1: [Joint; 15] = [
+    Joint::Head,
+    Joint::ShoulderCenter,
+    Joint::ShoulderLeft,
+    Joint::ShoulderRight,
+    Joint::ElbowLeft,
+    Joint::ElbowRight,
+    Joint::HandLeft,
+    Joint::HandRight,
+    Joint::Spine,
+    Joint::HipLeft,
+    Joint::HipRight,
+    Joint::KneeLeft,
+    Joint::KneeRight,
+    Joint::AnkleLeft,
+    Joint::AnkleRight,
+];
+
+/// Kinect v2's 25 joints in `JointType` order (also the NTU RGB+D order).
+pub const KINECT_V2_NAMES: [&str; 25] = [
+    "spine_base",
+    "spine_mid",
+    "neck",
+    "head",
+    "shoulder_left",
+    "elbow_left",
+    "wrist_left",
+    "hand_left",
+    "shoulder_right",
+    "elbow_right",
+    "wrist_right",
+    "hand_right",
+    "hip_left",
+    "knee_left",
+    "ankle_left",
+    "foot_left",
+    "hip_right",
+    "knee_right",
+    "ankle_right",
+    "foot_right",
+    "spine_shoulder",
+    "hand_tip_left",
+    "thumb_left",
+    "hand_tip_right",
+    "thumb_right",
+];
+
+const KINECT_V2_TO_V1: [Option<Joint>; 25] = {
+    use Joint as J;
+    [
+        Some(J::HipCenter),
+        Some(J::Spine),
+        None, // neck: fallback for shoulder_center only
+        Some(J::Head),
+        Some(J::ShoulderLeft),
+        Some(J::ElbowLeft),
+        Some(J::WristLeft),
+        Some(J::HandLeft),
+        Some(J::ShoulderRight),
+        Some(J::ElbowRight),
+        Some(J::WristRight),
+        Some(J::HandRight),
+        Some(J::HipLeft),
+        Some(J::KneeLeft),
+        Some(J::AnkleLeft),
+        Some(J::FootLeft),
+        Some(J::HipRight),
+        Some(J::KneeRight),
+        Some(J::AnkleRight),
+        Some(J::FootRight),
+        Some(J::ShoulderCenter),
+        None,
+        None,
+        None,
+        None,
+    ]
+};
+
+/// Index of Kinect v2's neck joint (used as a fallback for shoulder_center).
+pub(crate) const KINECT_V2_NECK: usize = 2;
+
+/// Normalises a joint name: accepts `left_shoulder` / `LeftShoulder`-style aliases for
+/// `shoulder_left` (NiTE and SDK spellings).
+pub(crate) fn normalise_name(name: &str) -> String {
+    // CamelCase → snake_case.
+    let mut snake = String::with_capacity(name.len() + 4);
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() {
+            if i > 0 && !snake.ends_with('_') {
+                snake.push('_');
+            }
+            snake.push(c.to_ascii_lowercase());
+        } else if c == '-' || c == ' ' {
+            snake.push('_');
+        } else {
+            snake.push(c);
+        }
+    }
+    for side in ["left", "right"] {
+        if let Some(rest) = snake.strip_prefix(&format!("{side}_")) {
+            return format!("{rest}_{side}");
+        }
+    }
+    snake
+}
+
+/// A partially known canonical skeleton: what an importer measured.
+#[derive(Debug, Clone)]
+pub(crate) struct Partial {
+    pub positions: [Option<[f64; 3]>; 20],
+    pub confidence: [f64; 20],
+}
+
+impl Partial {
+    pub fn new() -> Self {
+        Partial {
+            positions: [None; 20],
+            confidence: [0.0; 20],
+        }
+    }
+
+    pub fn set(&mut self, j: Joint, p: [f64; 3], c: f64) {
+        self.positions[j.index()] = Some(p);
+        self.confidence[j.index()] = c;
+    }
+
+    fn get(&self, j: Joint) -> Option<([f64; 3], f64)> {
+        self.positions[j.index()].map(|p| (p, self.confidence[j.index()]))
+    }
+
+    /// Completes the skeleton with the interpolation rules of the module docs. Returns the
+    /// first joint that cannot be estimated as the error.
+    pub fn complete(mut self) -> Result<Skeleton, Joint> {
+        let mut interpolated = [false; 20];
+        // Each pass fills what its neighbours allow; three passes settle every chain.
+        for _ in 0..4 {
+            let mut progress = false;
+            for j in Joint::ALL {
+                if self.positions[j.index()].is_some() {
+                    continue;
+                }
+                if let Some((p, c)) = self.estimate(j) {
+                    self.set(j, p, 0.5 * c);
+                    interpolated[j.index()] = true;
+                    progress = true;
+                }
+            }
+            if !progress {
+                break;
+            }
+        }
+        let mut positions = [[0.0; 3]; 20];
+        for j in Joint::ALL {
+            match self.positions[j.index()] {
+                Some(p) => positions[j.index()] = p,
+                None => return Err(j),
+            }
+        }
+        Ok(Skeleton {
+            positions,
+            confidence: self.confidence,
+            interpolated,
+        })
+    }
+
+    fn mid(&self, a: Joint, b: Joint) -> Option<([f64; 3], f64)> {
+        let (pa, ca) = self.get(a)?;
+        let (pb, cb) = self.get(b)?;
+        Some((lerp(pa, pb, 0.5), ca.min(cb)))
+    }
+
+    fn at(&self, a: Joint, b: Joint, t: f64) -> Option<([f64; 3], f64)> {
+        let (pa, ca) = self.get(a)?;
+        let (pb, cb) = self.get(b)?;
+        Some((lerp(pa, pb, t), ca.min(cb)))
+    }
+
+    /// Facing direction of the subject: (left − right) × up.
+    fn facing(&self) -> Option<[f64; 3]> {
+        let (hc, _) = self.get(Joint::HipCenter)?;
+        let (sc, _) = self.get(Joint::ShoulderCenter)?;
+        let up = sub(sc, hc);
+        let lr = self
+            .get(Joint::HipLeft)
+            .zip(self.get(Joint::HipRight))
+            .or_else(|| {
+                self.get(Joint::ShoulderLeft)
+                    .zip(self.get(Joint::ShoulderRight))
+            })?;
+        let left = sub(lr.0 .0, lr.1 .0);
+        normalize(cross(left, up))
+    }
+
+    fn estimate(&self, j: Joint) -> Option<([f64; 3], f64)> {
+        use Joint as J;
+        let side = |l: J, r: J| if is_left(j) { l } else { r };
+        match j {
+            J::HipCenter => self.mid(J::HipLeft, J::HipRight),
+            J::ShoulderCenter => self.mid(J::ShoulderLeft, J::ShoulderRight),
+            J::Spine => self.at(J::HipCenter, J::ShoulderCenter, 0.3),
+            J::Head => {
+                let (sc, c1) = self.get(J::ShoulderCenter)?;
+                let (sp, c2) = self.get(J::Spine)?;
+                Some((add(sc, scale(sub(sc, sp), 0.5)), c1.min(c2)))
+            }
+            J::WristLeft | J::WristRight => self.at(
+                side(J::ElbowLeft, J::ElbowRight),
+                side(J::HandLeft, J::HandRight),
+                0.8,
+            ),
+            J::HandLeft | J::HandRight => self.at(
+                side(J::ElbowLeft, J::ElbowRight),
+                side(J::WristLeft, J::WristRight),
+                1.25,
+            ),
+            J::ElbowLeft | J::ElbowRight => {
+                let s = side(J::ShoulderLeft, J::ShoulderRight);
+                self.mid(s, side(J::WristLeft, J::WristRight))
+                    .or_else(|| self.mid(s, side(J::HandLeft, J::HandRight)))
+            }
+            J::ShoulderLeft | J::ShoulderRight => None,
+            J::HipLeft | J::HipRight => None,
+            J::KneeLeft | J::KneeRight => self.mid(
+                side(J::HipLeft, J::HipRight),
+                side(J::AnkleLeft, J::AnkleRight),
+            ),
+            J::AnkleLeft | J::AnkleRight => self.at(
+                side(J::HipLeft, J::HipRight),
+                side(J::KneeLeft, J::KneeRight),
+                2.0,
+            ),
+            J::FootLeft | J::FootRight => {
+                let (k, c1) = self.get(side(J::KneeLeft, J::KneeRight))?;
+                let (a, c2) = self.get(side(J::AnkleLeft, J::AnkleRight))?;
+                let f = self.facing()?;
+                let shin = norm(sub(k, a));
+                Some((add(a, scale(f, 0.3 * shin)), c1.min(c2)))
+            }
+        }
+    }
+}
+
+fn is_left(j: Joint) -> bool {
+    j.name().ends_with("_left")
+}

@@ -1,0 +1,491 @@
+//! Joint importers against the hand-made fixtures in fixtures/kinect (see make_fixtures.py there).
+
+use approx::assert_abs_diff_eq;
+use std::path::PathBuf;
+use symcorr_attach::{Joint, Skeleton};
+use symcorr_kinect::joints::{
+    parse_joints, parse_joints_as, read_ntu_skeleton, to_json_string, BodySelect, JointFormat,
+};
+use symcorr_kinect::sdk_text::{parse_kinect_text, to_kinect_text};
+use symcorr_kinect::{
+    read_joints, read_joints_with_format, write_joints_json, JointFrame, JointLog, KinectError,
+    SkeletonKind,
+};
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/kinect")
+        .join(name)
+}
+
+fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9)
+}
+
+#[test]
+fn kinect_v1_json_fixture_reads_all_frames() {
+    let log = read_joints(fixture("standing_v1.json")).unwrap();
+    assert_eq!(log.skeleton_kind, SkeletonKind::KinectV1);
+    assert_eq!(log.frames.len(), 3);
+    let f1 = &log.frames[1];
+    assert_abs_diff_eq!(f1.time_s, 1.0 / 30.0, epsilon = 1e-12);
+    assert!(close(
+        f1.skeleton.position(Joint::HipCenter),
+        [0.01, 0.0, 2.5]
+    ));
+    assert!(close(
+        f1.skeleton.position(Joint::ShoulderRight),
+        [0.19, 0.45, 2.5]
+    ));
+    assert_eq!(f1.skeleton.confidence[Joint::Head.index()], 0.5);
+    assert_eq!(f1.skeleton.confidence[Joint::Spine.index()], 1.0);
+    assert!(f1.skeleton.interpolated.iter().all(|b| !b));
+}
+
+#[test]
+fn nite_json_maps_fifteen_joints_and_flags_interpolated_ones() {
+    let v1 = read_joints(fixture("standing_v1.json")).unwrap().frames[0]
+        .skeleton
+        .clone();
+    let log = read_joints(fixture("standing_nite.json")).unwrap();
+    assert_eq!(log.skeleton_kind, SkeletonKind::Nite);
+    let s = &log.frames[0].skeleton;
+    // Measured joints (millimetres converted to metres), including the `left_elbow` alias.
+    for j in [
+        Joint::Head,
+        Joint::ShoulderCenter,
+        Joint::Spine,
+        Joint::ElbowLeft,
+        Joint::HandRight,
+        Joint::KneeLeft,
+        Joint::AnkleRight,
+    ] {
+        assert!(close(s.position(j), v1.position(j)), "{j:?}");
+        assert!(!s.interpolated[j.index()], "{j:?}");
+    }
+    let flagged: Vec<Joint> = Joint::ALL
+        .into_iter()
+        .filter(|j| s.interpolated[j.index()])
+        .collect();
+    assert_eq!(
+        flagged,
+        vec![
+            Joint::HipCenter,
+            Joint::WristLeft,
+            Joint::WristRight,
+            Joint::FootLeft,
+            Joint::FootRight
+        ]
+    );
+    let mid = |a: [f64; 3], b: [f64; 3]| {
+        [
+            (a[0] + b[0]) / 2.0,
+            (a[1] + b[1]) / 2.0,
+            (a[2] + b[2]) / 2.0,
+        ]
+    };
+    assert!(close(
+        s.position(Joint::HipCenter),
+        mid(v1.position(Joint::HipLeft), v1.position(Joint::HipRight))
+    ));
+    // Feet are extrapolated toward the facing direction: the subject faces the sensor (−z).
+    for (a, f) in [
+        (Joint::AnkleLeft, Joint::FootLeft),
+        (Joint::AnkleRight, Joint::FootRight),
+    ] {
+        let d = [0, 1, 2].map(|k| s.position(f)[k] - s.position(a)[k]);
+        assert!(d[2] < -0.05, "foot not in front of ankle: {d:?}");
+        assert!(d[0].abs() < 0.02 && d[1].abs() < 0.02, "{d:?}");
+        assert!(s.confidence[f.index()] <= 0.5);
+    }
+    // Wrist at 80 % elbow → hand.
+    let (e, h) = (s.position(Joint::ElbowLeft), s.position(Joint::HandLeft));
+    let w = s.position(Joint::WristLeft);
+    assert!(close(w, [0, 1, 2].map(|k| e[k] + 0.8 * (h[k] - e[k]))));
+}
+
+#[test]
+fn kinect_text_fixture_interpolates_untracked_joint() {
+    let log = read_joints(fixture("standing_v1.txt")).unwrap();
+    assert_eq!(log.frames.len(), 2);
+    assert_abs_diff_eq!(log.frames[0].time_s, 10.0 / 30.0, epsilon = 1e-12);
+    assert_abs_diff_eq!(log.frames[1].time_s, 11.0 / 30.0, epsilon = 1e-12);
+    let s0 = &log.frames[0].skeleton;
+    assert!(s0.interpolated.iter().all(|b| !b));
+    assert!(close(s0.position(Joint::WristRight), [0.24, -0.06, 2.48]));
+    let s1 = &log.frames[1].skeleton;
+    let wr = Joint::WristRight.index();
+    assert!(s1.interpolated[wr]);
+    assert!(s1.confidence[wr] < 1.0);
+    let (e, h) = (
+        s1.position(Joint::ElbowRight),
+        s1.position(Joint::HandRight),
+    );
+    assert!(close(
+        s1.position(Joint::WristRight),
+        [0, 1, 2].map(|k| e[k] + 0.8 * (h[k] - e[k]))
+    ));
+}
+
+#[test]
+fn ntu_skeleton_picks_the_most_tracked_body_or_a_given_id() {
+    let log = read_joints(fixture("two_bodies.skeleton")).unwrap();
+    assert_eq!(log.skeleton_kind, SkeletonKind::KinectV2);
+    // Body A is only in frame 1 (frame 0 has no body, frame 2 only body B).
+    assert_eq!(log.frames.len(), 1);
+    assert_abs_diff_eq!(log.frames[0].time_s, 1.0 / 30.0, epsilon = 1e-12);
+    let v1 = read_joints(fixture("standing_v1.json")).unwrap().frames[0]
+        .skeleton
+        .clone();
+    for j in Joint::ALL {
+        // spine_shoulder → shoulder_center, spine_base → hip_center, spine_mid → spine.
+        assert!(
+            (0..3)
+                .all(|k| (log.frames[0].skeleton.position(j)[k] - v1.position(j)[k]).abs() < 1e-6),
+            "{j:?}"
+        );
+        assert_eq!(log.frames[0].skeleton.confidence[j.index()], 1.0);
+    }
+    let b = read_ntu_skeleton(
+        fixture("two_bodies.skeleton"),
+        BodySelect::Id(72057594037931102),
+    )
+    .unwrap();
+    assert_eq!(b.frames.len(), 2);
+    // Frame 1: body B tracks only Kinect v2 joints 0..3 (state 2), others state 0; frame 2: all
+    // inferred (state 1).
+    assert_eq!(b.frames[0].skeleton.confidence[Joint::Spine.index()], 1.0);
+    assert_eq!(b.frames[0].skeleton.confidence[Joint::Head.index()], 0.0);
+    assert_eq!(
+        b.frames[0].skeleton.confidence[Joint::ElbowLeft.index()],
+        0.0
+    );
+    assert_eq!(b.frames[1].skeleton.confidence[Joint::Head.index()], 0.5);
+    assert!(close(
+        b.frames[1].skeleton.position(Joint::HipCenter),
+        [1.0, 0.0, 3.5]
+    ));
+    let none = read_ntu_skeleton(fixture("two_bodies.skeleton"), BodySelect::Id(7));
+    assert!(matches!(none, Err(KinectError::NoBody { .. })), "{none:?}");
+}
+
+#[test]
+fn format_is_detected_from_content() {
+    for (name, f) in [
+        ("standing_v1.json", JointFormat::Json),
+        ("standing_nite.json", JointFormat::Json),
+        ("standing_v1.txt", JointFormat::KinectText),
+        ("two_bodies.skeleton", JointFormat::NtuSkeleton),
+    ] {
+        let text = std::fs::read_to_string(fixture(name)).unwrap();
+        assert_eq!(JointFormat::detect(&text), Some(f), "{name}");
+        assert_eq!(parse_joints(&text, name).unwrap().1, f);
+    }
+    assert!(matches!(
+        parse_joints("hello world\n", "x.txt"),
+        Err(KinectError::UnknownFormat { .. })
+    ));
+    // Forcing the wrong format is a parse error, not a panic.
+    let e =
+        read_joints_with_format(fixture("standing_v1.txt"), JointFormat::NtuSkeleton).unwrap_err();
+    assert!(matches!(e, KinectError::Parse { line: 1, .. }), "{e}");
+    assert_eq!(
+        JointFormat::from_name("kinect_text"),
+        Some(JointFormat::KinectText)
+    );
+    assert_eq!(
+        JointFormat::from_name("ntu"),
+        Some(JointFormat::NtuSkeleton)
+    );
+    assert_eq!(JointFormat::from_name("nope"), None);
+}
+
+#[test]
+fn json_write_then_read_is_identity_and_keeps_interpolation_flags() {
+    let mut log = read_joints(fixture("standing_nite.json")).unwrap();
+    log.skeleton_kind = SkeletonKind::KinectV1; // the writer writes the canonical skeleton
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.json");
+    write_joints_json(&path, &log).unwrap();
+    let back = read_joints(&path).unwrap();
+    assert_eq!(back, log);
+    // No temporary file left behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    // Writing into a missing directory is an Io error naming the file.
+    let e = write_joints_json(dir.path().join("no/such/dir/x.json"), &log).unwrap_err();
+    assert!(e.to_string().contains("x.json"), "{e}");
+}
+
+fn v1_json(frame_joints: &str) -> String {
+    format!(
+        r#"{{"format":"symcorr.joints/1","skeleton":"kinect_v1","units":"m","frames":[{frame_joints}]}}"#
+    )
+}
+
+fn full_joints_except(skip: &str) -> String {
+    Joint::ALL
+        .iter()
+        .filter(|j| j.name() != skip)
+        .map(|j| format!("\"{}\":[0.1,0.2,2.0]", j.name()))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+#[test]
+fn bad_json_gives_typed_errors_naming_file_and_frame() {
+    let ok_frame = format!(r#"{{"joints":{{{}}}}}"#, full_joints_except(""));
+    assert!(parse_joints_json_ok(&v1_json(&ok_frame)));
+
+    let missing = format!(r#"{{"joints":{{{}}}}}"#, full_joints_except("knee_left"));
+    let e = parse_joints(&v1_json(&format!("{ok_frame},{missing}")), "a.json").unwrap_err();
+    assert!(matches!(e, KinectError::Frame { frame: 1, .. }), "{e}");
+    assert!(
+        e.to_string().contains("a.json") && e.to_string().contains("knee_left"),
+        "{e}"
+    );
+
+    let e = parse_joints(
+        &v1_json(&ok_frame).replace("kinect_v1", "kinect_v9"),
+        "a.json",
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, KinectError::UnknownSkeleton { ref name, .. } if name == "kinect_v9"),
+        "{e}"
+    );
+
+    let e = parse_joints(
+        &v1_json(&ok_frame).replace("joints/1", "joints/2"),
+        "a.json",
+    )
+    .unwrap_err();
+    assert!(matches!(e, KinectError::Json { .. }), "{e}");
+
+    let bad = ok_frame.replacen("[0.1,0.2,2.0]", "[0.1,null,2.0]", 1);
+    let e = parse_joints(&v1_json(&bad), "a.json").unwrap_err();
+    assert!(matches!(e, KinectError::Frame { frame: 0, .. }), "{e}");
+
+    let bad = ok_frame.replacen("[0.1,0.2,2.0]", "[0.1,2.0]", 1);
+    assert!(matches!(
+        parse_joints(&v1_json(&bad), "a.json"),
+        Err(KinectError::Frame { .. })
+    ));
+
+    let bad = ok_frame.replacen("\"hip_center\"", "\"tail\"", 1);
+    let e = parse_joints(&v1_json(&bad), "a.json").unwrap_err();
+    assert!(e.to_string().contains("tail"), "{e}");
+
+    let bad = format!(
+        r#"{{"joints":{{{}}},"confidence":{{"head":1.5}}}}"#,
+        full_joints_except("")
+    );
+    assert!(matches!(
+        parse_joints(&v1_json(&bad), "a.json"),
+        Err(KinectError::Frame { .. })
+    ));
+
+    let e = parse_joints(&v1_json(""), "a.json").unwrap_err();
+    assert!(matches!(e, KinectError::NoBody { .. }), "{e}");
+
+    let truncated = &v1_json(&ok_frame)[..60];
+    assert!(matches!(
+        parse_joints(truncated, "a.json"),
+        Err(KinectError::Json { .. })
+    ));
+
+    // A nite file missing a shoulder cannot be completed.
+    let nite =
+        r#"{"format":"symcorr.joints/1","skeleton":"nite","frames":[{"joints":{"head":[0,1,2]}}]}"#;
+    let e = parse_joints(nite, "n.json").unwrap_err();
+    assert!(matches!(e, KinectError::Frame { frame: 0, .. }), "{e}");
+}
+
+fn parse_joints_json_ok(text: &str) -> bool {
+    parse_joints(text, "a.json").is_ok()
+}
+
+#[test]
+fn kinect_v2_json_uses_neck_when_spine_shoulder_is_missing() {
+    let v2 = symcorr_kinect::mapping::KINECT_V2_NAMES;
+    let joints: Vec<String> = v2
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| **n != "spine_shoulder")
+        .map(|(i, n)| format!("\"{n}\":[{},{},2.0]", 0.01 * i as f64, 0.02 * i as f64))
+        .collect();
+    let text = format!(
+        r#"{{"format":"symcorr.joints/1","skeleton":"kinect_v2","frames":[{{"joints":{{{}}}}}]}}"#,
+        joints.join(",")
+    );
+    let log = parse_joints(&text, "v2.json").unwrap().0;
+    let s = &log.frames[0].skeleton;
+    assert!(close(s.position(Joint::ShoulderCenter), [0.02, 0.04, 2.0])); // neck = index 2
+    assert!(close(s.position(Joint::Head), [0.03, 0.06, 2.0]));
+    assert!(close(s.position(Joint::FootRight), [0.19, 0.38, 2.0]));
+    assert!(s.interpolated.iter().all(|b| !b));
+}
+
+#[test]
+fn bad_text_dumps_name_the_line() {
+    let good = std::fs::read_to_string(fixture("standing_v1.txt")).unwrap();
+    let lines: Vec<&str> = good.lines().collect();
+    // NaN on line 3.
+    let bad = format!(
+        "{}\n{}\n{}\n",
+        lines[0],
+        lines[1],
+        lines[2].replacen("2.500000", "nan", 1)
+    );
+    let e = parse_kinect_text(&bad, "k.txt").unwrap_err();
+    assert!(matches!(e, KinectError::Parse { line: 3, .. }), "{e}");
+    assert!(e.to_string().starts_with("k.txt:3:"), "{e}");
+    // Wrong value count (a truncated last line).
+    let bad = format!("{}\n{}\n{}\n", lines[0], lines[1], &lines[2][..100]);
+    assert!(matches!(
+        parse_kinect_text(&bad, "k.txt"),
+        Err(KinectError::Parse { line: 3, .. })
+    ));
+    // Too many values.
+    let bad = format!("{} 1.0\n", lines[1]);
+    assert!(matches!(
+        parse_kinect_text(&bad, "k.txt"),
+        Err(KinectError::Parse { line: 1, .. })
+    ));
+    // Empty.
+    assert!(matches!(
+        parse_kinect_text("# nothing\n", "k.txt"),
+        Err(KinectError::NoBody { .. })
+    ));
+    // All-zero joints with nothing to interpolate from.
+    let zeros = format!("0{}\n", " 0".repeat(60));
+    assert!(matches!(
+        parse_kinect_text(&zeros, "k.txt"),
+        Err(KinectError::Parse { line: 1, .. })
+    ));
+}
+
+#[test]
+fn bad_ntu_files_name_the_line() {
+    let good = std::fs::read_to_string(fixture("two_bodies.skeleton")).unwrap();
+    let lines: Vec<&str> = good.lines().collect();
+    let parse = |t: &str| {
+        parse_joints_as(
+            t,
+            "n.skeleton",
+            JointFormat::NtuSkeleton,
+            BodySelect::MostTracked,
+        )
+    };
+    // Truncated in the middle of body A's joints (line 20).
+    let e = parse(&lines[..20].join("\n")).unwrap_err();
+    assert!(matches!(e, KinectError::Parse { line: 21, .. }), "{e}");
+    // Wrong joint count.
+    let mut l = lines.clone();
+    assert_eq!(l[4], "25");
+    l[4] = "20";
+    let e = parse(&l.join("\n")).unwrap_err();
+    assert!(matches!(e, KinectError::Parse { line: 5, .. }), "{e}");
+    // Bad tracking state.
+    let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+    l[5] = l[5]
+        .replacen(" 2", " 7", 1)
+        .trim_end_matches('2')
+        .to_string()
+        + "7";
+    let e = parse(&l.join("\n")).unwrap_err();
+    assert!(matches!(e, KinectError::Parse { line: 6, .. }), "{e}");
+    // Trailing data.
+    let e = parse(&format!("{good}1\n")).unwrap_err();
+    assert!(e.to_string().contains("trailing"), "{e}");
+    // No body at all.
+    assert!(matches!(
+        parse("2\n0\n0\n"),
+        Err(KinectError::NoBody { .. })
+    ));
+}
+
+fn skeleton(seed: u64) -> Skeleton {
+    let mut positions = [[0.0; 3]; 20];
+    for (i, p) in positions.iter_mut().enumerate() {
+        let t = (seed as f64) * 0.37 + i as f64;
+        *p = [t.sin(), t.cos(), 2.0 + 0.1 * i as f64];
+    }
+    Skeleton::from_positions(positions)
+}
+
+#[test]
+fn text_writer_round_trips_positions() {
+    let log = JointLog {
+        skeleton_kind: SkeletonKind::KinectV1,
+        frames: (0..3)
+            .map(|i| JointFrame {
+                time_s: i as f64 / 30.0,
+                skeleton: skeleton(i),
+            })
+            .collect(),
+    };
+    let back = parse_kinect_text(&to_kinect_text(&log), "<memory>").unwrap();
+    assert_eq!(back, log);
+    let json = to_json_string(&log);
+    assert!(json.starts_with(r#"{"format":"symcorr.joints/1","skeleton":"kinect_v1","units":"m""#));
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn arb_skeleton(text: bool) -> impl Strategy<Value = Skeleton> {
+        let coord = if text { -5.0..5.0f64 } else { -1e6..1e6f64 };
+        (
+            proptest::array::uniform20(proptest::array::uniform3(coord)),
+            proptest::array::uniform20(0.0..=1.0f64),
+            proptest::array::uniform20(any::<bool>()),
+        )
+            .prop_map(move |(mut positions, confidence, interpolated)| {
+                // The text format writes untracked joints as 0 0 0; keep z away from 0.
+                for p in positions.iter_mut() {
+                    p[2] = p[2].abs() + 0.5;
+                }
+                if text {
+                    Skeleton::from_positions(positions)
+                } else {
+                    Skeleton {
+                        positions,
+                        confidence,
+                        interpolated,
+                    }
+                }
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn json_round_trip(frames in proptest::collection::vec((0.0..1e4f64, arb_skeleton(false)), 1..5)) {
+            let log = JointLog {
+                skeleton_kind: SkeletonKind::KinectV1,
+                frames: frames.into_iter().map(|(time_s, skeleton)| JointFrame { time_s, skeleton }).collect(),
+            };
+            let (back, format) = parse_joints(&to_json_string(&log), "<memory>").unwrap();
+            prop_assert_eq!(format, JointFormat::Json);
+            prop_assert_eq!(back, log);
+        }
+
+        #[test]
+        fn kinect_text_round_trip(frames in proptest::collection::vec((0u32..100_000, arb_skeleton(true)), 1..5)) {
+            let log = JointLog {
+                skeleton_kind: SkeletonKind::KinectV1,
+                frames: frames.into_iter().map(|(f, skeleton)| JointFrame { time_s: f as f64 / 30.0, skeleton }).collect(),
+            };
+            let text = to_kinect_text(&log);
+            let (back, format) = parse_joints(&text, "<memory>").unwrap();
+            prop_assert_eq!(format, JointFormat::KinectText);
+            prop_assert_eq!(back.frames.len(), log.frames.len());
+            for (a, b) in back.frames.iter().zip(&log.frames) {
+                prop_assert_eq!(a.skeleton.positions, b.skeleton.positions);
+                prop_assert!((a.time_s - b.time_s).abs() < 1e-9);
+            }
+        }
+    }
+}
