@@ -65,7 +65,7 @@ pub struct Laplacian {
 
 /// Cotangent of the angle between `u` and `v`, clamped (see [`COT_CLAMP`]).
 #[inline]
-fn cot(u: [f64; 3], v: [f64; 3]) -> f64 {
+pub(crate) fn cot(u: [f64; 3], v: [f64; 3]) -> f64 {
     let c = norm(cross(u, v));
     let d = dot(u, v);
     if c <= d.abs() / COT_CLAMP {

@@ -1,0 +1,202 @@
+mod common;
+
+use common::*;
+use std::f64::consts::PI;
+use symcorr_spectral::*;
+
+fn total_curvature(mesh: &symcorr_mesh::TriMesh) -> f64 {
+    let gc = gaussian_curvature(mesh);
+    let mut area = vec![0.0; mesh.num_vertices()];
+    for (t, a) in mesh.triangles.iter().zip(mesh.triangle_areas()) {
+        for &v in t {
+            area[v as usize] += a / 3.0;
+        }
+    }
+    gc.iter().zip(&area).map(|(g, a)| g * a).sum()
+}
+
+#[test]
+fn gauss_bonnet_closed_genus_zero() {
+    for level in 0..4 {
+        let t = total_curvature(&icosphere(level));
+        assert!((t - 4.0 * PI).abs() < 1e-10, "level {level}: {t}");
+    }
+    let t = total_curvature(&body());
+    assert!((t - 4.0 * PI).abs() < 1e-8, "body: {t}");
+}
+
+#[test]
+fn gauss_bonnet_flat_disk_with_boundary_convention() {
+    // Interior vertices of a flat disk have zero curvature; with the π convention the boundary
+    // carries the total turning 2π (χ = 1).
+    let mesh = disk(8);
+    let gc = gaussian_curvature(&mesh);
+    let interior = mesh.num_vertices() - 48;
+    assert!(gc[..interior].iter().all(|g| g.abs() < 1e-10));
+    let t = total_curvature(&mesh);
+    assert!((t - 2.0 * PI).abs() < 1e-10, "{t}");
+}
+
+#[test]
+fn sphere_curvature_is_about_one() {
+    // Unit sphere: K = 1 everywhere.
+    let gc = gaussian_curvature(&icosphere(4));
+    let mean = gc.iter().sum::<f64>() / gc.len() as f64;
+    assert!((mean - 1.0).abs() < 0.01, "{mean}");
+}
+
+#[test]
+fn dijkstra_on_flat_disk_bounds_euclidean() {
+    let mesh = disk(10);
+    let sources = [0u32, 17, 100];
+    let rows = dijkstra_many(&mesh, &sources).unwrap();
+    for (row, &s) in rows.iter().zip(&sources) {
+        let single = dijkstra(&mesh, s).unwrap();
+        assert_eq!(row, &single);
+        let ps = mesh.positions[s as usize];
+        for (v, &d) in row.iter().enumerate() {
+            let p = mesh.positions[v];
+            let e = ((p[0] - ps[0]).powi(2) + (p[1] - ps[1]).powi(2)).sqrt();
+            assert!(d >= e - 1e-12, "vertex {v}: dijkstra {d} < euclidean {e}");
+            // Edge paths on this mesh are not much longer than straight lines.
+            assert!(d <= 1.4 * e + 1e-12, "vertex {v}: {d} vs {e}");
+        }
+    }
+    assert!(dijkstra(&mesh, mesh.num_vertices() as u32).is_err());
+}
+
+#[test]
+fn heat_method_on_flat_disk_close_to_euclidean() {
+    let mesh = disk(20);
+    let heat = HeatGeodesics::new(&mesh, 1.0).unwrap();
+    let d = heat.distance(&[0]).unwrap();
+    assert_eq!(d[0], 0.0);
+    let mut worst = 0.0f64;
+    for (v, p) in mesh.positions.iter().enumerate() {
+        let e = (p[0] * p[0] + p[1] * p[1]).sqrt();
+        if e > 0.2 {
+            worst = worst.max((d[v] - e).abs() / e);
+        }
+    }
+    assert!(worst < 0.05, "heat method off by {worst}");
+    // The blocked parallel variant gives the same rows as single queries.
+    let many = heat.distances_many(&[0, 5, 300]).unwrap();
+    for (row, s) in many.iter().zip([0u32, 5, 300]) {
+        let single = heat.distance(&[s]).unwrap();
+        for (a, b) in row.iter().zip(&single) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn heat_method_two_components() {
+    let a = icosphere(2);
+    let mesh = union(&a, &a, [4.0, 0.0, 0.0]);
+    let heat = HeatGeodesics::new(&mesh, 1.0).unwrap();
+    let d = heat.distance(&[3]).unwrap();
+    let n = a.num_vertices();
+    assert!(d[..n].iter().all(|x| x.is_finite()));
+    assert!(d[n..].iter().all(|x| x.is_infinite()));
+    // Antipode of vertex 3 on the unit sphere is at distance π.
+    let p = a.positions[3];
+    let anti = (0..n)
+        .min_by(|&i, &j| {
+            let f = |k: usize| {
+                let q = a.positions[k];
+                (q[0] + p[0]).powi(2) + (q[1] + p[1]).powi(2) + (q[2] + p[2]).powi(2)
+            };
+            f(i).total_cmp(&f(j))
+        })
+        .unwrap();
+    assert!((d[anti] - PI).abs() < 0.1 * PI, "{}", d[anti]);
+}
+
+#[test]
+fn base_vertex_set_is_a_separated_cover() {
+    let mesh = body();
+    let gc = gaussian_curvature(&mesh);
+    let radius = 0.1;
+    let r = radius * mesh.total_area().sqrt();
+    let base = base_vertex_set(&mesh, &gc, radius).unwrap();
+    assert!(base.len() > 5 && base.len() < 500, "{}", base.len());
+    let max = gc.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(gc[base[0] as usize], max);
+    let rows = dijkstra_many(&mesh, &base).unwrap();
+    // Separated: each base vertex is farther than r from every earlier one.
+    for i in 0..base.len() {
+        for row in rows.iter().take(i) {
+            assert!(row[base[i] as usize] > r);
+        }
+    }
+    // Cover: every vertex is within r of some base vertex.
+    for v in 0..mesh.num_vertices() {
+        assert!(rows.iter().any(|row| row[v] <= r), "vertex {v} uncovered");
+    }
+    assert!(base_vertex_set(&mesh, &gc[1..], radius).is_err());
+}
+
+#[test]
+fn descriptors_satisfy_trace_identities() {
+    let mesh = icosphere(3);
+    let lap = Laplacian::new(&mesh).unwrap();
+    let e = eigenpairs(&lap, 25, &EigenOptions::default()).unwrap();
+    let n = mesh.num_vertices();
+    // Σ_x M_x k_t(x,x) = Σ_i e^{-λ_i t} (heat trace).
+    let times = hks_times(&e, 4);
+    let h = hks(&e, &times);
+    for (j, &t) in times.iter().enumerate() {
+        let lhs: f64 = (0..n).map(|x| lap.mass[x] * h[(x, j)]).sum();
+        let rhs: f64 = e.values.iter().map(|l| (-l * t).exp()).sum();
+        assert!((lhs - rhs).abs() < 1e-9 * rhs);
+    }
+    // Σ_x M_x WKS(x, e) = 1 for every energy.
+    let w = wks(&e, &WksParams::default()).unwrap();
+    assert_eq!(w.ncols(), 100);
+    for j in 0..w.ncols() {
+        let s: f64 = (0..n).map(|x| lap.mass[x] * w[(x, j)]).sum();
+        assert!((s - 1.0).abs() < 1e-9, "{s}");
+    }
+}
+
+#[test]
+fn si_hks_is_scale_invariant() {
+    // Scaling by 2 multiplies t by 4: a shift of exactly 2 in τ = log2 t (32 samples at step
+    // 1/16). With a window wide enough for the derivative to vanish at both ends, |DFT| is
+    // unchanged.
+    let mesh = icosphere(2);
+    let mut big = mesh.clone();
+    for p in &mut big.positions {
+        *p = [2.0 * p[0], 2.0 * p[1], 2.0 * p[2]];
+    }
+    let params = SiHksParams {
+        tau_start: -30.0,
+        tau_end: 20.0,
+        ..Default::default()
+    };
+    let opts = EigenOptions::default();
+    let e1 = eigenpairs(&Laplacian::new(&mesh).unwrap(), 20, &opts).unwrap();
+    let e2 = eigenpairs(&Laplacian::new(&big).unwrap(), 20, &opts).unwrap();
+    let s1 = si_hks(&e1, &params).unwrap();
+    let s2 = si_hks(&e2, &params).unwrap();
+    assert_eq!(s1.ncols(), 6);
+    let mut worst = 0.0f64;
+    for x in 0..mesh.num_vertices() {
+        for f in 0..6 {
+            worst = worst.max((s1[(x, f)] - s2[(x, f)]).abs() / s1[(x, 0)].abs());
+        }
+    }
+    assert!(worst < 1e-6, "{worst}");
+    // Plain HKS is not scale invariant (sanity: the test can fail).
+    let h1 = hks(&e1, &[0.1]);
+    let h2 = hks(&e2, &[0.1]);
+    assert!((h1[(0, 0)] - h2[(0, 0)]).abs() > 1e-3 * h1[(0, 0)]);
+    assert!(si_hks(
+        &e1,
+        &SiHksParams {
+            tau_step: 0.0,
+            ..Default::default()
+        }
+    )
+    .is_err());
+}
