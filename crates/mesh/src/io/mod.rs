@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use crate::{MeshError, TriMesh};
 
+mod gltf;
 mod obj;
 mod off;
 mod ply;
@@ -79,7 +80,6 @@ pub struct LoadedMesh {
 /// directory against which external buffer URIs resolve.
 pub(crate) struct Source {
     pub name: String,
-    #[allow(dead_code)] // read by the glTF reader (external buffers); transient until it lands
     pub dir: Option<PathBuf>,
 }
 
@@ -183,9 +183,8 @@ fn parse(bytes: &[u8], format: Format, src: &Source) -> Result<LoadedMesh, MeshE
         Format::Off => off::read(bytes, src),
         Format::Ply => ply::read(bytes, src),
         Format::Obj => obj::read(bytes, src),
-        Format::Gltf | Format::Glb => {
-            Err(src.malformed("file", format!("{format:?} reading is not implemented yet")))
-        }
+        Format::Gltf => gltf::read(bytes, src, false),
+        Format::Glb => gltf::read(bytes, src, true),
     }
 }
 
@@ -261,11 +260,8 @@ pub fn write_to_bytes(
         Format::Off => Ok(off::write(mesh, colors)),
         Format::Ply => Ok(ply::write(mesh, colors, ply_encoding)),
         Format::Obj => Ok(obj::write(mesh, colors)),
-        Format::Gltf | Format::Glb => Err(MeshError::Malformed {
-            file: "<output>".to_string(),
-            element: "file".to_string(),
-            message: format!("{format:?} writing is not implemented yet"),
-        }),
+        Format::Gltf => Ok(gltf::write_gltf(mesh, colors)),
+        Format::Glb => Ok(gltf::write_glb(mesh, colors)),
     }
 }
 

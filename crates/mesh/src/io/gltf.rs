@@ -1,0 +1,548 @@
+//! glTF 2.0 (`.gltf` with embedded base64 or external buffers) and GLB reader and writer.
+//!
+//! Reading uses the `gltf` crate (1.x) for the validated document structure only; buffers are
+//! resolved here (GLB blob, `data:` URIs, files next to the `.gltf`) and accessor bytes are read
+//! here with checked offsets, so a malformed file is an error naming the accessor rather than a
+//! panic. Every triangle primitive (`TRIANGLES`, `TRIANGLE_STRIP`, `TRIANGLE_FAN`) of every mesh
+//! instance in the default scene (else scene 0; without scenes: every mesh, untransformed) is
+//! read with its node's world transform applied; vertices of the primitives are concatenated
+//! in traversal order (scene roots in order, depth first, primitives in order). A node transform
+//! with negative determinant flips the triangles' winding (as the glTF spec requires). Colours
+//! (`COLOR_0`, float or normalized integer, RGB or RGBA) are kept when every primitive has them.
+//!
+//! Writing produces one mesh with one primitive: `POSITION` (f32, with min/max), `NORMAL`
+//! (area-weighted, f32), optional `COLOR_0` (normalized u8 RGB, stride 4), u32 indices, and a
+//! plain double-sided material. Colour bytes are stored as given (no sRGB → linear conversion),
+//! so they read back exactly. Positions are f32 in glTF: a write → read round trip is exact only
+//! for coordinates representable in f32.
+
+use std::borrow::Cow;
+
+use base64::Engine as _;
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use gltf::Semantic;
+use serde_json::json;
+
+use super::{LoadedMesh, Source};
+use crate::{MeshError, TriMesh};
+
+type Mat4 = [[f64; 4]; 4]; // column-major, m[column][row], as glTF stores it
+
+const IDENTITY: Mat4 = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
+    let mut m = [[0.0; 4]; 4];
+    for (c, col) in m.iter_mut().enumerate() {
+        for (r, x) in col.iter_mut().enumerate() {
+            *x = (0..4).map(|k| a[k][r] * b[c][k]).sum();
+        }
+    }
+    m
+}
+
+fn apply(m: &Mat4, p: [f64; 3]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (r, o) in out.iter_mut().enumerate() {
+        *o = m[0][r] * p[0] + m[1][r] * p[1] + m[2][r] * p[2] + m[3][r];
+    }
+    out
+}
+
+fn det3(m: &Mat4) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[2][1] * m[1][2])
+        - m[1][0] * (m[0][1] * m[2][2] - m[2][1] * m[0][2])
+        + m[2][0] * (m[0][1] * m[1][2] - m[1][1] * m[0][2])
+}
+
+pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<LoadedMesh, MeshError> {
+    if expect_glb && !bytes.starts_with(b"glTF") {
+        return Err(src.malformed("header", "not a GLB file (missing the `glTF` magic)"));
+    }
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| src.malformed("document", e.to_string()))?;
+    validate(&gltf.document, src)?;
+    let doc = &gltf.document;
+
+    let mut buffers: Vec<Cow<[u8]>> = Vec::new();
+    for b in doc.buffers() {
+        let what = || format!("buffer {}", b.index());
+        let data: Cow<[u8]> = match b.source() {
+            gltf::buffer::Source::Bin => match &gltf.blob {
+                Some(blob) => Cow::Borrowed(blob.as_slice()),
+                None => {
+                    return Err(
+                        src.malformed(what(), "refers to the GLB binary chunk, but there is none")
+                    )
+                }
+            },
+            gltf::buffer::Source::Uri(uri) => Cow::Owned(load_uri(uri, src, &what())?),
+        };
+        if data.len() < b.length() {
+            return Err(src.malformed(
+                what(),
+                format!("declares {} bytes but holds {}", b.length(), data.len()),
+            ));
+        }
+        buffers.push(data);
+    }
+
+    let mut out = Output::default();
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    match scene {
+        Some(scene) => {
+            let mut seen = vec![false; doc.nodes().len()];
+            for node in scene.nodes() {
+                visit(&node, &IDENTITY, &mut seen, &buffers, src, &mut out)?;
+            }
+        }
+        None => {
+            for mesh in doc.meshes() {
+                add_mesh(&mesh, &IDENTITY, &buffers, src, &mut out)?;
+            }
+        }
+    }
+    let colors = (out.all_colored && !out.colors.is_empty()).then_some(out.colors);
+    src.finish(out.positions, out.triangles, colors)
+}
+
+/// Runs the `gltf` crate's validation (which the document accessors rely on: they unwrap
+/// checked enums and indices), tolerating only a missing `min`/`max` on `POSITION`: the spec
+/// requires them, but many exporters omit them and this reader does not need them.
+fn validate(doc: &gltf::Document, src: &Source) -> Result<(), MeshError> {
+    use gltf::json::validation::{Error, Validate};
+    let root = doc.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let p = path();
+        let harmless =
+            matches!(error, Error::Missing) && (p.0.ends_with(".min") || p.0.ends_with(".max"));
+        if !harmless {
+            errors.push(format!("{}: {error}", p.0));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(src.malformed("document", format!("invalid glTF: {}", errors.join("; "))))
+    }
+}
+
+#[derive(Default)]
+struct Output {
+    positions: Vec<[f64; 3]>,
+    triangles: Vec<[u32; 3]>,
+    colors: Vec<[u8; 3]>,
+    all_colored: bool,
+    primitives: usize,
+}
+
+fn visit(
+    node: &gltf::Node,
+    parent: &Mat4,
+    seen: &mut [bool],
+    buffers: &[Cow<[u8]>],
+    src: &Source,
+    out: &mut Output,
+) -> Result<(), MeshError> {
+    // glTF node hierarchies are disjoint strict trees: a node reached twice means a cycle or a
+    // node with two parents, both invalid (and a cycle would never end).
+    let i = node.index();
+    if seen.get(i).copied().unwrap_or(true) {
+        return Err(src.malformed(
+            format!("node {i}"),
+            "is reached twice in the scene graph (cycle or two parents)",
+        ));
+    }
+    seen[i] = true;
+    let local = node.transform().matrix();
+    let local: Mat4 = local.map(|c| c.map(|x| x as f64));
+    let world = mul(parent, &local);
+    if let Some(mesh) = node.mesh() {
+        add_mesh(&mesh, &world, buffers, src, out)?;
+    }
+    for child in node.children() {
+        visit(&child, &world, seen, buffers, src, out)?;
+    }
+    Ok(())
+}
+
+fn add_mesh(
+    mesh: &gltf::Mesh,
+    world: &Mat4,
+    buffers: &[Cow<[u8]>],
+    src: &Source,
+    out: &mut Output,
+) -> Result<(), MeshError> {
+    let flip = det3(world) < 0.0;
+    for prim in mesh.primitives() {
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            continue; // points and lines carry no surface
+        }
+        let what = format!("mesh {} primitive {}", mesh.index(), prim.index());
+        let pos_acc = prim
+            .get(&Semantic::Positions)
+            .ok_or_else(|| src.malformed(&what, "has no POSITION attribute"))?;
+        let (pos, dims) = read_accessor(&pos_acc, buffers, src)?;
+        if dims != 3 {
+            return Err(src.malformed(
+                format!("accessor {}", pos_acc.index()),
+                "POSITION must be VEC3",
+            ));
+        }
+        let n = pos_acc.count();
+        let base = out.positions.len();
+        if base + n > u32::MAX as usize {
+            return Err(src.malformed(&what, "too many vertices for u32 indices"));
+        }
+        out.positions.extend(
+            pos.chunks_exact(3)
+                .map(|p| apply(world, [p[0], p[1], p[2]])),
+        );
+
+        match prim.get(&Semantic::Colors(0)) {
+            Some(acc) if out.all_colored || out.primitives == 0 => {
+                let (c, dims) = read_accessor(&acc, buffers, src)?;
+                if !(dims == 3 || dims == 4) || acc.count() != n {
+                    return Err(src.malformed(
+                        format!("accessor {}", acc.index()),
+                        "COLOR_0 must be VEC3 or VEC4 with one colour per vertex",
+                    ));
+                }
+                out.colors.extend(
+                    c.chunks_exact(dims)
+                        .map(|c| [0, 1, 2].map(|k| (c[k].clamp(0.0, 1.0) * 255.0).round() as u8)),
+                );
+                out.all_colored = true;
+            }
+            _ => out.all_colored = false,
+        }
+        out.primitives += 1;
+
+        let indices: Vec<u32> = match prim.indices() {
+            Some(acc) => {
+                let (idx, dims) = read_accessor(&acc, buffers, src)?;
+                if dims != 1 || acc.data_type() == DataType::F32 {
+                    return Err(src.malformed(
+                        format!("accessor {}", acc.index()),
+                        "indices must be integer SCALAR",
+                    ));
+                }
+                let mut v = Vec::with_capacity(idx.len());
+                for (k, &i) in idx.iter().enumerate() {
+                    if i < 0.0 || i >= n as f64 {
+                        return Err(src.malformed(
+                            format!("accessor {} element {k}", acc.index()),
+                            format!("index {i} is out of range for {n} vertices ({what})"),
+                        ));
+                    }
+                    v.push(i as u32);
+                }
+                v
+            }
+            None => (0..n as u32).collect(),
+        };
+        let b = base as u32; // base + n ≤ u32::MAX, checked above
+        let mut push = |t: [u32; 3]| {
+            let t = if flip { [t[0], t[2], t[1]] } else { t };
+            out.triangles.push(t.map(|i| i + b));
+        };
+        match mode {
+            Mode::Triangles => indices
+                .chunks_exact(3)
+                .for_each(|t| push([t[0], t[1], t[2]])),
+            Mode::TriangleStrip => {
+                for k in 0..indices.len().saturating_sub(2) {
+                    let (a, b2, c) = (indices[k], indices[k + 1], indices[k + 2]);
+                    push(if k % 2 == 0 { [a, b2, c] } else { [b2, a, c] });
+                }
+            }
+            _ => {
+                for k in 1..indices.len().saturating_sub(1) {
+                    push([indices[0], indices[k], indices[k + 1]]);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads every component of an accessor as f64 (normalized integers mapped to [0, 1] or
+/// [-1, 1]); returns the values flattened and the number of components per element.
+fn read_accessor(
+    acc: &gltf::Accessor,
+    buffers: &[Cow<[u8]>],
+    src: &Source,
+) -> Result<(Vec<f64>, usize), MeshError> {
+    let what = || format!("accessor {}", acc.index());
+    if acc.sparse().is_some() {
+        return Err(src.malformed(what(), "sparse accessors are not supported"));
+    }
+    let view = acc.view().ok_or_else(|| {
+        src.malformed(
+            what(),
+            "has no bufferView (zero-filled accessors are not supported)",
+        )
+    })?;
+    let dims = match acc.dimensions() {
+        Dimensions::Scalar => 1,
+        Dimensions::Vec2 => 2,
+        Dimensions::Vec3 => 3,
+        Dimensions::Vec4 => 4,
+        _ => return Err(src.malformed(what(), "matrix accessors are not supported here")),
+    };
+    let ty = acc.data_type();
+    let comp = ty.size();
+    let elem = comp * dims;
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(src.malformed(
+            what(),
+            format!("byteStride {stride} is smaller than the element size {elem}"),
+        ));
+    }
+    let buffer = buffers
+        .get(view.buffer().index())
+        .ok_or_else(|| src.malformed(what(), "buffer is missing"))?;
+    let count = acc.count();
+    let view_end = view.offset().checked_add(view.length());
+    let view_bytes = view_end
+        .and_then(|e| buffer.get(view.offset()..e))
+        .ok_or_else(|| {
+            src.malformed(
+                format!("bufferView {}", view.index()),
+                "lies outside its buffer",
+            )
+        })?;
+    if count > 0 {
+        let end = (count - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(acc.offset()))
+            .and_then(|x| x.checked_add(elem));
+        if end.is_none_or(|e| e > view_bytes.len()) {
+            return Err(src.malformed(
+                what(),
+                format!(
+                    "{count} elements at offset {} stride {stride} run past its bufferView",
+                    acc.offset()
+                ),
+            ));
+        }
+    }
+    let norm = acc.normalized();
+    let mut out = Vec::with_capacity(count * dims);
+    for k in 0..count {
+        let start = acc.offset() + k * stride; // in range: checked above
+        for j in 0..dims {
+            let o = start + j * comp;
+            let b = &view_bytes[o..o + comp];
+            let v = match ty {
+                DataType::I8 => {
+                    let x = b[0] as i8 as f64;
+                    if norm {
+                        (x / 127.0).max(-1.0)
+                    } else {
+                        x
+                    }
+                }
+                DataType::U8 => {
+                    let x = b[0] as f64;
+                    if norm {
+                        x / 255.0
+                    } else {
+                        x
+                    }
+                }
+                DataType::I16 => {
+                    let x = i16::from_le_bytes([b[0], b[1]]) as f64;
+                    if norm {
+                        (x / 32767.0).max(-1.0)
+                    } else {
+                        x
+                    }
+                }
+                DataType::U16 => {
+                    let x = u16::from_le_bytes([b[0], b[1]]) as f64;
+                    if norm {
+                        x / 65535.0
+                    } else {
+                        x
+                    }
+                }
+                DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            };
+            out.push(v);
+        }
+    }
+    Ok((out, dims))
+}
+
+fn load_uri(uri: &str, src: &Source, what: &str) -> Result<Vec<u8>, MeshError> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, payload) = rest
+            .split_once(";base64,")
+            .ok_or_else(|| src.malformed(what, "data URI is not base64"))?;
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| src.malformed(what, format!("bad base64 data: {e}")));
+    }
+    let dir = src.dir.as_ref().ok_or_else(|| {
+        src.malformed(
+            what,
+            format!("external buffer {uri:?} cannot be resolved when reading from memory"),
+        )
+    })?;
+    let path = dir.join(percent_decode(uri));
+    std::fs::read(&path).map_err(|source| MeshError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+/// Decodes `%XX` escapes of a relative URI (e.g. `%20` for a space).
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push(h * 16 + l);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn pad4(v: &mut Vec<u8>, byte: u8) {
+    while v.len() % 4 != 0 {
+        v.push(byte);
+    }
+}
+
+/// Builds the glTF JSON and its binary buffer (`uri`: `None` for GLB, a data URI for `.gltf`).
+fn build(mesh: &TriMesh, colors: Option<&[[u8; 3]]>, embed: bool) -> (serde_json::Value, Vec<u8>) {
+    let nv = mesh.num_vertices();
+    let mut bin: Vec<u8> = Vec::with_capacity(nv * 28 + mesh.num_triangles() * 12);
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in &mesh.positions {
+        for k in 0..3 {
+            let x = p[k] as f32;
+            lo[k] = lo[k].min(x);
+            hi[k] = hi[k].max(x);
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    let pos_len = bin.len();
+    for n in mesh.vertex_normals() {
+        // An isolated or fully degenerate vertex has no normal; glTF requires unit normals.
+        let n = if n == [0.0; 3] { [0.0, 0.0, 1.0] } else { n };
+        for x in n {
+            bin.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
+    let nrm_len = bin.len() - pos_len;
+    let col_off = bin.len();
+    if let Some(c) = colors {
+        for c in c {
+            bin.extend_from_slice(&[c[0], c[1], c[2], 0]);
+        }
+    }
+    let col_len = bin.len() - col_off;
+    let idx_off = bin.len();
+    for t in &mesh.triangles {
+        for i in t {
+            bin.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    let idx_len = bin.len() - idx_off;
+
+    let mut views = vec![
+        json!({"buffer": 0, "byteOffset": 0, "byteLength": pos_len, "target": 34962}),
+        json!({"buffer": 0, "byteOffset": pos_len, "byteLength": nrm_len, "target": 34962}),
+        json!({"buffer": 0, "byteOffset": idx_off, "byteLength": idx_len, "target": 34963}),
+    ];
+    let mut accessors = vec![
+        json!({"bufferView": 0, "componentType": 5126, "count": nv, "type": "VEC3",
+               "min": lo, "max": hi}),
+        json!({"bufferView": 1, "componentType": 5126, "count": nv, "type": "VEC3"}),
+        json!({"bufferView": 2, "componentType": 5125, "count": 3 * mesh.num_triangles(), "type": "SCALAR"}),
+    ];
+    let mut attributes = json!({"POSITION": 0, "NORMAL": 1});
+    if colors.is_some() {
+        views.push(
+            json!({"buffer": 0, "byteOffset": col_off, "byteLength": col_len,
+                          "byteStride": 4, "target": 34962}),
+        );
+        accessors.push(
+            json!({"bufferView": 3, "componentType": 5121, "normalized": true,
+                              "count": nv, "type": "VEC3"}),
+        );
+        attributes["COLOR_0"] = json!(3);
+    }
+    let mut buffer = json!({"byteLength": bin.len()});
+    if embed {
+        buffer["uri"] = json!(format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        ));
+    }
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "symcorr-mesh"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": 2, "mode": 4, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+                                                "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                       "doubleSided": true}],
+        "buffers": [buffer],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    (doc, bin)
+}
+
+/// Encodes a binary glTF (GLB) file.
+pub(crate) fn write_glb(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Vec<u8> {
+    let (doc, mut bin) = build(mesh, colors, false);
+    let mut json = doc.to_string().into_bytes();
+    pad4(&mut json, b' ');
+    pad4(&mut bin, 0);
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// Encodes a `.gltf` JSON file with the buffer embedded as a base64 data URI.
+pub(crate) fn write_gltf(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Vec<u8> {
+    let (doc, _) = build(mesh, colors, true);
+    let mut s = serde_json::to_vec_pretty(&doc).unwrap_or_default();
+    s.push(b'\n');
+    s
+}
