@@ -26,6 +26,8 @@ mod geom;
 pub mod joints;
 pub mod mapping;
 pub mod ntu;
+#[cfg(feature = "openni2")]
+pub mod openni2;
 pub mod sdk_text;
 
 pub use camera::Intrinsics;

@@ -1,0 +1,92 @@
+//! Real OpenNI2 behaviour (feature `openni2`): the built-in Dummy device, OpenNI2's own recorder
+//! and the OniFile playback driver. OpenNI2's context is process-global, so everything runs in
+//! one test, in order.
+#![cfg(feature = "openni2")]
+
+use symcorr_kinect::openni2::{OpenNi, Recorder, STATUS_TIME_OUT};
+use symcorr_kinect::KinectError;
+
+#[test]
+fn dummy_device_recording_and_oni_playback() {
+    let ni = OpenNi::init().unwrap();
+    // Nested init shares the context.
+    let ni2 = OpenNi::init().unwrap();
+    drop(ni2);
+
+    // The Dummy driver is not enumerated, but opens by URI.
+    let devices = ni.devices().unwrap();
+    assert!(devices.iter().all(|d| d.uri != "Dummy"), "{devices:?}");
+
+    // A device that does not exist: typed error with OpenNI2's text.
+    let e = ni.open("no-such-device://x").unwrap_err();
+    assert!(matches!(e, KinectError::OpenNi { .. }), "{e}");
+    let e = ni.open_file("/nonexistent/rec.oni").unwrap_err();
+    assert!(matches!(e, KinectError::Io { .. }), "{e}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let oni = dir.path().join("dummy.oni");
+    let recorded: Vec<_>;
+    {
+        let dev = ni.open("Dummy").unwrap();
+        assert!(!dev.is_file());
+        let mut depth = dev.depth_stream().unwrap();
+        let vm = depth.video_mode().unwrap();
+        assert_eq!(
+            (vm.width, vm.height, vm.fps, vm.pixel_format),
+            (320, 240, 30, 100)
+        );
+        assert_eq!(depth.field_of_view(), None);
+        depth.start().unwrap();
+        // Live frames: right size, increasing index and timestamp (30 fps → 33 ms apart).
+        let a = depth.read_frame(2000).unwrap();
+        let b = depth.read_frame(2000).unwrap();
+        assert_eq!((a.depth.width, a.depth.height), (320, 240));
+        assert_eq!(a.depth.data_mm.len(), 320 * 240);
+        assert_eq!(b.frame_index, a.frame_index + 1);
+        assert_eq!(b.timestamp_us - a.timestamp_us, 33_000);
+        // The Dummy device's test pattern: 2000 mm at the top-left pixel, some zeros.
+        assert_eq!(a.depth.at(0, 0), Some(2000));
+        assert!(a.depth.data_mm.contains(&0));
+
+        let mut rec = Recorder::create(&ni, &oni).unwrap();
+        rec.attach(&depth).unwrap();
+        rec.start().unwrap();
+        recorded = (0..10).map(|_| depth.read_frame(2000).unwrap()).collect();
+        rec.stop();
+        drop(rec);
+        // Seeking a live device is not supported.
+        assert!(dev.seek(&depth, 1).is_err());
+    }
+    assert!(std::fs::metadata(&oni).unwrap().len() > 0);
+
+    // Playback of OpenNI2's own recording.
+    let dev = ni.open_file(&oni).unwrap();
+    assert!(dev.is_file());
+    dev.set_playback_speed(-1.0).unwrap();
+    dev.set_repeat(false).unwrap();
+    let mut depth = dev.depth_stream().unwrap();
+    let vm = depth.video_mode().unwrap();
+    assert_eq!((vm.width, vm.height, vm.pixel_format), (320, 240, 100));
+    // The recorder starts with the frame after its start: 9 or 10 of the 10 frames read.
+    let n = depth.number_of_frames().unwrap();
+    assert!(
+        (recorded.len() as i32 - 1..=recorded.len() as i32).contains(&n),
+        "{n}"
+    );
+    depth.start().unwrap();
+    // Debian's OpenNI 2.2.0.33: OniFile drops every frame of a Dummy recording (the recording
+    // has no cropping property; see the openni2 module docs). Pin that down: if a future
+    // OpenNI2 delivers frames, check their content against what was recorded instead.
+    match depth.read_frame(1500) {
+        Err(KinectError::OpenNi { status, .. }) => {
+            assert_eq!(status, STATUS_TIME_OUT);
+            // Seeking before any frame is refused instead of hanging.
+            assert!(dev.seek(&depth, 1).is_err());
+        }
+        Ok(first) => {
+            assert_eq!((first.depth.width, first.depth.height), (320, 240));
+            assert!(recorded.iter().any(|r| r.depth == first.depth));
+        }
+        Err(e) => panic!("unexpected error {e}"),
+    }
+}

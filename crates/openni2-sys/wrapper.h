@@ -1,0 +1,2 @@
+/* bindgen entry point: OpenNI2's C API. */
+#include <OniCAPI.h>
