@@ -24,6 +24,12 @@ pub struct FilterStats {
 /// Applies the skeleton filter in place: `cands[i]` are the candidates of template point
 /// `points[i]`; afterwards every list holds only target vertices with the point's segment.
 ///
+/// `halves` (optional, one table per mesh) refine the midline segments (pelvis, torso, head),
+/// which have a left and a right half that the segment label alone cannot tell apart:
+/// `-1`/`+1` for a vertex clearly on the subject's right/left of the skeleton's sagittal plane,
+/// `0` near the plane (or on a limb). A candidate whose half is the opposite non-zero value of
+/// the point's is dropped too.
+///
 /// If no candidate survives, the list becomes the single target vertex of the same segment
 /// whose descriptor is nearest (counted in [`FilterStats::fallbacks`]). If the target has no
 /// vertex of that segment, the list is left as it was ([`FilterStats::segment_missing`]).
@@ -33,7 +39,7 @@ pub struct FilterStats {
 /// use symcorr_correspond::{skeleton_filter, Candidate, Descriptors};
 /// let d = Descriptors::new(2, 1, vec![0.0, 0.1]).unwrap();
 /// let mut c = vec![vec![Candidate { vertex: 1, distance: 0.0 }, Candidate { vertex: 0, distance: 0.1 }]];
-/// let s = skeleton_filter(&mut c, &[0], &[ThighLeft, ThighRight], &[ThighLeft, ThighRight], &d, &d);
+/// let s = skeleton_filter(&mut c, &[0], (&[ThighLeft, ThighRight], &[ThighLeft, ThighRight]), None, &d, &d);
 /// assert_eq!(c[0][0].vertex, 0);
 /// assert_eq!(s.removed, 1);
 /// ```
@@ -43,11 +49,15 @@ pub struct FilterStats {
 pub fn skeleton_filter(
     cands: &mut [Vec<Candidate>],
     points: &[u32],
-    template_labels: &[Segment],
-    target_labels: &[Segment],
+    (template_labels, target_labels): (&[Segment], &[Segment]),
+    halves: Option<(&[i8], &[i8])>,
     template: &Descriptors,
     target: &Descriptors,
 ) -> FilterStats {
+    let compatible = |p: u32, q: u32| -> bool {
+        target_labels[q as usize] == template_labels[p as usize]
+            && halves.is_none_or(|(hp, hq)| hp[p as usize] * hq[q as usize] >= 0)
+    };
     assert_eq!(cands.len(), points.len(), "one candidate list per point");
     // Target vertices per segment, for the fallback search.
     let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); 17];
@@ -67,20 +77,23 @@ pub fn skeleton_filter(
             stats.kept += before;
             continue;
         }
-        list.retain(|c| target_labels[c.vertex as usize] == seg);
+        list.retain(|c| compatible(p, c.vertex));
         stats.kept += list.len();
         stats.removed += before - list.len();
         if list.is_empty() {
             stats.fallbacks += 1;
-            let best = pool
-                .iter()
-                .map(|&q| Candidate {
-                    vertex: q,
-                    distance: template.distance(p as usize, target, q as usize),
-                })
-                .min_by(|a, b| a.distance.total_cmp(&b.distance));
-            // Invariant: the pool is non-empty (checked above).
-            list.extend(best);
+            let nearest = |strict: bool| {
+                pool.iter()
+                    .filter(|&&q| !strict || compatible(p, q))
+                    .map(|&q| Candidate {
+                        vertex: q,
+                        distance: template.distance(p as usize, target, q as usize),
+                    })
+                    .min_by(|a, b| a.distance.total_cmp(&b.distance))
+            };
+            // The same half if the target has one, else anywhere on the segment (the pool is
+            // non-empty, checked above).
+            list.extend(nearest(true).or_else(|| nearest(false)));
         }
     }
     stats
@@ -106,12 +119,44 @@ mod tests {
                 distance: 0.2,
             },
         ]];
-        let s = skeleton_filter(&mut c, &[0], &[ShinLeft], &labels_u, &t, &u);
+        let s = skeleton_filter(&mut c, &[0], (&[ShinLeft], &labels_u), None, &t, &u);
         assert_eq!(s.fallbacks, 1);
         assert_eq!(s.removed, 2);
         assert_eq!(c[0].len(), 1);
         assert_eq!(c[0][0].vertex, 3);
         assert!((c[0][0].distance - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn halves_split_midline_segments() {
+        let t = Descriptors::new(1, 1, vec![0.0]).unwrap();
+        let u = Descriptors::new(3, 1, vec![0.1, 0.2, 0.3]).unwrap();
+        let mut c = vec![vec![
+            Candidate {
+                vertex: 0,
+                distance: 0.1,
+            },
+            Candidate {
+                vertex: 1,
+                distance: 0.2,
+            },
+            Candidate {
+                vertex: 2,
+                distance: 0.3,
+            },
+        ]];
+        let hu = [-1i8, 0, 1];
+        let s = skeleton_filter(
+            &mut c,
+            &[0],
+            (&[Torso], &[Torso; 3]),
+            Some((&[1], &hu)),
+            &t,
+            &u,
+        );
+        assert_eq!(s.removed, 1);
+        let got: Vec<u32> = c[0].iter().map(|c| c.vertex).collect();
+        assert_eq!(got, vec![1, 2]);
     }
 
     #[test]
@@ -122,7 +167,7 @@ mod tests {
             vertex: 1,
             distance: 0.2,
         }]];
-        let s = skeleton_filter(&mut c, &[0], &[Head], &[Torso, Torso], &t, &u);
+        let s = skeleton_filter(&mut c, &[0], (&[Head], &[Torso, Torso]), None, &t, &u);
         assert_eq!(s.segment_missing, 1);
         assert_eq!(c[0].len(), 1);
     }

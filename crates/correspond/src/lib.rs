@@ -22,7 +22,7 @@
 //! let d = Descriptors::new(2, 1, vec![1.0, 1.0]).unwrap();
 //! let labels = [ThighLeft, ThighRight];
 //! let profile = [0.3, 0.3];
-//! let side = Side { descriptors: &d, labels: &labels, profile: &profile };
+//! let side = Side { descriptors: &d, labels: &labels, profile: &profile, halves: None };
 //! let out = match_points(&side, &side, &[0, 1], &MatchOptions::default()).unwrap();
 //! assert_eq!(out.matches[0].target, 0);
 //! assert_eq!(out.matches[1].target, 1);
@@ -38,6 +38,10 @@
 //!   over the base set, so sets of different sizes compare). Ties go to the nearer descriptor.
 //! * **Confidence** of a match: `1 / (1 + d/d̃ + g/g̃)` — descriptor distance and eq. 8 gap,
 //!   each over its median in the match set ([`assign_confidence`]).
+//! * **Midline halves** (beyond the paper, on by default, [`MatchOptions::midline_halves`]):
+//!   pelvis, torso and head are single segments with a left and a right half, so the paper's
+//!   filter cannot stop a flip there; the pipeline passes a per-vertex side of the skeleton's
+//!   sagittal plane ([`Side::halves`]) and the filter also requires the same half.
 //! * **Fallback.** If the filter removes every candidate, the nearest target vertex of the same
 //!   segment by descriptor is used and counted ([`FilterStats::fallbacks`]); if the target has
 //!   no vertex of that segment at all, the point keeps its unfiltered candidates
@@ -55,7 +59,7 @@ mod selection;
 pub use candidates::{candidates, Candidate, CandidateOptions, Descriptors};
 pub use filter::{skeleton_filter, FilterStats};
 pub use metrics::{
-    cumulative_curve, evaluate, table1_row, within, EdgeGraph, Evaluation, FLIP_MIN_SEPARATION,
+    cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
 pub use sample::farthest_point_sample;
 pub use selection::{assign_confidence, base_profile, select, Match};
@@ -84,12 +88,18 @@ pub struct Side<'a> {
     pub labels: &'a [Segment],
     /// Base-set profile `D̂` per vertex ([`base_profile`]).
     pub profile: &'a [f64],
+    /// Optional sagittal half per vertex for the midline segments (see [`skeleton_filter`]):
+    /// `-1` right, `+1` left, `0` near the plane or not on a midline segment.
+    pub halves: Option<&'a [i8]>,
 }
 
 impl Side<'_> {
     fn check(&self, name: &str) -> Result<(), CorrespondError> {
         let n = self.descriptors.len();
-        if self.labels.len() != n || self.profile.len() != n {
+        if self.labels.len() != n
+            || self.profile.len() != n
+            || self.halves.is_some_and(|h| h.len() != n)
+        {
             return Err(CorrespondError::InvalidArgument(format!(
                 "{name}: {n} descriptors, {} labels, {} profile values",
                 self.labels.len(),
@@ -108,6 +118,9 @@ pub struct MatchOptions {
     /// Apply the skeleton filter (§3.2). `false` is the ablation: the paper's method without
     /// its contribution.
     pub skeleton_filter: bool,
+    /// Within the filter, also separate the left and right halves of the midline segments
+    /// ([`Side::halves`], when both sides have them). `false` is the paper's filter exactly.
+    pub midline_halves: bool,
 }
 
 impl Default for MatchOptions {
@@ -115,6 +128,7 @@ impl Default for MatchOptions {
         MatchOptions {
             candidates: CandidateOptions::default(),
             skeleton_filter: true,
+            midline_halves: true,
         }
     }
 }
@@ -157,11 +171,15 @@ pub fn match_points(
         cands.iter().map(Vec::len).sum::<usize>() as f64 / cands.len().max(1) as f64;
     let t = Instant::now();
     let filter = if options.skeleton_filter {
+        let halves = match (options.midline_halves, template.halves, target.halves) {
+            (true, Some(a), Some(b)) => Some((a, b)),
+            _ => None,
+        };
         skeleton_filter(
             &mut cands,
             points,
-            template.labels,
-            target.labels,
+            (template.labels, target.labels),
+            halves,
             template.descriptors,
             target.descriptors,
         )
@@ -199,11 +217,13 @@ mod tests {
             descriptors: &t,
             labels: &tl,
             profile: &tp,
+            halves: None,
         };
         let us = Side {
             descriptors: &u,
             labels: &ul,
             profile: &up,
+            halves: None,
         };
         let off = MatchOptions {
             skeleton_filter: false,
@@ -226,6 +246,7 @@ mod tests {
             descriptors: &d,
             labels: &[Torso],
             profile: &[0.0, 0.0],
+            halves: None,
         };
         assert!(match_points(&s, &s, &[0], &MatchOptions::default()).is_err());
     }

@@ -30,14 +30,14 @@ pub const FLIP_MIN_SEPARATION: f64 = 0.1;
 
 /// Mesh edges as a weighted graph (CSR, Euclidean edge lengths) with a bounded Dijkstra.
 #[derive(Debug, Clone)]
-pub struct EdgeGraph {
+pub struct EvalGraph {
     offsets: Vec<usize>,
     neighbors: Vec<u32>,
     lengths: Vec<f64>,
     positions: Vec<[f64; 3]>,
 }
 
-/// Reusable per-thread buffers for [`EdgeGraph`] searches (visited stamps instead of clearing).
+/// Reusable per-thread buffers for [`EvalGraph`] searches (visited stamps instead of clearing).
 struct Scratch {
     dist: Vec<f64>,
     stamp: Vec<u32>,
@@ -58,9 +58,9 @@ impl Scratch {
     }
 }
 
-impl EdgeGraph {
+impl EvalGraph {
     /// The edge graph of `mesh`.
-    pub fn new(mesh: &TriMesh) -> EdgeGraph {
+    pub fn new(mesh: &TriMesh) -> EvalGraph {
         let nb = mesh.vertex_neighbors();
         let mut offsets = Vec::with_capacity(nb.len() + 1);
         let mut neighbors = Vec::new();
@@ -76,7 +76,7 @@ impl EdgeGraph {
             }
             offsets.push(neighbors.len());
         }
-        EdgeGraph {
+        EvalGraph {
             offsets,
             neighbors,
             lengths,
@@ -139,9 +139,9 @@ impl EdgeGraph {
     ///
     /// ```
     /// use symcorr_mesh::TriMesh;
-    /// use symcorr_correspond::EdgeGraph;
+    /// use symcorr_correspond::EvalGraph;
     /// let m = TriMesh::new(vec![[0.0; 3], [3.0, 0.0, 0.0], [3.0, 4.0, 0.0]], vec![[0, 1, 2]]).unwrap();
-    /// assert_eq!(EdgeGraph::new(&m).distance(0, 2), 5.0);
+    /// assert_eq!(EvalGraph::new(&m).distance(0, 2), 5.0);
     /// ```
     pub fn distance(&self, a: u32, b: u32) -> f64 {
         let mut s = Scratch::new(self.positions.len());
@@ -220,15 +220,15 @@ pub fn within(errors: &[f64], x: f64) -> f64 {
 ///
 /// ```
 /// use symcorr_mesh::TriMesh;
-/// use symcorr_correspond::{evaluate, EdgeGraph};
+/// use symcorr_correspond::{evaluate, EvalGraph};
 /// let m = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
-/// let g = EdgeGraph::new(&m);
+/// let g = EvalGraph::new(&m);
 /// let e = evaluate(&g, m.total_area(), &[(0, 0), (1, 0)], |p| p, None);
 /// assert_eq!(e.errors[0], 0.0);
 /// assert!((e.errors[1] - 1.0 / 0.5f64.sqrt()).abs() < 1e-12);
 /// ```
 pub fn evaluate(
-    graph: &EdgeGraph,
+    graph: &EvalGraph,
     target_area: f64,
     matches: &[(u32, u32)],
     truth: impl Fn(u32) -> u32 + Sync,
@@ -351,7 +351,7 @@ mod tests {
     #[test]
     fn grid_distances_are_edge_paths() {
         let m = grid(10, 4);
-        let g = EdgeGraph::new(&m);
+        let g = EvalGraph::new(&m);
         // Along an axis: exact. Along the diagonals present in the triangulation: exact.
         assert!((g.distance(0, 10) - 10.0).abs() < 1e-12);
         assert!((g.distance(0, 4 * 11 + 4) - 4.0 * 2f64.sqrt()).abs() < 1e-12);
@@ -369,7 +369,7 @@ mod tests {
     fn errors_and_flips_on_a_mirrored_strip() {
         // 21 × 1 strip, mirror x ↦ 20 − x.
         let m = grid(20, 1);
-        let g = EdgeGraph::new(&m);
+        let g = EvalGraph::new(&m);
         let area = m.total_area();
         let mirror: Vec<u32> = (0..m.num_vertices() as u32)
             .map(|v| {

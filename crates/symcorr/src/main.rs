@@ -19,12 +19,24 @@ struct Args {
 enum Command {
     /// Laplace–Beltrami spectrum of a mesh: counts, repair report, eigenvalues, timings.
     Spectrum(cli::spectrum::SpectrumArgs),
+    /// Correspondence between two meshes with their skeletons (symcorr.correspondence/1 JSON).
+    Match(cli::match_cmd::MatchArgs),
+    /// Run every pair of a benchmark dataset: mean error, flip rate, Table 1 row, plot.
+    Bench(cli::bench::BenchArgs),
+    /// The whole pipeline on bundled fixtures, with outputs in ./symcorr-demo/.
+    Demo(cli::demo::DemoArgs),
+    /// Depth frame (.oni recording, PNG-16, or device) + joints → scan mesh.
+    Scan(cli::scan::ScanArgs),
 }
 
 fn main() -> ExitCode {
     let args = Args::parse();
     let result = match args.command {
         Command::Spectrum(a) => cli::spectrum::run(a),
+        Command::Match(a) => cli::match_cmd::run(a),
+        Command::Bench(a) => cli::bench::run(a),
+        Command::Demo(a) => cli::demo::run(a),
+        Command::Scan(a) => cli::scan::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,5 +1,10 @@
 //! One module per subcommand. Each exposes `XArgs` (clap `Args`) and `run(XArgs) -> Result<(), CliError>`.
 
+pub mod bench;
+pub mod demo;
+pub mod match_cmd;
+pub mod progress;
+pub mod scan;
 pub mod spectrum;
 
 /// A user error: printed as one line on stderr, exit status 1.

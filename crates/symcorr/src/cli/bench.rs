@@ -1,0 +1,229 @@
+//! `symcorr bench DATASET [--pairs FILE] [--mode sparse|dense] [--json OUT] [--out-dir DIR]`
+
+use super::match_cmd::MethodArgs;
+use super::progress::Bar;
+use super::CliError;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use symcorr::dataset::{run_bench, BenchReport, Dataset, Progress};
+use symcorr::output::{atomic_write, correspondence_json, curve_svg};
+use symcorr::Pipeline;
+
+/// Sparse or dense matching.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModeArg {
+    /// A farthest-point sample of template points (--samples).
+    Sparse,
+    /// Every template vertex.
+    Dense,
+}
+
+/// Arguments of `symcorr bench`.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "A dataset is a folder: meshes/NAME.{off,ply,obj} (same vertex order in every mesh),
+joints/NAME.json, optional mirror.txt (line i: mirror vertex of vertex i), pairs.txt
+(`template target` per line).
+
+Examples:
+  symcorr bench fixtures/synth
+  symcorr bench fixtures/synth --mode dense --json summary.json --out-dir results/
+  symcorr bench fixtures/synth --no-skeleton-filter --json ablation.json"
+)]
+pub struct BenchArgs {
+    /// Dataset folder.
+    pub dataset: PathBuf,
+    /// Pairs file (default: DATASET/pairs.txt).
+    #[arg(long)]
+    pub pairs: Option<PathBuf>,
+    /// Sparse or dense matching.
+    #[arg(long, value_enum, default_value_t = ModeArg::Sparse)]
+    pub mode: ModeArg,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    /// Write the JSON summary here.
+    #[arg(long, value_name = "OUT")]
+    pub json: Option<PathBuf>,
+    /// Write each pair's correspondence as DIR/TEMPLATE__TARGET.json, and the plot as DIR/curve.svg.
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: Option<PathBuf>,
+    /// Write the cumulative error curve (SVG) here (default: next to --json as OUT.svg, or
+    /// DIR/curve.svg with --out-dir).
+    #[arg(long, value_name = "SVG")]
+    pub plot: Option<PathBuf>,
+    /// Frame of the joint logs to use (default: the first).
+    #[arg(long)]
+    pub frame: Option<usize>,
+}
+
+/// The JSON summary (keys fixed by the issue: `mean_error`, `flip_rate`, `within_0.05`,
+/// `within_0.10`, `table1_row`, `seconds_per_pair`, `pairs`).
+pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -> Value {
+    let pairs: Vec<Value> = report
+        .pairs
+        .iter()
+        .map(|p| {
+            let (counted, flips) = p.evaluation.flip_counts();
+            json!({
+                "template": p.template,
+                "target": p.target,
+                "matches": p.evaluation.errors.len(),
+                "mean_error": p.evaluation.mean_error(),
+                "flip_rate": p.evaluation.flip_rate(),
+                "flips": flips,
+                "flip_counted": counted,
+                "within_0.05": p.evaluation.within(0.05),
+                "within_0.10": p.evaluation.within(0.10),
+                "table1_row": p.table1_row,
+                "seconds": p.seconds,
+                "match_seconds": p.match_seconds,
+                "skeleton_filter_fallbacks": p.correspondence.filter.fallbacks,
+            })
+        })
+        .collect();
+    let o = &pipeline.options;
+    json!({
+        "dataset": dataset.display().to_string(),
+        "mode": match o.mode { symcorr::Mode::Dense => "dense".to_string(), symcorr::Mode::Sparse { samples } => format!("sparse:{samples}") },
+        "skeleton_filter": o.matching.skeleton_filter,
+        "candidates": {"nearest": o.matching.candidates.nearest, "threshold": o.matching.candidates.threshold},
+        "eigenpairs": o.prepare.eigenpairs,
+        "base_radius": o.prepare.base_radius,
+        "mean_error": report.mean_error(),
+        "flip_rate": report.flip_rate(),
+        "within_0.05": report.within(0.05),
+        "within_0.10": report.within(0.10),
+        "table1_row": report.table1_row(),
+        "seconds_per_pair": report.seconds_per_pair(),
+        "wall_seconds": report.wall_seconds,
+        "skeleton_filter_fallbacks": report.fallbacks(),
+        "curve": report.curve(),
+        "pairs": pairs,
+    })
+}
+
+fn pct(x: f64) -> String {
+    format!("{:5.1}%", 100.0 * x)
+}
+
+fn flip_str(f: Option<f64>) -> String {
+    f.map_or_else(|| "    n/a".to_string(), |f| format!("{:6.2}%", 100.0 * f))
+}
+
+/// The table printed by `bench` and `demo`.
+pub fn table(report: &BenchReport, total: bool) -> String {
+    let mut s = format!(
+        "{:<34} {:>8} {:>8} {:>7} {:>7} {:>7}\n",
+        "pair", "mean err", "flips", "≤0.05", "≤0.10", "s/pair"
+    );
+    for p in &report.pairs {
+        let name = format!("{} → {}", p.template, p.target);
+        s += &format!(
+            "{:<34} {:>8.4} {:>8} {:>7} {:>7} {:>7.2}\n",
+            name,
+            p.evaluation.mean_error(),
+            flip_str(p.evaluation.flip_rate()),
+            pct(p.evaluation.within(0.05)),
+            pct(p.evaluation.within(0.10)),
+            p.seconds
+        );
+    }
+    if !total {
+        return s;
+    }
+    s += &format!(
+        "{:<34} {:>8.4} {:>8} {:>7} {:>7} {:>7.2}\n",
+        format!("all ({} pairs)", report.pairs.len()),
+        report.mean_error(),
+        flip_str(report.flip_rate()),
+        pct(report.within(0.05)),
+        pct(report.within(0.10)),
+        report.seconds_per_pair()
+    );
+    let row: Vec<String> = report
+        .table1_row()
+        .iter()
+        .map(|x| format!("{x:.3}"))
+        .collect();
+    s += &format!(
+        "Table 1 row (best 10 %…100 % by confidence): {}\n",
+        row.join(" ")
+    );
+    s
+}
+
+/// Writes the per-pair correspondence files into `dir`.
+pub fn write_pair_files(
+    report: &BenchReport,
+    dataset: &Dataset,
+    dir: &Path,
+) -> Result<(), CliError> {
+    std::fs::create_dir_all(dir).map_err(|e| CliError::with(dir.display(), e))?;
+    for p in &report.pairs {
+        let (a, b) = (&report.prepared[&p.template], &report.prepared[&p.target]);
+        let doc = correspondence_json(
+            &dataset.meshes[&p.template].display().to_string(),
+            a,
+            &dataset.meshes[&p.target].display().to_string(),
+            b,
+            &p.correspondence,
+            &symcorr::output::pair_timings(a, b, &p.correspondence),
+        );
+        let path = dir.join(format!("{}__{}.json", p.template, p.target));
+        let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
+        atomic_write(&path, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    }
+    Ok(())
+}
+
+pub fn run(args: BenchArgs) -> Result<(), CliError> {
+    let pipeline = args.method.pipeline(args.mode == ModeArg::Dense)?;
+    if let Some(j) = &args.json {
+        super::match_cmd::check_output_dir(j)?;
+    }
+    let dataset =
+        Dataset::open(&args.dataset, args.pairs.as_deref()).map_err(|e| CliError(e.to_string()))?;
+    let bar = Bar::new();
+    let report = run_bench(&dataset, &pipeline, args.frame, &|p| match p {
+        Progress::Prepared { done, total } => bar.update("preparing meshes", done, total),
+        Progress::Matched { done, total } => bar.update("matching pairs", done, total),
+    })
+    .map_err(|e| CliError(e.to_string()))?;
+    bar.finish();
+    print!("{}", table(&report, true));
+    let label = if pipeline.options.matching.skeleton_filter {
+        "with skeleton filter"
+    } else {
+        "no skeleton filter"
+    };
+    let svg = curve_svg(
+        &format!("symcorr bench {}", args.dataset.display()),
+        &[(label.to_string(), report.curve())],
+        0.25,
+    );
+    let plot = args.plot.clone().or_else(|| {
+        args.out_dir
+            .as_ref()
+            .map(|d| d.join("curve.svg"))
+            .or_else(|| args.json.as_ref().map(|j| j.with_extension("svg")))
+    });
+    if let Some(dir) = &args.out_dir {
+        write_pair_files(&report, &dataset, dir)?;
+        println!(
+            "wrote {} correspondence files to {}",
+            report.pairs.len(),
+            dir.display()
+        );
+    }
+    if let Some(p) = &plot {
+        atomic_write(p, svg.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(j) = &args.json {
+        let doc = summary_json(&report, &pipeline, &args.dataset);
+        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError(e.to_string()))?;
+        atomic_write(j, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+        println!("wrote {}", j.display());
+    }
+    Ok(())
+}

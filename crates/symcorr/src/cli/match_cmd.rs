@@ -1,0 +1,207 @@
+//! `symcorr match TEMPLATE TARGET --template-joints J1 --target-joints J2 --out corr.json
+//! [--dense] [--samples N] [--frame N] [--ply-out DIR]`
+
+use super::CliError;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use symcorr::dataset::{read_mesh, read_skeleton};
+use symcorr::output::{
+    atomic_write, correspondence_json, match_colours, pair_timings, segment_colours,
+};
+use symcorr::{Mode, Pipeline, PipelineOptions, PreparedMesh};
+use symcorr_correspond::CandidateOptions;
+
+/// Arguments of `symcorr match`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json
+  symcorr match a.ply b.ply --template-joints a.json --target-joints b.txt --out corr.json --dense --ply-out colours/
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out ablation.json --no-skeleton-filter")]
+pub struct MatchArgs {
+    /// Template mesh (OBJ, OFF, PLY, glTF/GLB).
+    pub template: PathBuf,
+    /// Target mesh.
+    pub target: PathBuf,
+    /// Joints of the template (symcorr.joints/1 JSON, Kinect SDK text, NTU .skeleton).
+    #[arg(long)]
+    pub template_joints: PathBuf,
+    /// Joints of the target.
+    #[arg(long)]
+    pub target_joints: PathBuf,
+    /// Output correspondence file (symcorr.correspondence/1 JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Match every template vertex instead of a sample.
+    #[arg(long)]
+    pub dense: bool,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    /// Frame of the joint logs to use (default: the first).
+    #[arg(long)]
+    pub frame: Option<usize>,
+    /// Also write coloured meshes into DIR: matched points share colours
+    /// (template_matches.ply, target_matches.ply) and segment colours
+    /// (template_segments.ply, target_segments.ply), plus .glb copies.
+    #[arg(long, value_name = "DIR")]
+    pub ply_out: Option<PathBuf>,
+}
+
+/// Method options shared by `match` and `bench`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MethodArgs {
+    /// Template points in sparse mode (farthest-point sample).
+    #[arg(long, default_value_t = symcorr::DEFAULT_SAMPLES)]
+    pub samples: usize,
+    /// Ablation: skip the skeleton filter (the paper's method without its contribution).
+    #[arg(long)]
+    pub no_skeleton_filter: bool,
+    /// Candidates per point: the N nearest by si-HKS.
+    #[arg(long, value_name = "N", default_value_t = symcorr_correspond::DEFAULT_NEAREST)]
+    pub candidates: usize,
+    /// Candidates per point: only those within FACTOR × the nearest si-HKS distance (≥ 1).
+    #[arg(long, value_name = "FACTOR")]
+    pub threshold: Option<f64>,
+    /// Laplace–Beltrami eigenpairs behind the si-HKS.
+    #[arg(long, default_value_t = symcorr::DEFAULT_EIGENPAIRS)]
+    pub eigenpairs: usize,
+    /// Base vertex set radius, in units of sqrt(area).
+    #[arg(long, default_value_t = symcorr::DEFAULT_BASE_RADIUS)]
+    pub base_radius: f64,
+}
+
+impl MethodArgs {
+    /// The pipeline these options describe.
+    pub fn pipeline(&self, dense: bool) -> Result<Pipeline, CliError> {
+        if !dense && self.samples == 0 {
+            return Err(CliError("--samples must be at least 1".into()));
+        }
+        if self.candidates == 0 {
+            return Err(CliError("--candidates must be at least 1".into()));
+        }
+        if let Some(t) = self.threshold {
+            if !(t.is_finite() && t >= 1.0) {
+                return Err(CliError(format!("--threshold {t}: must be a factor ≥ 1")));
+            }
+        }
+        if !(self.base_radius.is_finite() && self.base_radius > 0.0) {
+            return Err(CliError(format!(
+                "--base-radius {}: must be positive",
+                self.base_radius
+            )));
+        }
+        let mut o = PipelineOptions::default();
+        o.mode = if dense {
+            Mode::Dense
+        } else {
+            Mode::Sparse {
+                samples: self.samples,
+            }
+        };
+        o.matching.skeleton_filter = !self.no_skeleton_filter;
+        o.matching.candidates = CandidateOptions {
+            nearest: Some(self.candidates),
+            threshold: self.threshold,
+        };
+        o.prepare.eigenpairs = self.eigenpairs;
+        o.prepare.base_radius = self.base_radius;
+        Ok(Pipeline::new(o))
+    }
+}
+
+/// Reads a mesh and its joints and prepares it, naming the files in errors.
+pub fn load_prepared(
+    pipeline: &Pipeline,
+    mesh: &Path,
+    joints: &Path,
+    frame: Option<usize>,
+) -> Result<PreparedMesh, CliError> {
+    let m = read_mesh(mesh).map_err(|e| CliError(e.to_string()))?;
+    let sk = read_skeleton(joints, frame).map_err(|e| CliError(e.to_string()))?;
+    pipeline
+        .prepare(m, &sk)
+        .map_err(|e| CliError::with(mesh.display(), e))
+}
+
+/// Writes the four coloured meshes (PLY, and GLB when the mesh crate can) into `dir`.
+pub fn write_coloured(
+    dir: &Path,
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    corr: &symcorr::Correspondence,
+) -> Result<Vec<PathBuf>, CliError> {
+    std::fs::create_dir_all(dir).map_err(|e| CliError::with(dir.display(), e))?;
+    let (tc, uc) = match_colours(template, target, corr);
+    let ts = segment_colours(template);
+    let us = segment_colours(target);
+    let mut written = Vec::new();
+    for (name, mesh, colours) in [
+        ("template_matches", &template.mesh, &tc),
+        ("target_matches", &target.mesh, &uc),
+        ("template_segments", &template.mesh, &ts),
+        ("target_segments", &target.mesh, &us),
+    ] {
+        let ply = dir.join(format!("{name}.ply"));
+        symcorr_mesh::io::write(&ply, mesh, Some(colours)).map_err(|e| CliError(e.to_string()))?;
+        written.push(ply);
+        let glb = dir.join(format!("{name}.glb"));
+        // GLB support arrives with the mesh crate's glTF writer; PLY is always written.
+        if symcorr_mesh::io::write(&glb, mesh, Some(colours)).is_ok() {
+            written.push(glb);
+        }
+    }
+    Ok(written)
+}
+
+pub fn run(args: MatchArgs) -> Result<(), CliError> {
+    let pipeline = args.method.pipeline(args.dense)?;
+    check_output_dir(&args.out)?;
+    let start = Instant::now();
+    let progress = super::progress::Spinner::new("preparing meshes");
+    let (a, b) = rayon::join(
+        || load_prepared(&pipeline, &args.template, &args.template_joints, args.frame),
+        || load_prepared(&pipeline, &args.target, &args.target_joints, args.frame),
+    );
+    let (a, b) = (a?, b?);
+    progress.set("matching");
+    let corr = pipeline.run(&a, &b).map_err(|e| CliError(e.to_string()))?;
+    let mut timings = pair_timings(&a, &b, &corr);
+    timings.push(("total".into(), start.elapsed().as_secs_f64()));
+    progress.finish();
+    let doc = correspondence_json(
+        &args.template.display().to_string(),
+        &a,
+        &args.target.display().to_string(),
+        &b,
+        &corr,
+        &timings,
+    );
+    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
+    atomic_write(&args.out, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    let mut files = vec![args.out.clone()];
+    if let Some(dir) = &args.ply_out {
+        files.extend(write_coloured(dir, &a, &b, &corr)?);
+    }
+    println!(
+        "{} matches ({} template points, {} skeleton-filter fallbacks) in {:.2} s",
+        corr.matches.len(),
+        corr.filter.points.max(corr.matches.len()),
+        corr.filter.fallbacks,
+        start.elapsed().as_secs_f64()
+    );
+    for f in files {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}
+
+/// Fails early (before any work) if the output's directory does not exist.
+pub fn check_output_dir(out: &Path) -> Result<(), CliError> {
+    match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() && !d.is_dir() => Err(CliError(format!(
+            "{}: output directory {} does not exist",
+            out.display(),
+            d.display()
+        ))),
+        _ => Ok(()),
+    }
+}

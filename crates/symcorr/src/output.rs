@@ -1,0 +1,291 @@
+//! Output files: `symcorr.correspondence/1` JSON, match- and segment-coloured meshes, the
+//! cumulative error curve as SVG. Every file is written atomically (temporary file in the
+//! same directory, then rename), so a failure never leaves a half-written output.
+
+use crate::{Correspondence, PipelineError, PreparedMesh};
+use serde_json::{json, Value};
+use std::io::Write;
+use std::path::Path;
+use symcorr_attach::palette;
+
+/// The `format` tag of correspondence files.
+pub const CORRESPONDENCE_FORMAT: &str = "symcorr.correspondence/1";
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
+    let file = path.display().to_string();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(PipelineError::File {
+            file,
+            message: e.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// Stage timings of a pair: each per-mesh stage summed over the two meshes, then the pair
+/// stages, in pipeline order.
+pub fn pair_timings(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    corr: &Correspondence,
+) -> Vec<(String, f64)> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for (name, s) in template.timings.iter().chain(&target.timings) {
+        match out.iter_mut().find(|(n, _)| n == name) {
+            Some((_, t)) => *t += s,
+            None => out.push((name.clone(), *s)),
+        }
+    }
+    out.extend(corr.timings.iter().cloned());
+    out
+}
+
+/// The `symcorr.correspondence/1` document (DESIGN.md, Data formats).
+pub fn correspondence_json(
+    template_path: &str,
+    template: &PreparedMesh,
+    target_path: &str,
+    target: &PreparedMesh,
+    corr: &Correspondence,
+    timings: &[(String, f64)],
+) -> Value {
+    let pairs: Vec<Value> = corr
+        .matches
+        .iter()
+        .map(|m| json!([m.template, m.target, round6(m.confidence)]))
+        .collect();
+    let labels =
+        |p: &PreparedMesh| -> Vec<usize> { p.labels().iter().map(|s| s.index()).collect() };
+    let timings: serde_json::Map<String, Value> = timings
+        .iter()
+        .map(|(n, s)| (n.clone(), json!(round6(*s))))
+        .collect();
+    json!({
+        "format": CORRESPONDENCE_FORMAT,
+        "template": {"path": template_path, "vertices": template.num_vertices()},
+        "target": {"path": target_path, "vertices": target.num_vertices()},
+        "pairs": pairs,
+        "segments": {"template": labels(template), "target": labels(target)},
+        "skeleton_filter": {
+            "points": corr.filter.points,
+            "kept": corr.filter.kept,
+            "removed": corr.filter.removed,
+            "fallbacks": corr.filter.fallbacks,
+            "segment_missing": corr.filter.segment_missing,
+        },
+        "timings_s": timings,
+    })
+}
+
+fn round6(x: f64) -> f64 {
+    (x * 1e6).round() / 1e6
+}
+
+/// A smooth colour field over the template: position in the bounding box → RGB, so that nearby
+/// points have similar colours and distant ones different.
+fn field_colour(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> [u8; 3] {
+    let mut c = [0u8; 3];
+    for k in 0..3 {
+        let t = ((p[k] - lo[k]) / (hi[k] - lo[k]).max(1e-300)).clamp(0.0, 1.0);
+        c[k] = (40.0 + 215.0 * t).round() as u8;
+    }
+    c
+}
+
+/// Per-vertex colours of the template and the target in which matched points share a colour:
+/// each template point gets the colour of its position; every template vertex shows its nearest
+/// matched point's colour, and every target vertex the colour of the match whose target point is
+/// nearest (Euclidean). In dense mode this is exactly "vertex `q` has the colour of the template
+/// vertex matched to it".
+pub fn match_colours(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    corr: &Correspondence,
+) -> (Vec<[u8; 3]>, Vec<[u8; 3]>) {
+    let (lo, hi) = template.mesh.bounding_box();
+    let tp = &template.mesh.positions;
+    let colours: Vec<[u8; 3]> = corr
+        .matches
+        .iter()
+        .map(|m| field_colour(tp[m.template as usize], lo, hi))
+        .collect();
+    let spread = |mesh: &symcorr_mesh::TriMesh, anchor: &(dyn Fn(usize) -> usize + Sync)| {
+        let grey = [128u8, 128, 128];
+        let mut out = vec![grey; mesh.num_vertices()];
+        // Exact anchors first, then nearest anchor for the rest.
+        let mut has = vec![false; mesh.num_vertices()];
+        for (i, c) in colours.iter().enumerate() {
+            let v = anchor(i);
+            out[v] = *c;
+            has[v] = true;
+        }
+        let anchors: Vec<usize> = (0..colours.len()).collect();
+        if anchors.is_empty() {
+            return out;
+        }
+        use rayon::prelude::*;
+        let fill: Vec<Option<[u8; 3]>> = (0..mesh.num_vertices())
+            .into_par_iter()
+            .map(|v| {
+                if has[v] {
+                    return None;
+                }
+                let p = mesh.positions[v];
+                let best = anchors
+                    .iter()
+                    .min_by(|&&a, &&b| {
+                        let da = d2(p, mesh.positions[anchor(a)]);
+                        let db = d2(p, mesh.positions[anchor(b)]);
+                        da.total_cmp(&db)
+                    })
+                    .copied()
+                    .unwrap_or(0);
+                Some(colours[best])
+            })
+            .collect();
+        for (v, c) in fill.into_iter().enumerate() {
+            if let Some(c) = c {
+                out[v] = c;
+            }
+        }
+        out
+    };
+    let m = &corr.matches;
+    let t_col = spread(&template.mesh, &|i| m[i].template as usize);
+    let u_col = spread(&target.mesh, &|i| m[i].target as usize);
+    (t_col, u_col)
+}
+
+fn d2(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
+}
+
+/// Segment colours (symcorr-attach's palette) per vertex.
+pub fn segment_colours(p: &PreparedMesh) -> Vec<[u8; 3]> {
+    p.labels().iter().map(|&s| palette::colour(s)).collect()
+}
+
+/// The cumulative error curve(s) as a self-contained SVG plot: x = normalised geodesic error in
+/// [0, `max_x`], y = fraction of matches. `curves` are `(label, points)`.
+pub fn curve_svg(title: &str, curves: &[(String, Vec<(f64, f64)>)], max_x: f64) -> String {
+    let (w, h) = (640.0, 440.0);
+    let (l, r, t, b) = (70.0, 20.0, 40.0, 60.0);
+    let pw = w - l - r;
+    let ph = h - t - b;
+    let sx = |x: f64| l + pw * (x / max_x);
+    let sy = |y: f64| t + ph * (1.0 - y);
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">\n\
+         <rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n\
+         <text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{}</text>\n",
+        w / 2.0,
+        xml_escape(title)
+    );
+    // Grid and axes.
+    for i in 0..=5 {
+        let x = max_x * i as f64 / 5.0;
+        let px = sx(x);
+        s += &format!(
+            "<line x1=\"{px:.1}\" y1=\"{:.1}\" x2=\"{px:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>\n<text x=\"{px:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{x:.2}</text>\n",
+            sy(0.0),
+            sy(1.0),
+            sy(0.0) + 18.0
+        );
+        let y = i as f64 / 5.0;
+        let py = sy(y);
+        s += &format!(
+            "<line x1=\"{:.1}\" y1=\"{py:.1}\" x2=\"{:.1}\" y2=\"{py:.1}\" stroke=\"#ddd\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{:.0}%</text>\n",
+            sx(0.0),
+            sx(max_x),
+            sx(0.0) - 6.0,
+            py + 4.0,
+            y * 100.0
+        );
+    }
+    s += &format!(
+        "<rect x=\"{l}\" y=\"{t}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>\n\
+         <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">geodesic error / sqrt(area)</text>\n\
+         <text x=\"18\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 18 {})\">% of matches</text>\n",
+        l + pw / 2.0,
+        h - 15.0,
+        t + ph / 2.0,
+        t + ph / 2.0
+    );
+    const COLOURS: [&str; 6] = [
+        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
+    ];
+    for (i, (label, pts)) in curves.iter().enumerate() {
+        let c = COLOURS[i % COLOURS.len()];
+        let path: Vec<String> = pts
+            .iter()
+            .map(|&(x, y)| format!("{:.2},{:.2}", sx(x), sy(y)))
+            .collect();
+        s += &format!(
+            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"2\" points=\"{}\"/>\n\
+             <line x1=\"{:.1}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"{c}\" stroke-width=\"2\"/>\n\
+             <text x=\"{:.1}\" y=\"{:.1}\">{}</text>\n",
+            path.join(" "),
+            l + pw - 200.0,
+            t + ph - 20.0 - 18.0 * i as f64,
+            l + pw - 175.0,
+            t + ph - 20.0 - 18.0 * i as f64,
+            l + pw - 170.0,
+            t + ph - 16.0 - 18.0 * i as f64,
+            xml_escape(label)
+        );
+    }
+    s += "</svg>\n";
+    s
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn svg_has_one_polyline_per_curve_and_escapes() {
+        let c = vec![
+            ("a<b".to_string(), vec![(0.0, 0.0), (0.25, 1.0)]),
+            ("c".to_string(), vec![(0.0, 0.5), (0.25, 0.5)]),
+        ];
+        let s = curve_svg("t & u", &c, 0.25);
+        assert_eq!(s.matches("<polyline").count(), 2);
+        assert!(s.contains("a&lt;b") && s.contains("t &amp; u"));
+        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+    }
+
+    #[test]
+    fn atomic_write_leaves_nothing_on_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("missing-dir").join("x.json");
+        assert!(atomic_write(&bad, b"{}").is_err());
+        let good = dir.path().join("x.json");
+        atomic_write(&good, b"{}").unwrap();
+        assert_eq!(std::fs::read(&good).unwrap(), b"{}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

@@ -1,0 +1,478 @@
+//! The pipeline API: per-mesh preparation ([`PreparedMesh`]) and pairwise matching
+//! ([`Pipeline::run`]).
+
+use crate::PipelineError;
+use std::time::Instant;
+use symcorr_attach::{attach, AttachOptions, Attachment, Joint, Segment, Skeleton};
+use symcorr_correspond::{
+    base_profile, farthest_point_sample, match_points, Descriptors, FilterStats, Match,
+    MatchOptions, Side,
+};
+use symcorr_mesh::TriMesh;
+use symcorr_spectral::{
+    base_vertex_set, eigenpairs, gaussian_curvature, si_hks, EdgeGraph, EigenOptions, Laplacian,
+    SiHksParams,
+};
+
+/// Sparse (a farthest-point sample of template points) or dense (every template vertex).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Match this many farthest-point samples of the template.
+    Sparse {
+        /// Number of template points.
+        samples: usize,
+    },
+    /// Match every template vertex.
+    Dense,
+}
+
+impl Mode {
+    /// The default sparse mode (1,000 samples).
+    pub const DEFAULT_SPARSE: Mode = Mode::Sparse {
+        samples: DEFAULT_SAMPLES,
+    };
+}
+
+/// Default number of template points in sparse mode.
+pub const DEFAULT_SAMPLES: usize = 1000;
+
+/// Per-mesh options: what [`PreparedMesh::new`] computes.
+#[derive(Debug, Clone)]
+pub struct PrepareOptions {
+    /// Number of Laplace–Beltrami eigenpairs behind the si-HKS.
+    pub eigenpairs: usize,
+    /// si-HKS parameters (symcorr-spectral's defaults: Bronstein & Kokkinos 2010).
+    pub si_hks: SiHksParams,
+    /// Radius of the base vertex set's greedy cover, in units of √area (§3.3).
+    pub base_radius: f64,
+    /// Skeleton attachment options.
+    pub attach: AttachOptions,
+    /// Half-width of the band around the skeleton's sagittal plane in which a midline vertex
+    /// gets no half ([`midline_halves`]), in units of √area.
+    pub midline_margin: f64,
+}
+
+/// Default eigenpair count (measured: see the crate docs).
+pub const DEFAULT_EIGENPAIRS: usize = 60;
+/// Default base-set radius in √area units (measured: see the crate docs).
+pub const DEFAULT_BASE_RADIUS: f64 = 0.1;
+/// Default [`PrepareOptions::midline_margin`]: 0 — every midline vertex gets a half, so a
+/// match never crosses the plane (a wrong plane costs small errors near it, not flips).
+pub const DEFAULT_MIDLINE_MARGIN: f64 = 0.0;
+
+impl Default for PrepareOptions {
+    fn default() -> Self {
+        PrepareOptions {
+            eigenpairs: DEFAULT_EIGENPAIRS,
+            si_hks: SiHksParams::default(),
+            base_radius: DEFAULT_BASE_RADIUS,
+            attach: AttachOptions::default(),
+            midline_margin: DEFAULT_MIDLINE_MARGIN,
+        }
+    }
+}
+
+/// Everything about one mesh that does not depend on the other mesh of a pair: computed once,
+/// reused for every pair the mesh is in (`symcorr bench` prepares each mesh of a dataset once).
+#[derive(Debug, Clone)]
+pub struct PreparedMesh {
+    /// The mesh.
+    pub mesh: TriMesh,
+    /// Total surface area.
+    pub area: f64,
+    /// si-HKS descriptor per vertex (§3.1).
+    pub descriptors: Descriptors,
+    /// Gaussian curvature per vertex (eq. 4).
+    pub curvature: Vec<f64>,
+    /// The base vertex set (§3.3).
+    pub base_set: Vec<u32>,
+    /// `D̂(v)`: mean edge-geodesic distance to the base set over √area (eq. 7).
+    pub profile: Vec<f64>,
+    /// Skeleton attachment: segment labels, weights, refined joints.
+    pub attachment: Attachment,
+    /// Sagittal half per vertex of the midline segments ([`midline_halves`]).
+    pub halves: Vec<i8>,
+    /// Seconds per stage (`laplacian`, `eigenpairs`, `si_hks`, `curvature`, `base_set`,
+    /// `base_profile`, `attachment`). Attachment runs in parallel with the spectral stages.
+    pub timings: Vec<(String, f64)>,
+}
+
+impl PreparedMesh {
+    /// Runs the per-mesh stages: Laplacian, eigenpairs, si-HKS, curvature, base vertex set and
+    /// its distance profile, and (in parallel) skeleton attachment.
+    ///
+    /// Errors: [`PipelineError::Spectral`] (e.g. a vertex in no triangle, a non-converging
+    /// eigensolve), [`PipelineError::Attach`] (a skeleton that does not fit the mesh).
+    pub fn new(
+        mesh: TriMesh,
+        skeleton: &Skeleton,
+        options: &PrepareOptions,
+    ) -> Result<PreparedMesh, PipelineError> {
+        if options.eigenpairs < 2 {
+            return Err(PipelineError::InvalidOption(format!(
+                "eigenpairs = {} (need at least 2)",
+                options.eigenpairs
+            )));
+        }
+        let (spectral, attached) = rayon::join(
+            || spectral_stages(&mesh, options),
+            || {
+                let t = Instant::now();
+                attach(&mesh, skeleton, &options.attach).map(|a| (a, t.elapsed().as_secs_f64()))
+            },
+        );
+        let (sp, mut timings) = spectral?;
+        let (attachment, t_attach) = attached?;
+        timings.push(("attachment".into(), t_attach));
+        let area = mesh.total_area();
+        let halves = midline_halves(
+            &mesh,
+            &attachment.labels,
+            &attachment.joints,
+            options.midline_margin * area.sqrt(),
+        );
+        Ok(PreparedMesh {
+            halves,
+            area,
+            mesh,
+            descriptors: sp.descriptors,
+            curvature: sp.curvature,
+            base_set: sp.base_set,
+            profile: sp.profile,
+            attachment,
+            timings,
+        })
+    }
+
+    /// Segment label per vertex.
+    pub fn labels(&self) -> &[Segment] {
+        &self.attachment.labels
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.mesh.num_vertices()
+    }
+
+    fn side(&self) -> Side<'_> {
+        Side {
+            descriptors: &self.descriptors,
+            labels: &self.attachment.labels,
+            profile: &self.profile,
+            halves: Some(&self.halves),
+        }
+    }
+}
+
+/// The side of the skeleton's sagittal plane of each vertex on a midline segment (pelvis,
+/// torso, head): `+1` on the subject's left, `-1` on the right, `0` within `margin` of the
+/// plane and on every limb segment.
+///
+/// The plane of each segment is spanned by its own joints, so it follows a twisted spine: for
+/// the pelvis it passes through the midpoint of the hips with normal `hip_left − hip_right`;
+/// for the head through the midpoint of the shoulders with normal `shoulder_left −
+/// shoulder_right`; for the torso through the mean of both midpoints with the sum of both
+/// normals.
+pub fn midline_halves(
+    mesh: &TriMesh,
+    labels: &[Segment],
+    joints: &Skeleton,
+    margin: f64,
+) -> Vec<i8> {
+    let p = |j: Joint| joints.position(j);
+    let unit = |v: [f64; 3]| {
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if n > 0.0 {
+            [v[0] / n, v[1] / n, v[2] / n]
+        } else {
+            [0.0; 3]
+        }
+    };
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let mid = |a: [f64; 3], b: [f64; 3]| {
+        [
+            (a[0] + b[0]) / 2.0,
+            (a[1] + b[1]) / 2.0,
+            (a[2] + b[2]) / 2.0,
+        ]
+    };
+    let hips_n = unit(sub(p(Joint::HipLeft), p(Joint::HipRight)));
+    let hips_o = mid(p(Joint::HipLeft), p(Joint::HipRight));
+    let sh_n = unit(sub(p(Joint::ShoulderLeft), p(Joint::ShoulderRight)));
+    let sh_o = mid(p(Joint::ShoulderLeft), p(Joint::ShoulderRight));
+    let torso_n = unit([
+        hips_n[0] + sh_n[0],
+        hips_n[1] + sh_n[1],
+        hips_n[2] + sh_n[2],
+    ]);
+    let torso_o = mid(hips_o, sh_o);
+    mesh.positions
+        .iter()
+        .zip(labels)
+        .map(|(&x, s)| {
+            let (o, n) = match s {
+                Segment::Pelvis => (hips_o, hips_n),
+                Segment::Torso => (torso_o, torso_n),
+                Segment::Head => (sh_o, sh_n),
+                _ => return 0,
+            };
+            let d = sub(x, o);
+            let side = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+            if side > margin {
+                1
+            } else if side < -margin {
+                -1
+            } else {
+                0
+            }
+        })
+        .collect()
+}
+
+struct Spectral {
+    descriptors: Descriptors,
+    curvature: Vec<f64>,
+    base_set: Vec<u32>,
+    profile: Vec<f64>,
+}
+
+type Timings = Vec<(String, f64)>;
+
+fn spectral_stages(
+    mesh: &TriMesh,
+    options: &PrepareOptions,
+) -> Result<(Spectral, Timings), PipelineError> {
+    let mut timings = Vec::new();
+    let mut clock = Instant::now();
+    let mut lap = |name: &str, timings: &mut Timings| {
+        timings.push((name.to_string(), clock.elapsed().as_secs_f64()));
+        clock = Instant::now();
+    };
+    let laplacian = Laplacian::new(mesh)?;
+    lap("laplacian", &mut timings);
+    let k = options
+        .eigenpairs
+        .min(mesh.num_vertices().saturating_sub(1))
+        .max(1);
+    let eig = eigenpairs(&laplacian, k, &EigenOptions::default())?;
+    lap("eigenpairs", &mut timings);
+    let desc = si_hks(&eig, &options.si_hks)?;
+    let descriptors = Descriptors::from_mat(desc.as_ref())?;
+    lap("si_hks", &mut timings);
+    let curvature = gaussian_curvature(mesh);
+    lap("curvature", &mut timings);
+    let base_set = base_vertex_set(mesh, &curvature, options.base_radius)?;
+    lap("base_set", &mut timings);
+    let rows = EdgeGraph::new(mesh).distances_many(&base_set)?;
+    let profile = base_profile(&rows, mesh.total_area());
+    lap("base_profile", &mut timings);
+    Ok((
+        Spectral {
+            descriptors,
+            curvature,
+            base_set,
+            profile,
+        },
+        timings,
+    ))
+}
+
+/// Options of a [`Pipeline`].
+#[derive(Debug, Clone)]
+pub struct PipelineOptions {
+    /// Per-mesh stages.
+    pub prepare: PrepareOptions,
+    /// Candidates and the skeleton filter (switch it off for the ablation).
+    pub matching: MatchOptions,
+    /// Sparse or dense.
+    pub mode: Mode,
+}
+
+impl Default for PipelineOptions {
+    fn default() -> Self {
+        PipelineOptions {
+            prepare: PrepareOptions::default(),
+            matching: MatchOptions::default(),
+            mode: Mode::DEFAULT_SPARSE,
+        }
+    }
+}
+
+/// A correspondence between two prepared meshes.
+#[derive(Debug, Clone)]
+pub struct Correspondence {
+    /// One match per template point (sparse: the sample; dense: every vertex).
+    pub matches: Vec<Match>,
+    /// What the skeleton filter did.
+    pub filter: FilterStats,
+    /// Mean candidates per point before the filter.
+    pub mean_candidates: f64,
+    /// Seconds per pair stage (`sampling`, `candidates`, `skeleton_filter`, `selection`).
+    pub timings: Vec<(String, f64)>,
+}
+
+/// The paper's pipeline, configured once and run on many pairs.
+///
+/// ```no_run
+/// use symcorr::{Pipeline, PipelineOptions};
+/// # fn load() -> (symcorr_mesh::TriMesh, symcorr_attach::Skeleton) { unimplemented!() }
+/// let (mesh_a, joints_a) = load();
+/// let (mesh_b, joints_b) = load();
+/// let pipeline = Pipeline::new(PipelineOptions::default());
+/// let a = pipeline.prepare(mesh_a, &joints_a).unwrap();
+/// let b = pipeline.prepare(mesh_b, &joints_b).unwrap();
+/// let corr = pipeline.run(&a, &b).unwrap();
+/// println!("{} matches", corr.matches.len());
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct Pipeline {
+    /// The options.
+    pub options: PipelineOptions,
+}
+
+impl Pipeline {
+    /// A pipeline with the given options.
+    pub fn new(options: PipelineOptions) -> Pipeline {
+        Pipeline { options }
+    }
+
+    /// Per-mesh stages ([`PreparedMesh::new`]) with this pipeline's options.
+    pub fn prepare(
+        &self,
+        mesh: TriMesh,
+        skeleton: &Skeleton,
+    ) -> Result<PreparedMesh, PipelineError> {
+        PreparedMesh::new(mesh, skeleton, &self.options.prepare)
+    }
+
+    /// The template points this pipeline matches on `template` (sample or all vertices).
+    pub fn points(&self, template: &PreparedMesh) -> Vec<u32> {
+        match self.options.mode {
+            Mode::Dense => (0..template.num_vertices() as u32).collect(),
+            Mode::Sparse { samples } => farthest_point_sample(&template.mesh, samples),
+        }
+    }
+
+    /// Matches `template` onto `target`: candidates, skeleton filter, selection.
+    pub fn run(
+        &self,
+        template: &PreparedMesh,
+        target: &PreparedMesh,
+    ) -> Result<Correspondence, PipelineError> {
+        let t = Instant::now();
+        let points = self.points(template);
+        let mut timings = vec![("sampling".to_string(), t.elapsed().as_secs_f64())];
+        let out = match_points(
+            &template.side(),
+            &target.side(),
+            &points,
+            &self.options.matching,
+        )?;
+        timings.extend(out.timings.iter().map(|(n, s)| (n.to_string(), *s)));
+        Ok(Correspondence {
+            matches: out.matches,
+            filter: out.filter,
+            mean_candidates: out.mean_candidates,
+            timings,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use symcorr_attach::testbody::{capsule_body, t_pose};
+    use symcorr_correspond::{evaluate, EvalGraph};
+
+    /// The capsule body against a stretched, jittered copy of itself (same connectivity, so
+    /// the identity is the truth). The body is left/right symmetric, so the descriptors cannot
+    /// tell the sides apart; the skeleton filter must remove the flips the ablation makes.
+    #[test]
+    fn capsule_body_self_match_has_no_flips_with_the_filter() {
+        let sk = t_pose(1.0);
+        let (mesh, _) = capsule_body(&sk, 0.035);
+        let mirror = mirror_map(&mesh);
+        let pipeline = Pipeline::new(PipelineOptions {
+            mode: Mode::Sparse { samples: 200 },
+            ..PipelineOptions::default()
+        });
+        let p = pipeline.prepare(mesh.clone(), &sk).unwrap();
+        let mut seed = 7u64;
+        let mut jitter = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.004
+        };
+        let moved: Vec<[f64; 3]> = mesh
+            .positions
+            .iter()
+            .map(|q| {
+                [
+                    1.05 * q[0] + jitter(),
+                    0.97 * q[1] + jitter(),
+                    q[2] + jitter(),
+                ]
+            })
+            .collect();
+        let target_mesh = TriMesh::new(moved, mesh.triangles.clone()).unwrap();
+        let mut tsk = sk.clone();
+        for j in tsk.positions.iter_mut() {
+            *j = [1.05 * j[0], 0.97 * j[1], j[2]];
+        }
+        let q = pipeline.prepare(target_mesh.clone(), &tsk).unwrap();
+        let graph = EvalGraph::new(&target_mesh);
+        let corr = pipeline.run(&p, &q).unwrap();
+        assert_eq!(corr.matches.len(), 200);
+        let pairs: Vec<(u32, u32)> = corr
+            .matches
+            .iter()
+            .map(|m| (m.template, m.target))
+            .collect();
+        let e = evaluate(&graph, q.area, &pairs, |v| v, Some(&mirror));
+        let mut off = pipeline.clone();
+        off.options.matching.skeleton_filter = false;
+        let corr_off = off.run(&p, &q).unwrap();
+        let pairs: Vec<(u32, u32)> = corr_off
+            .matches
+            .iter()
+            .map(|m| (m.template, m.target))
+            .collect();
+        let e_off = evaluate(&graph, q.area, &pairs, |v| v, Some(&mirror));
+        eprintln!(
+            "n = {}, filter: mean {:.4} flips {:?}; ablation: mean {:.4} flips {:?}; timings {:?}",
+            mesh.num_vertices(),
+            e.mean_error(),
+            e.flip_rate(),
+            e_off.mean_error(),
+            e_off.flip_rate(),
+            p.timings
+        );
+        assert!(
+            e_off.flip_rate().unwrap() > 0.05,
+            "the ablation should flip"
+        );
+        assert!(e.flip_rate().unwrap() < 0.01);
+        assert!(e.mean_error() < e_off.mean_error());
+    }
+
+    /// Mirror map of a mesh symmetric under x ↦ −x: nearest vertex of the reflected position.
+    fn mirror_map(mesh: &TriMesh) -> Vec<u32> {
+        let p = &mesh.positions;
+        (0..p.len())
+            .map(|v| {
+                let q = [-p[v][0], p[v][1], p[v][2]];
+                (0..p.len())
+                    .min_by(|&a, &b| {
+                        let d = |i: usize| {
+                            (p[i][0] - q[0]).powi(2)
+                                + (p[i][1] - q[1]).powi(2)
+                                + (p[i][2] - q[2]).powi(2)
+                        };
+                        d(a).total_cmp(&d(b))
+                    })
+                    .unwrap() as u32
+            })
+            .collect()
+    }
+}
