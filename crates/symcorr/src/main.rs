@@ -25,8 +25,6 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// The whole pipeline on bundled fixtures, with outputs in ./symcorr-demo/.
     Demo(cli::demo::DemoArgs),
-    /// Depth frame (.oni recording, PNG-16, or device) + joints → scan mesh.
-    Scan(cli::scan::ScanArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,7 +34,6 @@ fn main() -> ExitCode {
         Command::Match(a) => cli::match_cmd::run(a),
         Command::Bench(a) => cli::bench::run(a),
         Command::Demo(a) => cli::demo::run(a),
-        Command::Scan(a) => cli::scan::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
