@@ -1,1 +1,206 @@
-fn main() {}
+//! `symcorr-synth`: synthetic bodies with ground truth and a virtual Kinect (see README.md).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat};
+use symcorr_synth::noise::JointNoise;
+use symcorr_synth::{fixtures, Assets, Model, Result, Shape, SynthError};
+
+#[derive(Parser)]
+#[command(
+    name = "symcorr-synth",
+    version,
+    about = "Synthetic human bodies with exact ground truth and a virtual Kinect"
+)]
+struct Cli {
+    /// Folder of the MPFB2 assets (default: the project's fixtures/mpfb2).
+    #[arg(long, global = true)]
+    assets: Option<PathBuf>,
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Args, Clone)]
+struct NoiseArgs {
+    /// Gaussian joint noise, σ in centimetres per coordinate.
+    #[arg(long, default_value_t = 0.0)]
+    noise_sigma_cm: f64,
+    /// Fraction of joints moved onto the surface (nearest vertex) before the Gaussian noise.
+    #[arg(long, default_value_t = 0.0)]
+    surface_fraction: f64,
+    /// Fraction of joints reported with confidence 0.
+    #[arg(long, default_value_t = 0.0)]
+    drop_fraction: f64,
+    /// Seed of the joint-noise stream.
+    #[arg(long, default_value_t = 1)]
+    noise_seed: u64,
+}
+
+impl NoiseArgs {
+    fn noise(&self) -> Result<Option<JointNoise>> {
+        let n = JointNoise {
+            sigma_cm: self.noise_sigma_cm,
+            surface_fraction: self.surface_fraction,
+            drop_fraction: self.drop_fraction,
+            seed: self.noise_seed,
+        };
+        let frac_ok = |x: f64| (0.0..=1.0).contains(&x);
+        if !(n.sigma_cm.is_finite()
+            && n.sigma_cm >= 0.0
+            && frac_ok(n.surface_fraction)
+            && frac_ok(n.drop_fraction))
+        {
+            return Err(SynthError::Invalid(
+                "noise: σ must be ≥ 0 and fractions in [0, 1]".into(),
+            ));
+        }
+        Ok((!n.is_none()).then_some(n))
+    }
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Write a benchmark dataset folder (meshes/, joints/, labels/, mirror.txt, pairs.txt).
+    Dataset {
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// A shape as `NAME:target=w,target=w` (repeat; `NAME:` alone is the base shape).
+        #[arg(long = "shape", required = true)]
+        shapes: Vec<String>,
+        /// Comma-separated poses: rest, t-pose, arms-down, walk-PP, random-SEED, file:PATH.
+        #[arg(long, value_delimiter = ',', required = true)]
+        poses: Vec<String>,
+        /// Mesh format: ply (binary) or off.
+        #[arg(long, default_value = "ply")]
+        format: String,
+        #[command(flatten)]
+        noise: NoiseArgs,
+    },
+    /// Pose one body and write its mesh, joints and labels.
+    Pose {
+        /// Shape as `target=w,target=w` (empty: base shape).
+        #[arg(long, default_value = "")]
+        shape: String,
+        /// Pose: rest, t-pose, arms-down, walk-PP, random-SEED, file:PATH.
+        #[arg(long, default_value = "rest")]
+        pose: String,
+        /// Output mesh (.ply or .off).
+        #[arg(long)]
+        out: PathBuf,
+        /// Output joints (symcorr.joints/1).
+        #[arg(long)]
+        joints: Option<PathBuf>,
+        /// Output reference labels (one per line).
+        #[arg(long)]
+        labels: Option<PathBuf>,
+        #[command(flatten)]
+        noise: NoiseArgs,
+    },
+    /// Regenerate the committed fixture set (fixtures/synth) bit for bit.
+    Fixtures {
+        /// Output folder (the committed set lives in fixtures/synth).
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn parse_named_shape(s: &str) -> Result<(String, Shape)> {
+    let (name, spec) = s
+        .split_once(':')
+        .ok_or_else(|| SynthError::Invalid(format!("--shape `{s}`: expected NAME:target=w,...")))?;
+    if name.is_empty() {
+        return Err(SynthError::Invalid(format!("--shape `{s}`: empty name")));
+    }
+    Ok((name.to_string(), Shape::parse(spec)?))
+}
+
+fn load_model(assets: &Option<PathBuf>) -> Result<Model> {
+    let dir = assets.clone().unwrap_or_else(Assets::default_dir);
+    Model::new(Assets::load(&dir)?)
+}
+
+fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}
+
+fn run(cli: Cli) -> Result<()> {
+    let model = load_model(&cli.assets)?;
+    match cli.cmd {
+        Cmd::Dataset {
+            out,
+            shapes,
+            poses,
+            format,
+            noise,
+        } => {
+            let format = match format.as_str() {
+                "ply" => MeshFormat::Ply,
+                "off" => MeshFormat::Off,
+                f => {
+                    return Err(SynthError::Invalid(format!(
+                        "--format {f}: expected ply or off"
+                    )))
+                }
+            };
+            let spec = DatasetSpec {
+                shapes: shapes
+                    .iter()
+                    .map(|s| parse_named_shape(s))
+                    .collect::<Result<_>>()?,
+                poses,
+                format,
+                noise: noise.noise()?,
+                command: command_line(),
+                share_meshes_with: None,
+            };
+            let s = write_dataset(&model, &spec, &out)?;
+            eprintln!(
+                "{}: {} bodies, {} pairs",
+                out.display(),
+                s.bodies.len(),
+                s.pairs
+            );
+        }
+        Cmd::Pose {
+            shape,
+            pose,
+            out,
+            joints,
+            labels,
+            noise,
+        } => {
+            fixtures::write_single(
+                &model,
+                &Shape::parse(&shape)?,
+                &pose,
+                &out,
+                joints.as_deref(),
+                labels.as_deref(),
+                noise.noise()?,
+            )?;
+        }
+        Cmd::Fixtures { out } => fixtures::write_fixtures(&model, Path::new(&out))?,
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("symcorr-synth: {e}");
+            ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,290 @@
+//! Writing a benchmark dataset folder in DESIGN.md's layout.
+//!
+//! ```text
+//! DIR/meshes/NAME.ply     posed bodies, same vertex order everywhere (ground truth = identity)
+//! DIR/joints/NAME.json    symcorr.joints/1, one frame, body frame (see crate docs)
+//! DIR/labels/NAME.txt     reference segment label (0..16, DESIGN.md numbering) per vertex, one per line
+//! DIR/mirror.txt          line i: the vertex mirror-symmetric to vertex i
+//! DIR/pairs.txt           `template target` (NAMEs) per line
+//! DIR/manifest.json       shapes, poses (with every bone rotation), noise, the generating command
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+use serde_json::json;
+use symcorr_attach::Skeleton;
+use symcorr_kinect::joints::{write_joints_json, JointLog};
+
+use crate::body::{Body, Model, Pose, Shape};
+use crate::error::{Result, SynthError};
+use crate::mapping::{kinect_joints, reference_labels, SelfIntersectionCheck};
+use crate::noise::{apply_joint_noise, JointNoise};
+use crate::poses::{named_pose, random_pose_unchecked, read_pose_json};
+
+/// Mesh file format of a dataset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Binary little-endian PLY (compact, exact f64).
+    Ply,
+    /// ASCII OFF.
+    Off,
+}
+
+impl MeshFormat {
+    fn ext(self) -> &'static str {
+        match self {
+            MeshFormat::Ply => "ply",
+            MeshFormat::Off => "off",
+        }
+    }
+}
+
+/// What to generate.
+#[derive(Debug, Clone)]
+pub struct DatasetSpec {
+    /// Named shapes: `(name, shape)`; body names are `SHAPE_POSE`.
+    pub shapes: Vec<(String, Shape)>,
+    /// Pose names: named poses, `random-SEED`, or `file:PATH` (rotations JSON).
+    pub poses: Vec<String>,
+    /// Mesh format.
+    pub format: MeshFormat,
+    /// Joint noise for the joint files (`None` = exact joints).
+    pub noise: Option<JointNoise>,
+    /// The command line to record in the manifest.
+    pub command: String,
+    /// Instead of writing `meshes/` and `labels/`, make them symbolic links to this (relative)
+    /// folder's `meshes/` and `labels/` — a joint-noise variant that shares another dataset's
+    /// meshes.
+    pub share_meshes_with: Option<PathBuf>,
+}
+
+/// Joint positions as a single-frame symcorr.joints/1 log.
+pub fn single_frame_log(skeleton: Skeleton) -> JointLog {
+    JointLog::from_skeletons(vec![skeleton], symcorr_kinect::joints::KINECT_FPS)
+}
+
+fn kerr(e: symcorr_kinect::KinectError) -> SynthError {
+    SynthError::Invalid(e.to_string())
+}
+
+pub(crate) fn write_text(path: &Path, text: &str) -> Result<()> {
+    // Atomic: temporary file next to the target, then rename.
+    let tmp = path.with_extension("tmp~");
+    std::fs::write(&tmp, text).map_err(|e| SynthError::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| SynthError::io(path, e))
+}
+
+pub(crate) fn mkdir(path: &Path) -> Result<()> {
+    std::fs::create_dir_all(path).map_err(|e| SynthError::io(path, e))
+}
+
+/// Writes a single-frame joint file.
+pub fn write_joints(path: &Path, skeleton: &Skeleton) -> Result<()> {
+    write_joints_json(path, &single_frame_log(skeleton.clone())).map_err(kerr)
+}
+
+/// Samples a random pose (joint limits of [`crate::poses::JOINT_LIMITS`]) until the body shows
+/// no gross self-intersection; `seed` fixes the ChaCha8 stream. Returns the pose and the number
+/// of draws it took.
+pub fn sample_valid_pose(
+    body: &Body<'_>,
+    check: &SelfIntersectionCheck,
+    seed: u64,
+) -> Result<(Pose, usize)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for attempt in 1..=200 {
+        let pose = random_pose_unchecked(&mut rng);
+        if check.find(&body.pose(&pose)?.mesh).is_empty() {
+            return Ok((pose, attempt));
+        }
+    }
+    Err(SynthError::Invalid(format!(
+        "random pose seed {seed}: no self-intersection-free draw in 200 tries"
+    )))
+}
+
+/// Resolves a pose name (see [`DatasetSpec::poses`]) for `body`.
+pub fn resolve_pose(
+    model: &Model,
+    body: &Body<'_>,
+    check: &SelfIntersectionCheck,
+    name: &str,
+) -> Result<Pose> {
+    if let Some(seed) = name.strip_prefix("random-") {
+        let seed: u64 = seed
+            .parse()
+            .map_err(|_| SynthError::Invalid(format!("pose `{name}`: expected random-SEED")))?;
+        Ok(sample_valid_pose(body, check, seed)?.0)
+    } else if let Some(path) = name.strip_prefix("file:") {
+        read_pose_json(Path::new(path))
+    } else {
+        named_pose(&model.assets, name)
+    }
+}
+
+fn pose_label(name: &str) -> String {
+    match name.strip_prefix("file:") {
+        Some(p) => Path::new(p)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "file".into()),
+        None => name.to_string(),
+    }
+}
+
+/// Pairs of a dataset with shapes `S` and poses `P` (body `s_p`): within each shape, the first
+/// pose against every other pose; across shapes, pose `i` of shape `k` against pose `i+1` of
+/// shape `k+1` (cyclic) — different pose *and* shape.
+pub fn default_pairs(shapes: &[String], poses: &[String]) -> Vec<(String, String)> {
+    let name = |s: &str, p: &str| format!("{s}_{p}");
+    let mut pairs = Vec::new();
+    for s in shapes {
+        for p in &poses[1..] {
+            pairs.push((name(s, &poses[0]), name(s, p)));
+        }
+    }
+    for k in 0..shapes.len().saturating_sub(1) {
+        for i in 0..poses.len() {
+            pairs.push((
+                name(&shapes[k], &poses[i]),
+                name(&shapes[k + 1], &poses[(i + 1) % poses.len()]),
+            ));
+        }
+    }
+    pairs
+}
+
+#[cfg(unix)]
+fn symlink_dir(target: &Path, link: &Path) -> Result<()> {
+    std::os::unix::fs::symlink(target, link).map_err(|e| SynthError::io(link, e))
+}
+
+#[cfg(not(unix))]
+fn symlink_dir(_target: &Path, link: &Path) -> Result<()> {
+    Err(SynthError::Invalid(format!(
+        "{}: sharing meshes needs symbolic links (unix only)",
+        link.display()
+    )))
+}
+
+/// Summary of a written dataset.
+#[derive(Debug, Clone)]
+pub struct DatasetSummary {
+    /// Body names in generation order.
+    pub bodies: Vec<String>,
+    /// Pairs written.
+    pub pairs: usize,
+}
+
+/// Generates and writes a dataset into `out` (created if needed; existing files overwritten).
+pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<DatasetSummary> {
+    if spec.shapes.is_empty() || spec.poses.is_empty() {
+        return Err(SynthError::Invalid(
+            "dataset needs at least one shape and one pose".into(),
+        ));
+    }
+    let base = model.body(&Shape::default())?;
+    let labels = reference_labels(&base)?;
+    let check = SelfIntersectionCheck::new(&base.rest.triangles, &labels);
+    let mirror = model.assets.body_mirror()?;
+    mkdir(&out.join("joints"))?;
+    match &spec.share_meshes_with {
+        None => {
+            mkdir(&out.join("meshes"))?;
+            mkdir(&out.join("labels"))?;
+        }
+        Some(other) => {
+            for d in ["meshes", "labels"] {
+                let link = out.join(d);
+                if link.symlink_metadata().is_ok() {
+                    std::fs::remove_file(&link).map_err(|e| SynthError::io(&link, e))?;
+                }
+                symlink_dir(&other.join(d), &link)?;
+            }
+        }
+    }
+    let labels_text: String = labels.iter().map(|l| format!("{l}\n")).collect();
+    let pose_names: Vec<String> = spec.poses.iter().map(|p| pose_label(p)).collect();
+    let shape_names: Vec<String> = spec.shapes.iter().map(|s| s.0.clone()).collect();
+    // Poses are resolved once (random ones checked on the base shape) so every shape shares them.
+    let poses: Vec<Pose> = spec
+        .poses
+        .iter()
+        .map(|p| resolve_pose(model, &base, &check, p))
+        .collect::<Result<_>>()?;
+    let mut bodies = Vec::new();
+    let mut manifest_bodies = Vec::new();
+    let mut stream = 0u64;
+    for (sname, shape) in &spec.shapes {
+        let body = model.body(shape)?;
+        for (pname, pose) in pose_names.iter().zip(&poses) {
+            let name = format!("{sname}_{pname}");
+            let posed = body.pose(pose)?;
+            let hits = check.find(&posed.mesh).len();
+            let exact = kinect_joints(&body, &posed)?;
+            let skel = match &spec.noise {
+                Some(n) => apply_joint_noise(&exact, &posed.mesh, n, stream),
+                None => exact,
+            };
+            stream += 1;
+            let mesh_path: PathBuf = out
+                .join("meshes")
+                .join(format!("{name}.{}", spec.format.ext()));
+            if spec.share_meshes_with.is_none() {
+                symcorr_mesh::io::write(&mesh_path, &posed.mesh, None)?;
+                write_text(
+                    &out.join("labels").join(format!("{name}.txt")),
+                    &labels_text,
+                )?;
+            }
+            write_joints(&out.join("joints").join(format!("{name}.json")), &skel)?;
+            manifest_bodies.push(json!({
+                "name": name,
+                "shape": sname,
+                "shape_weights": shape.weights,
+                "pose": pname,
+                "rotations": pose.rotations,
+                "self_intersecting_triangle_pairs": hits,
+            }));
+            bodies.push(name);
+        }
+    }
+    let mirror_text: String = mirror.iter().map(|m| format!("{m}\n")).collect();
+    write_text(&out.join("mirror.txt"), &mirror_text)?;
+    let pairs = default_pairs(&shape_names, &pose_names);
+    let pairs_text: String = pairs.iter().map(|(a, b)| format!("{a} {b}\n")).collect();
+    write_text(&out.join("pairs.txt"), &pairs_text)?;
+    let segments: Vec<&str> = symcorr_attach::Segment::ALL
+        .iter()
+        .map(|s| s.name())
+        .collect();
+    let shapes_json: BTreeMap<&str, &BTreeMap<String, f64>> = spec
+        .shapes
+        .iter()
+        .map(|(n, s)| (n.as_str(), &s.weights))
+        .collect();
+    let manifest = json!({
+        "format": "symcorr.synth-dataset/1",
+        "command": spec.command,
+        "units": "m",
+        "frame": "MakeHuman body frame: x = subject's left, y up, z = subject's front",
+        "source": "MakeHuman/MPFB2 CC0 assets (fixtures/mpfb2), game_engine rig, linear blend skinning",
+        "vertices": base.rest.num_vertices(),
+        "segments": segments,
+        "shapes": shapes_json,
+        "noise": spec.noise.map(|n| json!({
+            "sigma_cm": n.sigma_cm, "surface_fraction": n.surface_fraction,
+            "drop_fraction": n.drop_fraction, "seed": n.seed})),
+        "bodies": manifest_bodies,
+    });
+    let text =
+        serde_json::to_string_pretty(&manifest).map_err(|e| SynthError::Invalid(e.to_string()))?;
+    write_text(&out.join("manifest.json"), &(text + "\n"))?;
+    Ok(DatasetSummary {
+        bodies,
+        pairs: pairs.len(),
+    })
+}
