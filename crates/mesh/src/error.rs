@@ -57,6 +57,13 @@ pub enum MeshError {
     /// The number of per-vertex colours does not match the number of vertices.
     #[error("{colors} colours given for {vertices} vertices")]
     ColorCount { colors: usize, vertices: usize },
+    /// A coordinate cannot be stored in the output format (glTF positions are 32-bit floats).
+    #[error("vertex {vertex}: coordinate {value} does not fit a 32-bit float ({format} stores positions as f32)")]
+    NotRepresentable {
+        vertex: usize,
+        value: f64,
+        format: &'static str,
+    },
     /// A repair removed every triangle (e.g. all of them were degenerate).
     #[error("repair left no triangles: {reason}")]
     NothingLeft { reason: String },

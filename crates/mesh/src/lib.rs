@@ -16,8 +16,13 @@
 mod error;
 pub mod geometry;
 pub mod io;
+mod validate;
 
 pub use error::MeshError;
+pub use validate::{
+    repair, validate, validate_with, RepairOptions, RepairReport, Repaired, ValidationReport,
+    DEFAULT_ZERO_AREA_REL,
+};
 
 /// A triangle mesh: positions (f64) and counter-clockwise triangles (u32 vertex indices).
 ///

@@ -519,8 +519,23 @@ fn build(mesh: &TriMesh, colors: Option<&[[u8; 3]]>, embed: bool) -> (serde_json
     (doc, bin)
 }
 
+/// glTF stores positions as f32: a coordinate beyond f32's range cannot be written.
+fn check_f32(mesh: &TriMesh, format: &'static str) -> Result<(), MeshError> {
+    for (vertex, p) in mesh.positions.iter().enumerate() {
+        if let Some(&value) = p.iter().find(|c| !(**c as f32).is_finite()) {
+            return Err(MeshError::NotRepresentable {
+                vertex,
+                value,
+                format,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Encodes a binary glTF (GLB) file.
-pub(crate) fn write_glb(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Vec<u8> {
+pub(crate) fn write_glb(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Result<Vec<u8>, MeshError> {
+    check_f32(mesh, "GLB")?;
     let (doc, mut bin) = build(mesh, colors, false);
     let mut json = doc.to_string().into_bytes();
     pad4(&mut json, b' ');
@@ -536,13 +551,14 @@ pub(crate) fn write_glb(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Vec<u8> {
     out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
-    out
+    Ok(out)
 }
 
 /// Encodes a `.gltf` JSON file with the buffer embedded as a base64 data URI.
-pub(crate) fn write_gltf(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Vec<u8> {
+pub(crate) fn write_gltf(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Result<Vec<u8>, MeshError> {
+    check_f32(mesh, "glTF")?;
     let (doc, _) = build(mesh, colors, true);
-    let mut s = serde_json::to_vec_pretty(&doc).unwrap_or_default();
+    let mut s = doc.to_string().into_bytes();
     s.push(b'\n');
-    s
+    Ok(s)
 }

@@ -260,8 +260,8 @@ pub fn write_to_bytes(
         Format::Off => Ok(off::write(mesh, colors)),
         Format::Ply => Ok(ply::write(mesh, colors, ply_encoding)),
         Format::Obj => Ok(obj::write(mesh, colors)),
-        Format::Gltf => Ok(gltf::write_gltf(mesh, colors)),
-        Format::Glb => Ok(gltf::write_glb(mesh, colors)),
+        Format::Gltf => gltf::write_gltf(mesh, colors),
+        Format::Glb => gltf::write_glb(mesh, colors),
     }
 }
 
