@@ -1,9 +1,454 @@
 //! The canonical Kinect skeleton, its 17 segments, and skeleton attachment.
 //!
 //! [`Skeleton`], [`Joint`], [`Segment`] (with [`Segment::mirror`]) are the types every joint
-//! importer in symcorr produces. Attachment (labels and bone-heat weights) arrives with the
-//! attachment issue.
+//! importer in symcorr produces. [`attach`] fits a skeleton into a triangle mesh and computes
+//! Baran & Popović (2007) bone-heat weights and one of the 17 segment labels per vertex;
+//! [`label`] is the one-call version with default options.
+//!
+//! ```
+//! use symcorr_attach::{attach, AttachOptions, Segment};
+//! # let (mesh, skeleton) = symcorr_attach::doc_example();
+//! let a = attach(&mesh, &skeleton, &AttachOptions::default()).unwrap();
+//! assert_eq!(a.labels.len(), mesh.num_vertices());
+//! // Every row of the weights sums to one.
+//! let s: f64 = a.weights.row(0).iter().map(|&(_, w)| w).sum();
+//! assert!((s - 1.0).abs() < 1e-9);
+//! assert!(a.labels.contains(&Segment::ForearmLeft));
+//! ```
+//!
+//! # Pipeline (DESIGN.md, Algorithm 1)
+//! 1. **Joint repair**: non-finite or untracked (confidence 0, not interpolated) joints are
+//!    rebuilt from their chain (midpoint of neighbours, or an extrapolation for hand/head) or,
+//!    failing that, the bones touching them are dropped; everything is reported.
+//! 2. **Frame alignment** ([`FrameAlignment`]): scale by a power of ten when the skeleton's and the
+//!    mesh's extents disagree (units), then, only if the joints do not already sit in the mesh,
+//!    the best of the 24 axis rotations about the bounding-box centres. Refused when nothing fits.
+//! 3. **Mirror check** ([`MirrorCheck`]): the torso frame (up = hip→shoulder centre, left =
+//!    right→left shoulders and hips) gives the facing direction `left × up`; the feet (ankle→foot
+//!    joints, and the mesh around the ankles: toes reach further forward than heels) must point
+//!    the same way, otherwise the skeleton's sides are swapped ([`MirrorPolicy`]).
+//! 4. **Joint refinement**: each limb joint moves to the centre of the mesh cross-section
+//!    perpendicular to its limb (algebraic circle fit, which also works on the half-rings of a
+//!    single-view scan), restricted to the connected piece of that cross-section nearest the
+//!    joint so that a joint never jumps to another limb; shoulder and hip joints are only
+//!    re-centred in depth; moves are capped; left/right bone lengths that differ by more than
+//!    [`AttachOptions::bone_length_tolerance`] are set to their mean.
+//! 5. **Bone heat**: for each vertex the nearest *visible* bone(s) (the segment from vertex to
+//!    bone crosses no triangle; a small BVH) gets `H_ii = c/d²`; `(L + M·H) W = M·H·P` is solved
+//!    for all bones with one sparse Cholesky factorisation (symcorr-spectral's cotan Laplacian,
+//!    PSD convention; the mass `M` makes the system unit-free, as Pinocchio's area-normalised
+//!    Laplacian does). Weights are clipped to [0, 1], weights below
+//!    [`AttachOptions::min_weight`] dropped, rows normalised. The label is the segment with the
+//!    largest summed weight of its bones.
+//!
+//! # Decisions the design leaves open
+//! * Components of the mesh from which no bone is visible get the nearest bone (ignoring
+//!   visibility) as their heat source instead of an empty row, and are reported
+//!   ([`ComponentReport::fallback`]); vertices in no non-degenerate triangle get the nearest
+//!   bone's label.
+//! * Unit detection only considers powers of ten (mm, cm, dm, m, km); other scale mismatches
+//!   are refused, not guessed.
+//! * Weights are per bone in [`BONES`] order (19 bones; the forearm segment has two), so the
+//!   wrist can be skinned separately; [`BoneWeights::segment_weights`] sums them per segment.
 
+// `!(x > 0.0)` is deliberate throughout: it is true for NaN as well.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod align;
+mod bvh;
+mod error;
+mod heat;
+pub mod palette;
+mod refine;
+mod repair;
 mod skeleton;
+mod vec3;
 
+pub use error::AttachError;
 pub use skeleton::{Joint, Segment, Skeleton, BONES};
+
+use symcorr_mesh::TriMesh;
+
+/// What to do when the skeleton's left and right are swapped relative to the mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MirrorPolicy {
+    /// Swap the skeleton's sides and report it (default).
+    Fix,
+    /// Return [`AttachError::MirroredSkeleton`].
+    Refuse,
+    /// Do not check.
+    Ignore,
+}
+
+/// Options of [`attach`]. `AttachOptions::default()` is what [`label`] uses.
+#[derive(Debug, Clone)]
+pub struct AttachOptions {
+    /// Detect and correct units, offset and axis rotation between skeleton and mesh.
+    pub align: bool,
+    /// Move joints to the centres of their cross-sections.
+    pub refine_joints: bool,
+    /// Handling of a left/right-swapped skeleton.
+    pub mirror: MirrorPolicy,
+    /// Baran–Popović heat constant `c` in `H_ii = c/d²` (mass-weighted system).
+    pub heat_constant: f64,
+    /// Weights below this (after clipping, before normalisation) are dropped.
+    pub min_weight: f64,
+    /// Largest joint move during refinement, as a fraction of the skeleton's height.
+    pub max_joint_move: f64,
+    /// Relative left/right bone-length difference above which both are set to their mean.
+    pub bone_length_tolerance: f64,
+}
+
+impl Default for AttachOptions {
+    fn default() -> Self {
+        AttachOptions {
+            align: true,
+            refine_joints: true,
+            mirror: MirrorPolicy::Fix,
+            heat_constant: 1.0,
+            min_weight: 0.01,
+            max_joint_move: 0.08,
+            bone_length_tolerance: 0.15,
+        }
+    }
+}
+
+/// The similarity that took the skeleton into the mesh's frame: `p_mesh = scale·R·p + translation`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameAlignment {
+    /// Uniform scale (a power of ten; 1 when units agreed).
+    pub scale: f64,
+    /// Rotation, row-major (identity unless the joints did not fit as given).
+    pub rotation: [[f64; 3]; 3],
+    /// Translation in mesh units.
+    pub translation: [f64; 3],
+    /// Median distance from a joint to the nearest mesh vertex, in skeleton heights, as given
+    /// (after the scale only).
+    pub fit_before: f64,
+    /// The same after the alignment.
+    pub fit_after: f64,
+    /// Median distance from a mesh vertex to the nearest bone after the alignment, in skeleton
+    /// heights (the bones must run through the whole mesh).
+    pub coverage: f64,
+}
+
+impl FrameAlignment {
+    /// The identity (no alignment).
+    pub fn identity() -> Self {
+        FrameAlignment {
+            scale: 1.0,
+            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.0; 3],
+            fit_before: f64::NAN,
+            fit_after: f64::NAN,
+            coverage: f64::NAN,
+        }
+    }
+
+    /// True if anything other than the identity was applied.
+    pub fn is_identity(&self) -> bool {
+        self.scale == 1.0
+            && self.translation == [0.0; 3]
+            && self.rotation == FrameAlignment::identity().rotation
+    }
+
+    /// Applies the similarity to a point.
+    pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
+        vec3::add(
+            vec3::scale(vec3::mat_vec(&self.rotation, p), self.scale),
+            self.translation,
+        )
+    }
+}
+
+/// Result of the left/right handedness check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MirrorCheck {
+    /// Mean cosine between the ankle→foot joints and the torso frame's facing direction
+    /// (`None` without usable feet).
+    pub skeleton_evidence: Option<f64>,
+    /// Forward-minus-backward reach of the mesh around the ankles along the facing direction,
+    /// normalised to [-1, 1] (`None` without usable feet).
+    pub mesh_evidence: Option<f64>,
+    /// True if the sides were swapped (policy [`MirrorPolicy::Fix`]).
+    pub swapped: bool,
+}
+
+/// How a joint was repaired before attachment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointRepair {
+    /// Rebuilt from neighbouring joints along its chain.
+    Interpolated,
+    /// Could not be rebuilt; the bones touching it were dropped.
+    Dropped,
+}
+
+/// A joint moved by refinement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointMove {
+    /// The joint.
+    pub joint: Joint,
+    /// Position before (mesh frame, after alignment).
+    pub from: [f64; 3],
+    /// Position after.
+    pub to: [f64; 3],
+    /// Why: `"cross-section centre"`, `"depth centre"`, `"bone length"`.
+    pub reason: &'static str,
+}
+
+impl JointMove {
+    /// Distance moved, in mesh units.
+    pub fn distance(&self) -> f64 {
+        vec3::dist(self.from, self.to)
+    }
+}
+
+/// One connected component of the mesh in bone heat.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ComponentReport {
+    /// Vertices in the component.
+    pub vertices: usize,
+    /// Vertices that saw a bone (heat sources).
+    pub visible_vertices: usize,
+    /// True if no vertex saw a bone and the nearest bones were used instead.
+    pub fallback: bool,
+}
+
+/// Everything [`attach`] did besides labelling: repairs, alignment, moves, fallbacks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostics {
+    /// Joints rebuilt or dropped before anything else.
+    pub repaired_joints: Vec<(Joint, JointRepair)>,
+    /// Bones (indices into [`BONES`]) left out because a joint was dropped.
+    pub dropped_bones: Vec<usize>,
+    /// The frame alignment applied.
+    pub alignment: FrameAlignment,
+    /// The handedness check.
+    pub mirror: MirrorCheck,
+    /// Joints moved by refinement (in order of application).
+    pub joint_moves: Vec<JointMove>,
+    /// Joint moves that refinement proposed but refused (too far, or no cross-section).
+    pub refinement_skipped: Vec<(Joint, &'static str)>,
+    /// Per connected component of the mesh.
+    pub components: Vec<ComponentReport>,
+    /// Vertices whose weight row came out empty and got the nearest bone instead, plus
+    /// vertices in no non-degenerate triangle.
+    pub nearest_bone_vertices: usize,
+    /// Skeleton height used for relative thresholds (mesh units).
+    pub skeleton_height: f64,
+}
+
+/// Sparse per-vertex bone weights (CSR): for each vertex, `(bone index into BONES, weight)`
+/// pairs with weights in (0, 1] summing to 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoneWeights {
+    offsets: Vec<usize>,
+    entries: Vec<(usize, f64)>,
+}
+
+impl BoneWeights {
+    pub(crate) fn from_rows(rows: Vec<Vec<(usize, f64)>>) -> Self {
+        let mut offsets = Vec::with_capacity(rows.len() + 1);
+        let mut entries = Vec::new();
+        offsets.push(0);
+        for r in rows {
+            entries.extend(r);
+            offsets.push(entries.len());
+        }
+        BoneWeights { offsets, entries }
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// True for a mesh without vertices (never for a result of [`attach`]).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The non-zero `(bone, weight)` pairs of vertex `v` (bone indexes [`BONES`]).
+    pub fn row(&self, v: usize) -> &[(usize, f64)] {
+        &self.entries[self.offsets[v]..self.offsets[v + 1]]
+    }
+
+    /// Weights of vertex `v` summed per segment (index = [`Segment::index`]).
+    pub fn segment_weights(&self, v: usize) -> [f64; 17] {
+        let mut s = [0.0; 17];
+        for &(b, w) in self.row(v) {
+            s[bone_segment(b).index()] += w;
+        }
+        s
+    }
+}
+
+/// The segment that bone `b` (index into [`BONES`]) belongs to.
+pub fn bone_segment(b: usize) -> Segment {
+    let bone = BONES[b];
+    Segment::ALL
+        .into_iter()
+        .find(|s| s.bones().contains(&bone))
+        // Invariant: every bone belongs to exactly one segment (tested in skeleton.rs).
+        .unwrap_or(Segment::Torso)
+}
+
+/// The result of [`attach`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Attachment {
+    /// One segment per mesh vertex.
+    pub labels: Vec<Segment>,
+    /// Bone-heat weights per vertex.
+    pub weights: BoneWeights,
+    /// The refined skeleton in the mesh's frame (what the bones were placed at).
+    pub joints: Skeleton,
+    /// What was repaired, applied and moved.
+    pub diagnostics: Diagnostics,
+}
+
+/// Fits `skeleton` into `mesh` and computes bone-heat weights and segment labels
+/// (DESIGN.md, Algorithm 1; see the crate docs for the steps).
+///
+/// Errors: [`AttachError::EmptyMesh`], [`AttachError::EmptySkeleton`],
+/// [`AttachError::ScaleMismatch`], [`AttachError::AlignmentFailed`],
+/// [`AttachError::MirroredSkeleton`] (with [`MirrorPolicy::Refuse`]), [`AttachError::Solver`].
+pub fn attach(
+    mesh: &TriMesh,
+    skeleton: &Skeleton,
+    options: &AttachOptions,
+) -> Result<Attachment, AttachError> {
+    check_options(options)?;
+    if mesh.num_vertices() == 0 || mesh.num_triangles() == 0 {
+        return Err(AttachError::EmptyMesh {
+            vertices: mesh.num_vertices(),
+            triangles: mesh.num_triangles(),
+        });
+    }
+    // 1. Repair missing joints.
+    let rep = repair::repair(skeleton)?;
+    let mut positions = rep.positions;
+    // 2. Frame alignment.
+    let alignment = if options.align {
+        align::align(mesh, &mut positions, &rep.usable)?
+    } else {
+        FrameAlignment::identity()
+    };
+    let height = repair::skeleton_height(&positions, &rep.usable);
+    // 3. Mirror check.
+    let mut usable = rep.usable;
+    let mut mirror = MirrorCheck {
+        skeleton_evidence: None,
+        mesh_evidence: None,
+        swapped: false,
+    };
+    if options.mirror != MirrorPolicy::Ignore {
+        mirror = refine::mirror_check(mesh, &positions, &usable, height);
+        let evidence = refine::mirror_decision(&mirror);
+        if evidence < -refine::MIRROR_MARGIN {
+            if options.mirror == MirrorPolicy::Refuse {
+                return Err(AttachError::MirroredSkeleton { evidence });
+            }
+            let mut swapped = positions;
+            let mut swapped_usable = usable;
+            for j in Joint::ALL {
+                swapped[j.index()] = positions[j.mirror().index()];
+                swapped_usable[j.index()] = usable[j.mirror().index()];
+            }
+            positions = swapped;
+            usable = swapped_usable;
+            mirror.swapped = true;
+        }
+    }
+    // 4. Refinement.
+    let mut joint_moves = Vec::new();
+    let mut refinement_skipped = Vec::new();
+    if options.refine_joints {
+        let r = refine::refine(mesh, &mut positions, &usable, height, options);
+        joint_moves = r.moves;
+        refinement_skipped = r.skipped;
+    }
+    // 5. Bone heat.
+    let active: Vec<usize> = (0..BONES.len())
+        .filter(|&b| usable[BONES[b].0.index()] && usable[BONES[b].1.index()])
+        .collect();
+    let dropped_bones: Vec<usize> = (0..BONES.len()).filter(|b| !active.contains(b)).collect();
+    let heat = heat::bone_heat(
+        mesh,
+        &positions,
+        &active,
+        options.heat_constant,
+        options.min_weight,
+    )?;
+    let labels = (0..mesh.num_vertices())
+        .map(|v| {
+            let s = heat.weights.segment_weights(v);
+            let best = (0..17).max_by(|&a, &b| s[a].total_cmp(&s[b])).unwrap_or(1);
+            Segment::ALL[best]
+        })
+        .collect();
+    let mut joints = Skeleton::from_positions(positions);
+    for j in Joint::ALL {
+        joints.confidence[j.index()] = if usable[j.index()] {
+            skeleton.confidence[j.mirror_if(mirror.swapped).index()].max(0.0)
+        } else {
+            0.0
+        };
+        joints.interpolated[j.index()] = rep
+            .repaired
+            .iter()
+            .any(|&(k, r)| k == j.mirror_if(mirror.swapped) && r == JointRepair::Interpolated)
+            || skeleton.interpolated[j.mirror_if(mirror.swapped).index()];
+    }
+    Ok(Attachment {
+        labels,
+        weights: heat.weights,
+        joints,
+        diagnostics: Diagnostics {
+            repaired_joints: rep.repaired,
+            dropped_bones,
+            alignment,
+            mirror,
+            joint_moves,
+            refinement_skipped,
+            components: heat.components,
+            nearest_bone_vertices: heat.nearest_bone_vertices,
+            skeleton_height: height,
+        },
+    })
+}
+
+/// One segment label per vertex with [`AttachOptions::default`] (see [`attach`]).
+pub fn label(mesh: &TriMesh, skeleton: &Skeleton) -> Result<Vec<Segment>, AttachError> {
+    attach(mesh, skeleton, &AttachOptions::default()).map(|a| a.labels)
+}
+
+fn check_options(o: &AttachOptions) -> Result<(), AttachError> {
+    let bad = |name: &str, v: f64| {
+        Err(AttachError::InvalidOption(format!(
+            "{name} = {v} is out of range"
+        )))
+    };
+    if !(o.heat_constant.is_finite() && o.heat_constant > 0.0) {
+        return bad("heat_constant", o.heat_constant);
+    }
+    if !(0.0..0.5).contains(&o.min_weight) {
+        return bad("min_weight", o.min_weight);
+    }
+    if !(o.max_joint_move.is_finite() && o.max_joint_move >= 0.0) {
+        return bad("max_joint_move", o.max_joint_move);
+    }
+    if !(o.bone_length_tolerance.is_finite() && o.bone_length_tolerance >= 0.0) {
+        return bad("bone_length_tolerance", o.bone_length_tolerance);
+    }
+    Ok(())
+}
+
+/// A small stick-figure mesh and its skeleton, for the documentation examples.
+#[doc(hidden)]
+pub fn doc_example() -> (TriMesh, Skeleton) {
+    let sk = testbody::t_pose(1.0);
+    (testbody::capsule_body(&sk, 0.04).0, sk)
+}
+
+#[doc(hidden)]
+pub mod testbody;

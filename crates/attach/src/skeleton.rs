@@ -114,6 +114,20 @@ impl Joint {
             j => j,
         }
     }
+
+    /// [`Joint::mirror`] if `swap`, else the joint itself.
+    pub fn mirror_if(self, swap: bool) -> Joint {
+        if swap {
+            self.mirror()
+        } else {
+            self
+        }
+    }
+
+    /// The parent joint in the kinematic tree rooted at the hip centre (`None` for the root).
+    pub fn parent(self) -> Option<Joint> {
+        BONES.iter().find(|b| b.1 == self).map(|b| b.0)
+    }
 }
 
 /// One of the 17 body segments of DESIGN.md, numbered as there.
@@ -336,7 +350,10 @@ mod tests {
 
     #[test]
     fn segments_cover_every_bone_once() {
-        let mut bones: Vec<_> = Segment::ALL.iter().flat_map(|s| s.bones().to_vec()).collect();
+        let mut bones: Vec<_> = Segment::ALL
+            .iter()
+            .flat_map(|s| s.bones().to_vec())
+            .collect();
         bones.sort();
         let mut all = BONES.to_vec();
         all.sort();

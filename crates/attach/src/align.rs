@@ -1,0 +1,206 @@
+//! Frame alignment: bring the skeleton into the mesh's units and frame (DESIGN.md, Algorithm 1:
+//! "express the skeleton in the mesh's frame").
+
+use crate::repair::{extent, skeleton_height};
+use crate::vec3::{add, dist, mat_vec, scale, sub};
+use crate::{AttachError, FrameAlignment};
+use symcorr_mesh::TriMesh;
+
+/// Largest accepted median joint-to-surface distance, in skeleton heights. Joints inside a
+/// body sit at most a torso half-depth (~0.07 heights) from the surface; a joint set in
+/// another frame is typically ≥ 0.2 away.
+pub(crate) const FIT_LIMIT: f64 = 0.08;
+
+/// Largest accepted median distance from a mesh vertex to the nearest bone, in skeleton
+/// heights: the bones must run through the whole mesh (a limb is ~0.03 heights thick, the torso
+/// ~0.1), not just have their joints somewhere inside it.
+pub(crate) const COVER_LIMIT: f64 = 0.12;
+
+/// Accepted mesh/skeleton extent ratio without a unit change. A full body's mesh box is a little
+/// larger than its joints' box; a scan may include some background.
+const RATIO_BAND: (f64, f64) = (0.5, 3.0);
+
+/// Median distance from the usable joints to their nearest mesh vertex, over `height`.
+pub(crate) fn fit(mesh: &TriMesh, p: &[[f64; 3]; 20], usable: &[bool; 20], height: f64) -> f64 {
+    let mut d: Vec<f64> = (0..20)
+        .filter(|&j| usable[j])
+        .map(|j| {
+            mesh.positions
+                .iter()
+                .map(|v| {
+                    let e = sub(*v, p[j]);
+                    e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+                })
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .collect();
+    d.sort_by(f64::total_cmp);
+    if d.is_empty() {
+        return f64::INFINITY;
+    }
+    d[d.len() / 2] / height.max(f64::MIN_POSITIVE)
+}
+
+/// Median distance from (up to 1000 evenly spread) mesh vertices to the nearest bone, over
+/// `height`.
+pub(crate) fn coverage(
+    mesh: &TriMesh,
+    p: &[[f64; 3]; 20],
+    usable: &[bool; 20],
+    height: f64,
+) -> f64 {
+    let bones: Vec<([f64; 3], [f64; 3])> = crate::BONES
+        .iter()
+        .filter(|b| usable[b.0.index()] && usable[b.1.index()])
+        .map(|b| (p[b.0.index()], p[b.1.index()]))
+        .collect();
+    let stride = (mesh.num_vertices() / 1000).max(1);
+    let mut d: Vec<f64> = mesh
+        .positions
+        .iter()
+        .step_by(stride)
+        .map(|&x| {
+            bones
+                .iter()
+                .map(|&(a, b)| crate::vec3::closest_on_segment(x, a, b).1)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    d.sort_by(f64::total_cmp);
+    if d.is_empty() {
+        return f64::INFINITY;
+    }
+    d[d.len() / 2] / height.max(f64::MIN_POSITIVE)
+}
+
+/// The 24 proper rotations that permute the coordinate axes (with signs).
+fn axis_rotations() -> Vec<[[f64; 3]; 3]> {
+    let perms = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let mut out = Vec::with_capacity(24);
+    for p in perms {
+        for signs in 0..8 {
+            let mut r = [[0.0; 3]; 3];
+            for (row, &col) in p.iter().enumerate() {
+                r[row][col] = if signs & (1 << row) != 0 { -1.0 } else { 1.0 };
+            }
+            let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
+                - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+                + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+            if det > 0.0 {
+                out.push(r);
+            }
+        }
+    }
+    out
+}
+
+fn bbox_centre(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    scale(add(lo, hi), 0.5)
+}
+
+/// Aligns `p` (in place) to the mesh and returns what was applied.
+pub(crate) fn align(
+    mesh: &TriMesh,
+    p: &mut [[f64; 3]; 20],
+    usable: &[bool; 20],
+) -> Result<FrameAlignment, AttachError> {
+    let (lo, hi) = mesh.bounding_box();
+    let mesh_extent = dist(lo, hi);
+    let skel_extent = extent(p, usable);
+    if !(skel_extent > 0.0) || !skel_extent.is_finite() {
+        return Err(AttachError::EmptySkeleton {
+            usable: usable.iter().filter(|&&u| u).count(),
+            extent: skel_extent,
+        });
+    }
+    // Units: the power of ten that brings the extent ratio closest to a typical 1.2.
+    let ratio = mesh_extent / skel_extent;
+    let s = if (RATIO_BAND.0..=RATIO_BAND.1).contains(&ratio) {
+        1.0
+    } else {
+        let k = ((ratio / 1.2).log10()).round();
+        let s = 10f64.powf(k);
+        if !(RATIO_BAND.0..=RATIO_BAND.1).contains(&(ratio / s)) || k.abs() > 6.0 {
+            return Err(AttachError::ScaleMismatch {
+                skeleton_extent: skel_extent,
+                mesh_extent,
+            });
+        }
+        s
+    };
+    let scaled: [[f64; 3]; 20] = std::array::from_fn(|j| scale(p[j], s));
+    let height = skeleton_height(&scaled, usable);
+    let fit_before = fit(mesh, &scaled, usable, height);
+    let cover_before = coverage(mesh, &scaled, usable, height);
+    let mut best = FrameAlignment {
+        scale: s,
+        fit_before,
+        fit_after: fit_before,
+        coverage: cover_before,
+        ..FrameAlignment::identity()
+    };
+    let ok = |f: f64, c: f64| f <= FIT_LIMIT && c <= COVER_LIMIT;
+    if !ok(fit_before, cover_before) {
+        let mut best_score = f64::INFINITY;
+        // Not in place: try every axis rotation with the bounding-box centres matched.
+        let cm = bbox_centre(mesh.positions.iter().copied());
+        let cj = bbox_centre((0..20).filter(|&j| usable[j]).map(|j| scaled[j]));
+        for r in axis_rotations() {
+            let rc = mat_vec(&r, cj);
+            let t = sub(cm, rc);
+            let q: [[f64; 3]; 20] = std::array::from_fn(|j| add(mat_vec(&r, scaled[j]), t));
+            let f = fit(mesh, &q, usable, height);
+            let c = coverage(mesh, &q, usable, height);
+            if f / FIT_LIMIT + c / COVER_LIMIT < best_score {
+                best_score = f / FIT_LIMIT + c / COVER_LIMIT;
+                best.rotation = r;
+                best.translation = t;
+                best.fit_after = f;
+                best.coverage = c;
+            }
+        }
+        if !ok(best.fit_after, best.coverage) {
+            return Err(AttachError::AlignmentFailed {
+                scale: s,
+                residual: best.fit_after,
+                coverage: best.coverage,
+            });
+        }
+    }
+    for q in p.iter_mut() {
+        *q = best.apply(*q);
+    }
+    Ok(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn there_are_24_distinct_axis_rotations() {
+        let r = axis_rotations();
+        assert_eq!(r.len(), 24);
+        for (i, a) in r.iter().enumerate() {
+            for b in &r[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! Bone heat (Baran & Popović 2007, "Automatic rigging and animation of 3D characters", §4):
+//! `(L + M·H) w_b = M·H·p_b` for every bone `b`, one factorisation for all of them.
+
+use crate::bvh::TriangleBvh;
+use crate::vec3::{closest_on_segment, cross, dot, norm, sub};
+use crate::{AttachError, BoneWeights, ComponentReport, BONES};
+use faer::Mat;
+use rayon::prelude::*;
+use symcorr_mesh::TriMesh;
+use symcorr_spectral::{Laplacian, DEGENERATE_REL};
+
+/// Bones within this relative distance of the nearest visible one share its heat (ties, as in
+/// Pinocchio's 1.0001).
+const TIE: f64 = 1e-4;
+
+pub(crate) struct Heat {
+    pub weights: BoneWeights,
+    pub components: Vec<ComponentReport>,
+    pub nearest_bone_vertices: usize,
+}
+
+/// The heat sources of one vertex: `(distance to the nearest visible bone, tied bones)`,
+/// or the nearest bone ignoring visibility with `visible = false`.
+struct Source {
+    d: f64,
+    bones: Vec<usize>,
+    visible: bool,
+}
+
+fn sources(x: [f64; 3], v: u32, p: &[[f64; 3]; 20], active: &[usize], bvh: &TriangleBvh) -> Source {
+    let mut d: Vec<(f64, usize, [f64; 3])> = active
+        .iter()
+        .map(|&b| {
+            let (q, d) = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]);
+            (d, b, q)
+        })
+        .collect();
+    d.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let nearest = Source {
+        d: d[0].0,
+        bones: vec![d[0].1],
+        visible: false,
+    };
+    for (i, &(di, _, _)) in d.iter().enumerate() {
+        // Visibility of the bone at its closest point (Baran & Popović test the segment
+        // from the vertex to the bone against the surface).
+        if bvh.segment_blocked(x, d[i].2, v) {
+            continue;
+        }
+        let mut bones = vec![d[i].1];
+        for &(dk, bk, qk) in &d[i + 1..] {
+            if dk > di * (1.0 + TIE) {
+                break;
+            }
+            if !bvh.segment_blocked(x, qk, v) {
+                bones.push(bk);
+            }
+        }
+        return Source {
+            d: di,
+            bones,
+            visible: true,
+        };
+    }
+    nearest
+}
+
+/// Computes bone-heat weights for `active` bones (indices into [`BONES`]) with joints `p`.
+pub(crate) fn bone_heat(
+    mesh: &TriMesh,
+    p: &[[f64; 3]; 20],
+    active: &[usize],
+    c: f64,
+    min_weight: f64,
+) -> Result<Heat, AttachError> {
+    let n = mesh.num_vertices();
+    // The Laplacian needs every vertex in a non-degenerate triangle (same test as
+    // symcorr-spectral): solve on that sub-mesh, give the rest their nearest bone.
+    let keep_tri: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .copied()
+        .filter(|t| {
+            let a = mesh.positions[t[0] as usize];
+            let e = [
+                sub(mesh.positions[t[1] as usize], a),
+                sub(mesh.positions[t[2] as usize], mesh.positions[t[1] as usize]),
+                sub(a, mesh.positions[t[2] as usize]),
+            ];
+            let longest = e.iter().map(|x| dot(*x, *x)).fold(0.0, f64::max);
+            let area2 = norm(cross(e[0], e[1]));
+            area2 > DEGENERATE_REL * longest && area2 > 0.0
+        })
+        .collect();
+    let mut new_id = vec![u32::MAX; n];
+    let mut old_id = Vec::new();
+    for t in &keep_tri {
+        for &v in t {
+            if new_id[v as usize] == u32::MAX {
+                new_id[v as usize] = old_id.len() as u32;
+                old_id.push(v);
+            }
+        }
+    }
+    let nearest_only = |x: [f64; 3]| -> usize {
+        active
+            .iter()
+            .copied()
+            .min_by(|&a, &b| {
+                let da = closest_on_segment(x, p[BONES[a].0.index()], p[BONES[a].1.index()]).1;
+                let db = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]).1;
+                da.total_cmp(&db)
+            })
+            .unwrap_or(0)
+    };
+    let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+    let mut nearest_bone_vertices = 0;
+    let mut components = Vec::new();
+    if !old_id.is_empty() {
+        let sub_tris: Vec<[u32; 3]> = keep_tri
+            .iter()
+            .map(|t| t.map(|v| new_id[v as usize]))
+            .collect();
+        let sub_pos: Vec<[f64; 3]> = old_id.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let sub_mesh = TriMesh {
+            positions: sub_pos,
+            triangles: sub_tris,
+        };
+        let m = sub_mesh.num_vertices();
+        let bvh = TriangleBvh::new(mesh);
+        let src: Vec<Source> = (0..m)
+            .into_par_iter()
+            .map(|i| sources(sub_mesh.positions[i], old_id[i], p, active, &bvh))
+            .collect();
+        let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;
+        // Per component: at least one heat source, or every vertex uses its nearest bone.
+        let (comp, ncomp) = sub_mesh.connected_components();
+        let mut visible = vec![0usize; ncomp];
+        let mut size = vec![0usize; ncomp];
+        for i in 0..m {
+            size[comp[i] as usize] += 1;
+            if src[i].visible {
+                visible[comp[i] as usize] += 1;
+            }
+        }
+        let fallback: Vec<bool> = visible.iter().map(|&v| v == 0).collect();
+        for k in 0..ncomp {
+            components.push(ComponentReport {
+                vertices: size[k],
+                visible_vertices: visible[k],
+                fallback: fallback[k],
+            });
+        }
+        let mut h = vec![0.0; m];
+        let mut rhs = Mat::<f64>::zeros(m, active.len());
+        let col: std::collections::HashMap<usize, usize> =
+            active.iter().enumerate().map(|(i, &b)| (b, i)).collect();
+        for i in 0..m {
+            let s = &src[i];
+            if !(s.visible || fallback[comp[i] as usize]) {
+                continue;
+            }
+            // H_ii = c/d² (a vertex on a bone gets a large but finite weight).
+            let d2 = (s.d * s.d).max(1e-12 * lap.mass[i]);
+            h[i] = lap.mass[i] * c / d2;
+            let share = h[i] / s.bones.len() as f64;
+            for b in &s.bones {
+                rhs[(i, col[b])] += share;
+            }
+        }
+        let sys = lap
+            .factor(0.0, Some(&h))
+            .map_err(|e| AttachError::Solver(e.to_string()))?;
+        let w = sys.solve_many(rhs.as_ref());
+        for i in 0..m {
+            let mut row: Vec<(usize, f64)> = (0..active.len())
+                .map(|k| (active[k], w[(i, k)].clamp(0.0, 1.0)))
+                .filter(|&(_, x)| x >= min_weight && x > 0.0)
+                .collect();
+            let s: f64 = row.iter().map(|r| r.1).sum();
+            if !(s > 0.0) {
+                row = vec![(nearest_only(sub_mesh.positions[i]), 1.0)];
+                nearest_bone_vertices += 1;
+            } else {
+                for r in &mut row {
+                    r.1 /= s;
+                }
+            }
+            rows[old_id[i] as usize] = row;
+        }
+    }
+    for v in 0..n {
+        if new_id[v] == u32::MAX {
+            rows[v] = vec![(nearest_only(mesh.positions[v]), 1.0)];
+            nearest_bone_vertices += 1;
+        }
+    }
+    Ok(Heat {
+        weights: BoneWeights::from_rows(rows),
+        components,
+        nearest_bone_vertices,
+    })
+}

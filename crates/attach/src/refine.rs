@@ -1,0 +1,461 @@
+//! Handedness check and joint refinement (DESIGN.md, Algorithm 1: "move each joint to the
+//! interior, toward the medial axis of its cross-section, keep bone lengths plausible").
+
+use crate::vec3::{add, closest_on_segment, cross, dist, dot, norm, scale, sub, unit};
+use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
+use symcorr_mesh::TriMesh;
+
+/// A swap needs the combined facing evidence below `-MIRROR_MARGIN`.
+pub(crate) const MIRROR_MARGIN: f64 = 0.15;
+
+/// The torso frame `(up, left, facing)`: up = hip centre → shoulder centre, left = right → left
+/// shoulders and hips (made orthogonal to up), facing = left × up (right-handed).
+pub(crate) fn torso_frame(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[[f64; 3]; 3]> {
+    use Joint as J;
+    let u = |j: Joint| usable[j.index()];
+    let up = unit(sub(p[J::ShoulderCenter.index()], p[J::HipCenter.index()]))?;
+    let mut l = [0.0; 3];
+    for (a, b) in [
+        (J::ShoulderLeft, J::ShoulderRight),
+        (J::HipLeft, J::HipRight),
+    ] {
+        if u(a) && u(b) {
+            l = add(l, sub(p[a.index()], p[b.index()]));
+        }
+    }
+    let left = unit(sub(l, scale(up, dot(l, up))))?;
+    let facing = cross(left, up);
+    Some([up, left, facing])
+}
+
+/// Facing evidence from the skeleton's feet and from the mesh around the ankles.
+pub(crate) fn mirror_check(
+    mesh: &TriMesh,
+    p: &[[f64; 3]; 20],
+    usable: &[bool; 20],
+    height: f64,
+) -> MirrorCheck {
+    use Joint as J;
+    let mut out = MirrorCheck {
+        skeleton_evidence: None,
+        mesh_evidence: None,
+        swapped: false,
+    };
+    let Some([_, left, facing]) = torso_frame(p, usable) else {
+        return out;
+    };
+    let (mut sk, mut nsk, mut me, mut nme) = (0.0, 0, 0.0, 0);
+    for (knee, ankle, foot) in [
+        (J::KneeLeft, J::AnkleLeft, J::FootLeft),
+        (J::KneeRight, J::AnkleRight, J::FootRight),
+    ] {
+        let (k, a, f) = (p[knee.index()], p[ankle.index()], p[foot.index()]);
+        if usable[ankle.index()] && usable[foot.index()] {
+            if let Some(d) = unit(sub(f, a)) {
+                sk += dot(d, facing);
+                nsk += 1;
+            }
+        }
+        if !(usable[knee.index()] && usable[ankle.index()]) {
+            continue;
+        }
+        // The foot: surface below the ankle (along the shin), near it laterally.
+        let Some(shin) = unit(sub(k, a)) else {
+            continue;
+        };
+        let reach = 0.16 * height;
+        let (mut fwd, mut back) = (0.0f64, 0.0f64);
+        let mut n = 0;
+        for v in &mesh.positions {
+            let e = sub(*v, a);
+            if dot(e, shin) > 0.02 * height || norm(e) > reach || dot(e, left).abs() > 0.06 * height
+            {
+                continue;
+            }
+            let t = dot(e, facing);
+            fwd = fwd.max(t);
+            back = back.max(-t);
+            n += 1;
+        }
+        if n >= 8 && fwd + back > 0.0 {
+            me += (fwd - back) / (fwd + back);
+            nme += 1;
+        }
+    }
+    out.skeleton_evidence = (nsk > 0).then(|| sk / nsk as f64);
+    out.mesh_evidence = (nme > 0).then(|| me / nme as f64);
+    out
+}
+
+/// Combined evidence: the mesh counts fully, the feet joints (noisy) half.
+pub(crate) fn mirror_decision(m: &MirrorCheck) -> f64 {
+    m.mesh_evidence.unwrap_or(0.0) + 0.5 * m.skeleton_evidence.unwrap_or(0.0)
+}
+
+pub(crate) struct Refined {
+    pub moves: Vec<JointMove>,
+    pub skipped: Vec<(Joint, &'static str)>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// Centre of the limb's cross-section.
+    Limb,
+    /// Shoulder / hip joints: only the depth (facing) coordinate.
+    Junction,
+    /// Torso midline joints: cross-section perpendicular to up.
+    Torso,
+}
+
+fn kind(j: Joint) -> Kind {
+    use Joint as J;
+    match j {
+        J::HipCenter | J::Spine | J::ShoulderCenter => Kind::Torso,
+        J::ShoulderLeft | J::ShoulderRight | J::HipLeft | J::HipRight => Kind::Junction,
+        _ => Kind::Limb,
+    }
+}
+
+fn children(j: Joint) -> impl Iterator<Item = Joint> {
+    BONES.iter().filter(move |b| b.0 == j).map(|b| b.1)
+}
+
+/// Vertices of `set` grouped into connected pieces (mesh edges within the set).
+fn pieces(set: &[u32], adj: &[Vec<u32>], mark: &mut [u32], stamp: u32) -> Vec<Vec<u32>> {
+    for &v in set {
+        mark[v as usize] = stamp;
+    }
+    let mut out = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for &s in set {
+        if !seen.insert(s) {
+            continue;
+        }
+        let mut comp = vec![s];
+        let mut i = 0;
+        while i < comp.len() {
+            let v = comp[i];
+            i += 1;
+            for &w in &adj[v as usize] {
+                if mark[w as usize] == stamp && seen.insert(w) {
+                    comp.push(w);
+                }
+            }
+        }
+        out.push(comp);
+    }
+    out
+}
+
+/// Algebraic (Kåsa) circle fit of 2-D points: centre and radius. Works on partial arcs, which
+/// is what a single-view scan gives.
+fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
+    if pts.len() < 5 {
+        return None;
+    }
+    // Centre the data for conditioning.
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p[0]).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p[1]).sum::<f64>() / n;
+    // Minimise Σ (x² + y² + D x + E y + F)²  →  3×3 normal equations.
+    let mut a = [[0.0; 3]; 3];
+    let mut b = [0.0; 3];
+    for p in pts {
+        let (x, y) = (p[0] - mx, p[1] - my);
+        let row = [x, y, 1.0];
+        let z = -(x * x + y * y);
+        for i in 0..3 {
+            for k in 0..3 {
+                a[i][k] += row[i] * row[k];
+            }
+            b[i] += row[i] * z;
+        }
+    }
+    let det = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(&a);
+    let scale_ = a[0][0] * a[1][1] * a[2][2];
+    if d.abs() <= 1e-12 * scale_.abs() || d == 0.0 {
+        return None;
+    }
+    let mut sol = [0.0; 3];
+    for c in 0..3 {
+        let mut m = a;
+        for r in 0..3 {
+            m[r][c] = b[r];
+        }
+        sol[c] = det(&m) / d;
+    }
+    let (cx, cy) = (-sol[0] / 2.0, -sol[1] / 2.0);
+    let r2 = cx * cx + cy * cy - sol[2];
+    if !(r2 > 0.0) {
+        return None;
+    }
+    Some(([cx + mx, cy + my], r2.sqrt()))
+}
+
+/// Two unit vectors spanning the plane perpendicular to `n`.
+fn plane_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let t = if n[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let e1 = unit(cross(n, t)).unwrap_or([0.0, 0.0, 1.0]);
+    (e1, cross(n, e1))
+}
+
+/// Refines the joint positions in place.
+pub(crate) fn refine(
+    mesh: &TriMesh,
+    p: &mut [[f64; 3]; 20],
+    usable: &[bool; 20],
+    height: f64,
+    options: &AttachOptions,
+) -> Refined {
+    let mut moves = Vec::new();
+    let mut skipped = Vec::new();
+    let adj = mesh.vertex_neighbors();
+    let mean_edge = {
+        let e = mesh.edges();
+        e.iter()
+            .map(|&[a, b]| dist(mesh.positions[a as usize], mesh.positions[b as usize]))
+            .sum::<f64>()
+            / e.len().max(1) as f64
+    };
+    let frame = torso_frame(p, usable);
+    // Boundary vertices (edges with one triangle): a cross-section containing one is open (a
+    // single-view scan), where only limbs can be centred (circle fit on the visible arc); the
+    // torso's and the shoulders'/hips' depth centres are unknowable there.
+    let on_boundary = boundary_vertices(mesh);
+    let max_move = options.max_joint_move * height;
+    let mut mark = vec![0u32; mesh.num_vertices()];
+    let orig = *p;
+    for (stamp, j) in Joint::ALL.into_iter().enumerate() {
+        if !usable[j.index()] {
+            continue;
+        }
+        let x = orig[j.index()];
+        let k = kind(j);
+        // Local axis and scale of the cross-section.
+        let parent = j.parent().filter(|q| usable[q.index()]);
+        let child = children(j).find(|c| usable[c.index()] && kind(*c) != Kind::Junction);
+        let (axis, bone_len) = match k {
+            Kind::Torso | Kind::Junction => match frame {
+                Some(f) => (f[0], 0.25 * height),
+                None => continue,
+            },
+            Kind::Limb => {
+                let a = parent.and_then(|q| unit(sub(x, orig[q.index()])));
+                let b = child.and_then(|c| unit(sub(orig[c.index()], x)));
+                let len = parent
+                    .map(|q| dist(x, orig[q.index()]))
+                    .into_iter()
+                    .chain(child.map(|c| dist(x, orig[c.index()])))
+                    .fold(0.0, f64::max);
+                let axis = match (a, b) {
+                    (Some(a), Some(b)) => unit(add(a, b)).unwrap_or(a),
+                    (Some(a), None) | (None, Some(a)) => a,
+                    (None, None) => continue,
+                };
+                (axis, len)
+            }
+        };
+        let half = (0.08 * bone_len).max(1.5 * mean_edge);
+        let radius = match k {
+            Kind::Limb => max_move + 0.5 * bone_len.min(0.25 * height),
+            Kind::Torso => 0.2 * height,
+            Kind::Junction => 0.12 * height,
+        };
+        let set: Vec<u32> = (0..mesh.num_vertices() as u32)
+            .filter(|&v| {
+                let e = sub(mesh.positions[v as usize], x);
+                let h = dot(e, axis);
+                h.abs() <= half && norm(sub(e, scale(axis, h))) <= radius
+            })
+            .collect();
+        let (e1, e2) = plane_basis(axis);
+        let mut best: Option<([f64; 3], f64)> = None;
+        let mut open = false;
+        for piece in pieces(&set, &adj, &mut mark, stamp as u32 + 1) {
+            if k != Kind::Limb && piece.iter().any(|&v| on_boundary[v as usize]) {
+                open = true;
+                continue;
+            }
+            let centre = if k == Kind::Junction {
+                // Depth centre only: the shoulder/hip cross-section runs into the torso.
+                let Some(f) = frame else { continue };
+                let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+                for &v in &piece {
+                    let t = dot(sub(mesh.positions[v as usize], x), f[2]);
+                    lo = lo.min(t);
+                    hi = hi.max(t);
+                }
+                if piece.len() < 5 {
+                    continue;
+                }
+                add(x, scale(f[2], 0.5 * (lo + hi)))
+            } else {
+                let pts: Vec<[f64; 2]> = piece
+                    .iter()
+                    .map(|&v| {
+                        let e = sub(mesh.positions[v as usize], x);
+                        [dot(e, e1), dot(e, e2)]
+                    })
+                    .collect();
+                let Some((c, r)) = circle_fit(&pts) else {
+                    continue;
+                };
+                if r > radius {
+                    continue;
+                }
+                add(x, add(scale(e1, c[0]), scale(e2, c[1])))
+            };
+            let d = dist(centre, x);
+            if best.is_none_or(|b| d < b.1) {
+                best = Some((centre, d));
+            }
+        }
+        match best {
+            Some((c, d)) if d <= max_move => {
+                if d > 0.0 {
+                    p[j.index()] = c;
+                    moves.push(JointMove {
+                        joint: j,
+                        from: x,
+                        to: c,
+                        reason: if k == Kind::Junction {
+                            "depth centre"
+                        } else {
+                            "cross-section centre"
+                        },
+                    });
+                }
+            }
+            Some(_) => skipped.push((j, "cross-section centre farther than the move limit")),
+            None if open => skipped.push((j, "open cross-section (scan): left as given")),
+            None => skipped.push((j, "no cross-section found")),
+        }
+    }
+    symmetric_bone_lengths(p, usable, options.bone_length_tolerance, &mut moves);
+    Refined { moves, skipped }
+}
+
+/// Vertices on an edge that belongs to exactly one triangle.
+fn boundary_vertices(mesh: &TriMesh) -> Vec<bool> {
+    let mut e: Vec<[u32; 2]> = mesh
+        .triangles
+        .iter()
+        .flat_map(|t| {
+            [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
+                .map(|(a, b)| if a < b { [a, b] } else { [b, a] })
+        })
+        .collect();
+    e.sort_unstable();
+    let mut out = vec![false; mesh.num_vertices()];
+    let mut i = 0;
+    while i < e.len() {
+        let mut k = i + 1;
+        while k < e.len() && e[k] == e[i] {
+            k += 1;
+        }
+        if k - i == 1 {
+            out[e[i][0] as usize] = true;
+            out[e[i][1] as usize] = true;
+        }
+        i = k;
+    }
+    out
+}
+
+/// Left/right bone pairs whose lengths should agree.
+const PAIRS: [((Joint, Joint), (Joint, Joint)); 4] = {
+    use Joint as J;
+    [
+        (
+            (J::ShoulderLeft, J::ElbowLeft),
+            (J::ShoulderRight, J::ElbowRight),
+        ),
+        ((J::ElbowLeft, J::WristLeft), (J::ElbowRight, J::WristRight)),
+        ((J::HipLeft, J::KneeLeft), (J::HipRight, J::KneeRight)),
+        ((J::KneeLeft, J::AnkleLeft), (J::KneeRight, J::AnkleRight)),
+    ]
+};
+
+fn descendants(j: Joint) -> Vec<Joint> {
+    let mut out = vec![j];
+    let mut i = 0;
+    while i < out.len() {
+        let c: Vec<Joint> = children(out[i]).collect();
+        out.extend(c);
+        i += 1;
+    }
+    out
+}
+
+/// Sets left/right bone pairs that differ by more than `tol` (relative) to their mean length,
+/// moving the child joint (and everything below it) along its bone.
+fn symmetric_bone_lengths(
+    p: &mut [[f64; 3]; 20],
+    usable: &[bool; 20],
+    tol: f64,
+    moves: &mut Vec<JointMove>,
+) {
+    for ((la, lb), (ra, rb)) in PAIRS {
+        if ![la, lb, ra, rb].iter().all(|j| usable[j.index()]) {
+            continue;
+        }
+        let ll = dist(p[la.index()], p[lb.index()]);
+        let lr = dist(p[ra.index()], p[rb.index()]);
+        let mean = 0.5 * (ll + lr);
+        if !(mean > 0.0) || (ll - lr).abs() <= tol * mean {
+            continue;
+        }
+        for (a, b, l) in [(la, lb, ll), (ra, rb, lr)] {
+            let Some(d) = unit(sub(p[b.index()], p[a.index()])) else {
+                continue;
+            };
+            let delta = scale(d, mean - l);
+            let from = p[b.index()];
+            for q in descendants(b) {
+                p[q.index()] = add(p[q.index()], delta);
+            }
+            moves.push(JointMove {
+                joint: b,
+                from,
+                to: p[b.index()],
+                reason: "bone length",
+            });
+        }
+    }
+}
+
+/// Distance from `x` to the nearest bone segment (for tests and diagnostics).
+#[allow(dead_code)]
+pub(crate) fn nearest_bone_distance(x: [f64; 3], p: &[[f64; 3]; 20]) -> f64 {
+    BONES
+        .iter()
+        .map(|b| closest_on_segment(x, p[b.0.index()], p[b.1.index()]).1)
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn circle_fit_recovers_a_half_circle() {
+        let pts: Vec<[f64; 2]> = (0..20)
+            .map(|i| {
+                let t = std::f64::consts::PI * i as f64 / 19.0;
+                [2.0 + 0.5 * t.cos(), -1.0 + 0.5 * t.sin()]
+            })
+            .collect();
+        let (c, r) = circle_fit(&pts).unwrap();
+        assert!((c[0] - 2.0).abs() < 1e-9 && (c[1] + 1.0).abs() < 1e-9);
+        assert!((r - 0.5).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,163 @@
+//! Attachment on the procedural capsule body (exact and perturbed skeletons, known reference
+//! labels), including single-view scans and frame changes.
+
+mod common;
+
+use common::{agreement, noisy, unambiguous, Rng};
+use symcorr_attach::testbody::{capsule_body, t_pose};
+use symcorr_attach::{attach, AttachOptions, Segment, Skeleton};
+use symcorr_mesh::TriMesh;
+
+fn body() -> (Skeleton, TriMesh, Vec<Segment>, Vec<bool>) {
+    let sk = t_pose(1.0);
+    let (mesh, reference) = capsule_body(&sk, 0.02);
+    let core = unambiguous(&mesh, &sk, 0.03);
+    (sk, mesh, reference, core)
+}
+
+#[test]
+fn exact_skeleton_labels_the_capsule_body() {
+    let (sk, mesh, reference, core) = body();
+    let a = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    let all = vec![true; mesh.num_vertices()];
+    let (agree_all, mirror) = agreement(&mesh, &a.labels, &reference, &all);
+    let (agree, _) = agreement(&mesh, &a.labels, &reference, &core);
+    eprintln!("capsule exact: core agreement {agree:.4}, all {agree_all:.4}, mirror {mirror}");
+    assert!(agree >= 0.95, "core agreement {agree}");
+    assert_eq!(mirror, 0.0);
+    // Nothing to align, nothing mirrored, one component that sees its bones.
+    assert!(a.diagnostics.alignment.is_identity());
+    assert!(!a.diagnostics.mirror.swapped);
+    assert!(a.diagnostics.mirror.mesh_evidence.unwrap() > 0.3);
+    assert_eq!(a.diagnostics.components.len(), 1);
+    assert!(!a.diagnostics.components[0].fallback);
+    // Exact joints sit on the capsule axes: refinement barely moves them.
+    for m in &a.diagnostics.joint_moves {
+        assert!(m.distance() < 0.02, "{:?} moved {}", m.joint, m.distance());
+    }
+    // Weights: rows sum to one, and the label is the segment with the largest weight.
+    for v in 0..mesh.num_vertices() {
+        let row = a.weights.row(v);
+        assert!(!row.is_empty());
+        let s: f64 = row.iter().map(|r| r.1).sum();
+        assert!((s - 1.0).abs() < 1e-9);
+        let sw = a.weights.segment_weights(v);
+        assert!(sw.iter().all(|&w| w <= sw[a.labels[v].index()]));
+    }
+}
+
+#[test]
+fn noisy_and_surface_biased_joints_still_label_without_swaps() {
+    let (sk, mesh, reference, core) = body();
+    for seed in [1u64, 2, 3] {
+        let mut rng = Rng(seed);
+        let bad = noisy(&sk, &mesh, 0.03, 0.10, &mut rng);
+        let a = attach(&mesh, &bad, &AttachOptions::default()).unwrap();
+        let all = vec![true; mesh.num_vertices()];
+        let (agree, mirror) = agreement(&mesh, &a.labels, &reference, &core);
+        let (agree_all, mirror_all) = agreement(&mesh, &a.labels, &reference, &all);
+        eprintln!(
+            "capsule noisy seed {seed}: core {agree:.4} all {agree_all:.4} mirror {mirror_all}"
+        );
+        assert!(agree >= 0.90, "seed {seed}: core agreement {agree}");
+        assert_eq!(mirror, 0.0);
+        assert_eq!(mirror_all, 0.0);
+    }
+}
+
+#[test]
+fn swapped_sides_are_detected_and_fixed_or_refused() {
+    let (sk, mesh, reference, core) = body();
+    let swapped = sk.swap_sides();
+    let a = attach(&mesh, &swapped, &AttachOptions::default()).unwrap();
+    assert!(a.diagnostics.mirror.swapped);
+    let (agree, mirror) = agreement(&mesh, &a.labels, &reference, &core);
+    assert!(agree >= 0.95 && mirror == 0.0, "{agree} {mirror}");
+    let refuse = AttachOptions {
+        mirror: symcorr_attach::MirrorPolicy::Refuse,
+        ..AttachOptions::default()
+    };
+    let e = attach(&mesh, &swapped, &refuse).unwrap_err();
+    assert!(e.to_string().contains("swapped"), "{e}");
+}
+
+#[test]
+fn units_rotation_and_offset_are_aligned() {
+    let (sk, mesh, reference, core) = body();
+    // Skeleton in centimetres, rotated 90° about y and moved.
+    let mut moved = sk.clone();
+    for p in &mut moved.positions {
+        *p = [
+            100.0 * p[2] + 30.0,
+            100.0 * p[1] - 12.0,
+            -100.0 * p[0] + 7.0,
+        ];
+    }
+    let a = attach(&mesh, &moved, &AttachOptions::default()).unwrap();
+    let al = &a.diagnostics.alignment;
+    assert_eq!(al.scale, 0.01);
+    assert!(!al.is_identity());
+    assert!(al.fit_after < 0.08 && al.fit_before > al.fit_after);
+    let (agree, mirror) = agreement(&mesh, &a.labels, &reference, &core);
+    assert!(agree >= 0.9 && mirror == 0.0, "{agree} {mirror}");
+    // Mesh in decimetres, skeleton in metres: scale 10.
+    let dm = TriMesh {
+        positions: mesh.positions.iter().map(|p| p.map(|c| 10.0 * c)).collect(),
+        triangles: mesh.triangles.clone(),
+    };
+    let a = attach(&dm, &sk, &AttachOptions::default()).unwrap();
+    assert_eq!(a.diagnostics.alignment.scale, 10.0);
+    let (agree, mirror) = agreement(&dm, &a.labels, &reference, &core);
+    assert!(agree >= 0.95 && mirror == 0.0, "{agree} {mirror}");
+}
+
+#[test]
+fn single_view_scan_labels_its_visible_surface() {
+    let (sk, mesh, reference, core) = body();
+    // A front scan: keep triangles whose normal faces the camera at +z.
+    let normals = mesh.triangle_normals();
+    let tris: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .zip(&normals)
+        .filter(|(_, n)| n[2] > 0.1)
+        .map(|(t, _)| *t)
+        .collect();
+    let mut used = vec![false; mesh.num_vertices()];
+    for t in &tris {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    // Keep vertex ids (unused vertices are labelled by their nearest bone and not scored).
+    let scan = TriMesh {
+        positions: mesh.positions.clone(),
+        triangles: tris,
+    };
+    let mut rng = Rng(7);
+    let bad = noisy(&sk, &mesh, 0.03, 0.10, &mut rng);
+    for (name, s) in [("exact", &sk), ("noisy", &bad)] {
+        let a = attach(&scan, s, &AttachOptions::default()).unwrap();
+        let mask: Vec<bool> = (0..used.len()).map(|v| used[v] && core[v]).collect();
+        let (agree, mirror) = agreement(&scan, &a.labels, &reference, &mask);
+        eprintln!("capsule scan {name}: visible core {agree:.4} mirror {mirror}");
+        if std::env::var("ATTACH_DEBUG").is_ok() {
+            for m in &a.diagnostics.joint_moves {
+                eprintln!("  {:?} {:.4} {}", m.joint, m.distance(), m.reason);
+            }
+            eprintln!("  components {}", a.diagnostics.components.len());
+            let mut conf = std::collections::BTreeMap::new();
+            for v in 0..mask.len() {
+                if mask[v] && a.labels[v] != reference[v] {
+                    *conf
+                        .entry((reference[v].name(), a.labels[v].name()))
+                        .or_insert(0) += 1;
+                }
+            }
+            eprintln!("  {conf:?}");
+        }
+        assert!(agree >= 0.9, "{name}: {agree}");
+        assert_eq!(mirror, 0.0);
+        assert!(!a.diagnostics.mirror.swapped);
+    }
+}

@@ -1,0 +1,116 @@
+//! Shared helpers for the attachment tests: area-weighted agreement, the capsule body's
+//! unambiguous region, a seeded random generator.
+#![allow(dead_code)]
+
+use symcorr_attach::testbody::RADII;
+use symcorr_attach::{Segment, Skeleton, BONES};
+use symcorr_mesh::TriMesh;
+
+/// Area per vertex (a third of the incident triangle areas).
+pub fn vertex_areas(m: &TriMesh) -> Vec<f64> {
+    let mut a = vec![0.0; m.num_vertices()];
+    for (t, ar) in m.triangle_areas().iter().enumerate() {
+        for &v in &m.triangles[t] {
+            a[v as usize] += ar / 3.0;
+        }
+    }
+    a
+}
+
+/// `(area fraction with got == want, area fraction with got == mirror(want) ≠ want)` over the
+/// vertices where `mask` holds.
+pub fn agreement(m: &TriMesh, got: &[Segment], want: &[Segment], mask: &[bool]) -> (f64, f64) {
+    let a = vertex_areas(m);
+    let (mut total, mut same, mut mirror) = (0.0, 0.0, 0.0);
+    for v in 0..a.len() {
+        if !mask[v] {
+            continue;
+        }
+        total += a[v];
+        if got[v] == want[v] {
+            same += a[v];
+        } else if want[v].mirror() != want[v] && got[v] == want[v].mirror() {
+            mirror += a[v];
+        }
+    }
+    (same / total, mirror / total)
+}
+
+fn seg_dist(x: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let ax = [x[0] - a[0], x[1] - a[1], x[2] - a[2]];
+    let l2 = ab.iter().map(|v| v * v).sum::<f64>();
+    let t = ((ax[0] * ab[0] + ax[1] * ab[1] + ax[2] * ab[2]) / l2).clamp(0.0, 1.0);
+    (0..3)
+        .map(|k| (ax[k] - t * ab[k]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Vertices at least `margin` away from every capsule but the nearest one, whose nearest bone is
+/// that capsule's bone: there the capsule body's reference label is unambiguous (where capsules
+/// overlap, "nearest capsule" is not a meaningful ground truth). `sk` is the exact skeleton
+/// (metres).
+pub fn unambiguous(m: &TriMesh, sk: &Skeleton, margin: f64) -> Vec<bool> {
+    m.positions
+        .iter()
+        .map(|&x| {
+            let raw: Vec<f64> = BONES
+                .iter()
+                .map(|(p, q)| seg_dist(x, sk.position(*p), sk.position(*q)))
+                .collect();
+            let argmin = |d: &[f64]| (0..d.len()).min_by(|&a, &b| d[a].total_cmp(&d[b]));
+            let mut d: Vec<f64> = raw.iter().zip(RADII).map(|(r, c)| r - c).collect();
+            let same = argmin(&d) == argmin(&raw);
+            d.sort_by(f64::total_cmp);
+            same && d[1] - d[0] > margin
+        })
+        .collect()
+}
+
+/// Small deterministic generator (SplitMix64) with normal deviates (Box–Muller).
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn normal(&mut self) -> f64 {
+        let u = self.uniform().max(1e-300);
+        let v = self.uniform();
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// Exact joints perturbed as in issue 5: Gaussian noise of `sigma` per coordinate, and a
+/// fraction `biased` of the joints moved onto the surface (to the nearest mesh vertex).
+pub fn noisy(sk: &Skeleton, mesh: &TriMesh, sigma: f64, biased: f64, rng: &mut Rng) -> Skeleton {
+    let mut out = sk.clone();
+    for j in 0..20 {
+        let p = &mut out.positions[j];
+        if rng.uniform() < biased {
+            let x = *p;
+            *p = mesh
+                .positions
+                .iter()
+                .copied()
+                .min_by(|a, b| {
+                    let da: f64 = (0..3).map(|k| (a[k] - x[k]).powi(2)).sum();
+                    let db: f64 = (0..3).map(|k| (b[k] - x[k]).powi(2)).sum();
+                    da.total_cmp(&db)
+                })
+                .unwrap();
+        }
+        for c in p.iter_mut() {
+            *c += sigma * rng.normal();
+        }
+    }
+    out
+}
