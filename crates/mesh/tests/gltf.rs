@@ -288,3 +288,15 @@ fn index_types_u16_u32_and_float_colours() {
         );
     }
 }
+
+#[test]
+fn position_accessor_index_out_of_range_is_an_error_not_a_panic() {
+    // Fuzz finding: gltf-json's validation indexed accessors[POSITION] unchecked.
+    let doc =
+        br#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#;
+    let e = io::read_from_bytes(doc, Format::Gltf).unwrap_err();
+    match e {
+        MeshError::Malformed { element, .. } => assert_eq!(element, "mesh 0 primitive 0"),
+        other => panic!("{other:?}"),
+    }
+}

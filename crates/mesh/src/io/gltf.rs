@@ -115,8 +115,27 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
 /// checked enums and indices), tolerating only a missing `min`/`max` on `POSITION`: the spec
 /// requires them, but many exporters omit them and this reader does not need them.
 fn validate(doc: &gltf::Document, src: &Source) -> Result<(), MeshError> {
-    use gltf::json::validation::{Error, Validate};
+    use gltf::json::validation::{Checked, Error, Validate};
     let root = doc.as_json();
+    // gltf-json 1.4.1's primitive validation hook indexes `accessors[POSITION]` before the
+    // index itself is checked, and panics on an out-of-range index (found by fuzzing): check
+    // those indices first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&Checked::Valid(Semantic::Positions)) {
+                if i.value() >= root.accessors.len() {
+                    return Err(src.malformed(
+                        format!("mesh {m} primitive {p}"),
+                        format!(
+                            "POSITION refers to accessor {}, but there are {}",
+                            i.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let p = path();
