@@ -5,8 +5,10 @@ use std::path::{Path, PathBuf};
 use crate::body::{Model, Shape};
 use crate::dataset::{write_dataset, write_joints, write_text, DatasetSpec, MeshFormat};
 use crate::error::Result;
+use crate::kinect::{write_scan, write_sequence};
 use crate::mapping::{kinect_joints, reference_labels, SelfIntersectionCheck};
 use crate::noise::{apply_joint_noise, JointNoise};
+use crate::render::{Camera, Realism};
 
 /// The command that regenerates `fixtures/synth/` (run from the workspace root).
 pub const FIXTURES_COMMAND: &str =
@@ -56,7 +58,59 @@ pub fn write_fixtures(model: &Model, out: &Path) -> Result<()> {
         ..spec
     };
     write_dataset(model, &noisy, &out.join("bodies_noisy"))?;
+
+    // Virtual Kinect: one view of s0_walk-10, ideal and realistic, and a short walk sequence.
+    let body = model.body(&fixture_shapes()[0].1)?;
+    let pose = crate::poses::named_pose(&model.assets, SCAN_POSE)?;
+    let posed = body.pose(&pose)?;
+    let joints = kinect_joints(&body, &posed)?;
+    let camera = fixture_camera();
+    let mesh_ref = format!("../bodies/meshes/s0_{SCAN_POSE}.ply");
+    write_scan(
+        &out.join("scan"),
+        &posed.mesh,
+        &joints,
+        &camera,
+        &Realism::default(),
+        &mesh_ref,
+    )?;
+    write_scan(
+        &out.join("scan_kinect"),
+        &posed.mesh,
+        &joints,
+        &camera,
+        &Realism::kinect(11),
+        &mesh_ref,
+    )?;
+    let poses: Vec<_> = (0..SEQUENCE_FRAMES)
+        .map(|f| {
+            crate::poses::walk_pose(model.assets.walk.as_ref(), f as f64 / 30.0 / WALK_PERIOD_S)
+        })
+        .collect();
+    write_sequence(
+        &out.join("sequence"),
+        &body,
+        &poses,
+        30.0,
+        &camera,
+        &Realism::kinect(12),
+    )?;
     Ok(())
+}
+
+/// Pose of the committed single-view scans (`scan/`, `scan_kinect/`): body `s0_walk-10`.
+pub const SCAN_POSE: &str = "walk-10";
+
+/// Frames of the committed sequence (30 fps walk).
+pub const SEQUENCE_FRAMES: usize = 4;
+
+/// Walk-cycle period used for sequences, seconds (40 frames at 24 fps, as the MPFB2 walk file).
+pub const WALK_PERIOD_S: f64 = 40.0 / 24.0;
+
+/// The fixture camera: a Kinect v1 2.6 m in front of the subject (who faces +z) at about
+/// 0.8 m above the floor, looking at the body's centre.
+pub fn fixture_camera() -> Camera {
+    Camera::kinect_v1([0.0, 0.0, 2.6], [0.0, -0.05, 0.0])
 }
 
 /// Poses one body and writes its mesh (and optionally joints and labels).

@@ -12,5 +12,7 @@ pub use error::{Result, SynthError};
 pub mod dataset;
 pub mod fixtures;
 pub mod geom;
+pub mod kinect;
 pub mod mapping;
 pub mod noise;
+pub mod render;

@@ -1,0 +1,118 @@
+//! Virtual-Kinect outputs: a single-view scan with per-pixel ground truth, and sequences.
+//!
+//! Scan folder: `depth.png` (PNG-16, z in mm, 0 = none), `vertex_ids.png` (PNG-16, body vertex
+//! id + 1 per pixel, 0 = none), `intrinsics.json` (`symcorr.intrinsics/1`), `camera.json`
+//! (position, look-at, the world → camera rigid transform, the body mesh it saw), `joints.json`
+//! (`symcorr.joints/1`, Kinect camera space).
+//!
+//! Sequence folder: `depth/frame_NNN.png`, `joints.json` (one frame per depth frame, `time_s`
+//! = frame / fps), `intrinsics.json`, `camera.json`.
+
+use std::path::Path;
+
+use serde_json::json;
+use symcorr_attach::Skeleton;
+use symcorr_kinect::joints::{write_joints_json, JointFrame, JointLog};
+use symcorr_kinect::write_depth_png16;
+use symcorr_mesh::TriMesh;
+
+use crate::body::{Body, Pose};
+use crate::dataset::{mkdir, write_text};
+use crate::error::{Result, SynthError};
+use crate::mapping::kinect_joints;
+use crate::math::Rigid;
+use crate::render::{render, Camera, Realism, Rendering};
+
+fn kerr(e: symcorr_kinect::KinectError) -> SynthError {
+    SynthError::Invalid(e.to_string())
+}
+
+/// A skeleton moved into camera space.
+pub fn skeleton_to_camera(s: &Skeleton, to_cam: &Rigid) -> Skeleton {
+    let mut out = s.clone();
+    for p in out.positions.iter_mut() {
+        *p = to_cam.apply(*p);
+    }
+    out
+}
+
+fn write_camera_files(
+    out: &Path,
+    camera: &Camera,
+    mesh_ref: &str,
+    realism: &Realism,
+) -> Result<()> {
+    let k = serde_json::to_string(&camera.intrinsics)
+        .map_err(|e| SynthError::Invalid(e.to_string()))?;
+    write_text(&out.join("intrinsics.json"), &(k + "\n"))?;
+    let t = camera.world_to_camera();
+    let cam = json!({
+        "format": "symcorr.synth-camera/1",
+        "position": camera.position,
+        "look_at": camera.look_at,
+        "world_to_camera": {"rotation_rows": t.r, "translation": t.t},
+        "body": mesh_ref,
+        "realism": {
+            "axial_noise": realism.axial_noise, "quantise": realism.quantise,
+            "grazing_deg": realism.grazing_deg, "edge_dropout": realism.edge_dropout,
+            "floor": realism.floor, "wall": realism.wall, "seed": realism.seed,
+        },
+    });
+    let text =
+        serde_json::to_string_pretty(&cam).map_err(|e| SynthError::Invalid(e.to_string()))?;
+    write_text(&out.join("camera.json"), &(text + "\n"))
+}
+
+/// Renders one view of a posed body and writes the scan folder (see module docs). `mesh_ref`
+/// names the world-frame body mesh in `camera.json`.
+pub fn write_scan(
+    out: &Path,
+    mesh: &TriMesh,
+    joints_world: &Skeleton,
+    camera: &Camera,
+    realism: &Realism,
+    mesh_ref: &str,
+) -> Result<Rendering> {
+    mkdir(out)?;
+    let r = render(mesh, camera, realism, 0);
+    write_depth_png16(out.join("depth.png"), &r.depth_frame()).map_err(kerr)?;
+    write_depth_png16(out.join("vertex_ids.png"), &r.vertex_id_frame()).map_err(kerr)?;
+    let cam_joints = skeleton_to_camera(joints_world, &camera.world_to_camera());
+    let log = JointLog::from_skeletons(vec![cam_joints], symcorr_kinect::joints::KINECT_FPS);
+    write_joints_json(out.join("joints.json"), &log).map_err(kerr)?;
+    write_camera_files(out, camera, mesh_ref, realism)?;
+    Ok(r)
+}
+
+/// Renders `poses` of `body` as a sequence at `fps` and writes the sequence folder.
+pub fn write_sequence(
+    out: &Path,
+    body: &Body<'_>,
+    poses: &[Pose],
+    fps: f64,
+    camera: &Camera,
+    realism: &Realism,
+) -> Result<()> {
+    mkdir(&out.join("depth"))?;
+    let to_cam = camera.world_to_camera();
+    let mut frames = Vec::new();
+    for (f, pose) in poses.iter().enumerate() {
+        let posed = body.pose(pose)?;
+        let r = render(&posed.mesh, camera, realism, f as u64);
+        write_depth_png16(
+            out.join("depth").join(format!("frame_{f:03}.png")),
+            &r.depth_frame(),
+        )
+        .map_err(kerr)?;
+        frames.push(JointFrame {
+            time_s: f as f64 / fps,
+            skeleton: skeleton_to_camera(&kinect_joints(body, &posed)?, &to_cam),
+        });
+    }
+    let log = JointLog {
+        skeleton_kind: symcorr_kinect::mapping::SkeletonKind::KinectV1,
+        frames,
+    };
+    write_joints_json(out.join("joints.json"), &log).map_err(kerr)?;
+    write_camera_files(out, camera, "(posed per frame; see joints.json)", realism)
+}
