@@ -6,6 +6,10 @@
 //! * [`mapping`]: the NiTE 15-joint and Kinect v2 25-joint tables and the interpolation rules.
 //! * [`camera`]: [`Intrinsics`] and the single projection/unprojection convention.
 //! * [`depth`]: [`DepthFrame`] and PNG-16 reading/writing.
+//! * [`replay`]: a frame by index/time, robust window average, bone-length consistency.
+//! * [`handedness`]: is a skeleton's left/right consistent with a mesh?
+//! * [`scan`]: depth frame → organised cloud → scan mesh (floor, background, discontinuities).
+//! * `openni2` (feature `openni2`): safe OpenNI2 wrapper; devices, `.oni` playback, recorder.
 //!
 //! ## Decisions the design leaves open
 //!
@@ -23,20 +27,26 @@ pub mod camera;
 pub mod depth;
 mod error;
 mod geom;
+pub mod handedness;
 pub mod joints;
 pub mod mapping;
 pub mod ntu;
 #[cfg(feature = "openni2")]
 pub mod openni2;
+pub mod replay;
+pub mod scan;
 pub mod sdk_text;
 
 pub use camera::Intrinsics;
 pub use depth::{read_depth_png16, write_depth_png16, DepthFrame};
 pub use error::KinectError;
+pub use handedness::{check_handedness, Handedness, HandednessReport};
 pub use joints::{
     read_joints, read_joints_with_format, write_joints_json, JointFormat, JointFrame, JointLog,
 };
 pub use mapping::SkeletonKind;
+pub use replay::{BoneLengthReport, FrameSelect};
+pub use scan::{fuse_depth_frames, scan_mesh, ScanMesh, ScanOptions};
 
 use std::io::Write;
 use std::path::Path;

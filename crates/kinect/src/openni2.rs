@@ -31,24 +31,23 @@
 //!   wrapper therefore always waits with a timeout ([`DepthStream::read_frame`]) and reports
 //!   [`KinectError::OpenNi`] with status `TIME_OUT` instead of hanging, and [`Device::seek`]
 //!   refuses to seek a stream that has not produced a frame yet.
-//! * `oniShutdown` crashes (SIGSEGV in a driver thread) in a process that has used a recorder,
-//!   whatever the teardown order. [`OpenNi`]'s `Drop` therefore skips `oniShutdown` once a
-//!   [`Recorder`] has existed in the process (the OS reclaims everything at exit).
+//! * `oniShutdown` crashes (SIGSEGV in a driver thread executing code of an already unloaded
+//!   driver library) in a process that has used a recorder, whatever the teardown order, and
+//!   also, racily, right after a Dummy stream was destroyed (`symcorr scan --device --uri Dummy`
+//!   crashed at exit this way). This wrapper therefore initialises OpenNI2 once per process and
+//!   never calls `oniShutdown`; the OS reclaims the library's state at exit.
 
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
 use std::ffi::{CStr, CString};
 use std::marker::PhantomData;
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use symcorr_openni2_sys as sys;
 
-/// OpenNI2's context is process-global: a reference count makes `OpenNi` values share it, the
-/// first initialising and the last shutting down.
-static CONTEXT_USERS: Mutex<usize> = Mutex::new(0);
-/// Set once a recorder has been created: `oniShutdown` would crash (see the module docs).
-static RECORDER_USED: AtomicBool = AtomicBool::new(false);
+/// OpenNI2's context is process-global: it is initialised by the first [`OpenNi::init`] and never
+/// shut down (module docs).
+static INITIALISED: Mutex<bool> = Mutex::new(false);
 
 fn extended_error() -> String {
     // SAFETY: oniGetExtendedError returns a pointer to a NUL-terminated static/thread buffer
@@ -97,7 +96,8 @@ fn check(call: &str, s: sys::OniStatus) -> Result<(), KinectError> {
 /// Status code of a timed-out wait (`ONI_STATUS_TIME_OUT`), as found in [`KinectError::OpenNi`].
 pub const STATUS_TIME_OUT: i32 = 102;
 
-/// An initialised OpenNI2 library. Devices borrow it, so it outlives them.
+/// A handle on the initialised OpenNI2 library (process-global, initialised once, never shut
+/// down: see the module docs). Devices borrow it, so it outlives them.
 #[derive(Debug)]
 pub struct OpenNi {
     _not_send: PhantomData<*const ()>,
@@ -131,14 +131,14 @@ impl OpenNi {
     /// Initialises OpenNI2 (`oniInitialize(ONI_API_VERSION)`); drivers are loaded from
     /// `/usr/lib/x86_64-linux-gnu/OpenNI2/Drivers` (Debian; see `/etc/openni2/OpenNI.ini`).
     pub fn init() -> Result<OpenNi, KinectError> {
-        let mut users = CONTEXT_USERS.lock().unwrap_or_else(|e| e.into_inner());
-        if *users == 0 {
+        let mut done = INITIALISED.lock().unwrap_or_else(|e| e.into_inner());
+        if !*done {
             // SAFETY: plain C call; the version constant matches the linked headers.
             check("oniInitialize", unsafe {
                 sys::oniInitialize(sys::ONI_API_VERSION)
             })?;
+            *done = true;
         }
-        *users += 1;
         Ok(OpenNi {
             _not_send: PhantomData,
         })
@@ -196,17 +196,6 @@ impl OpenNi {
         let file = p.display().to_string();
         std::fs::metadata(p).map_err(|e| KinectError::io(&file, e))?;
         self.open(&file)
-    }
-}
-
-impl Drop for OpenNi {
-    fn drop(&mut self) {
-        let mut users = CONTEXT_USERS.lock().unwrap_or_else(|e| e.into_inner());
-        *users = users.saturating_sub(1);
-        if *users == 0 && !RECORDER_USED.load(Ordering::SeqCst) {
-            // SAFETY: every device/stream borrowed this context and has been dropped.
-            unsafe { sys::oniShutdown() };
-        }
     }
 }
 
@@ -515,8 +504,7 @@ impl Drop for DepthStream<'_> {
     }
 }
 
-/// OpenNI2's own `.oni` recorder. Destroyed on drop. Creating one makes [`OpenNi`] skip
-/// `oniShutdown` for the rest of the process (module docs).
+/// OpenNI2's own `.oni` recorder. Destroyed (file finalised) on drop.
 #[derive(Debug)]
 pub struct Recorder<'ctx> {
     handle: sys::OniRecorderHandle,
@@ -536,7 +524,6 @@ impl<'ctx> Recorder<'ctx> {
             status: 4,
             message: format!("path {file:?} contains a NUL byte"),
         })?;
-        RECORDER_USED.store(true, Ordering::SeqCst);
         let mut h: sys::OniRecorderHandle = std::ptr::null_mut();
         // SAFETY: valid C string and out-pointer.
         check(&format!("oniCreateRecorder({file})"), unsafe {

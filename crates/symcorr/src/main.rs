@@ -25,6 +25,8 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// The whole pipeline on bundled fixtures, with outputs in ./symcorr-demo/.
     Demo(cli::demo::DemoArgs),
+    /// Depth frame (.oni recording, PNG-16, or device) + joints → scan mesh.
+    Scan(cli::scan::ScanArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +36,7 @@ fn main() -> ExitCode {
         Command::Match(a) => cli::match_cmd::run(a),
         Command::Bench(a) => cli::bench::run(a),
         Command::Demo(a) => cli::demo::run(a),
+        Command::Scan(a) => cli::scan::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

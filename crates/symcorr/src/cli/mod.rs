@@ -4,6 +4,7 @@ pub mod bench;
 pub mod demo;
 pub mod match_cmd;
 pub mod progress;
+pub mod scan;
 pub mod spectrum;
 
 /// A user error: printed as one line on stderr, exit status 1.

@@ -1,0 +1,375 @@
+//! Depth frame → organised point cloud → scan mesh.
+//!
+//! 1. Every pixel with a depth in `[min_depth_m, max_depth_m]` is unprojected with
+//!    [`Intrinsics::unproject`] (the organised cloud keeps the pixel grid).
+//! 2. Background: with a skeleton, points outside the skeleton's bounding box grown by
+//!    `background_margin_m` are dropped (walls, furniture, other people).
+//! 3. Floor: RANSAC plane fit ([`ScanOptions::floor_iterations`] samples, deterministic seed);
+//!    the plane must be within 35° of horizontal (the skeleton's up, or camera +y without a
+//!    skeleton) and, with a skeleton, below the hip centre; its inliers (within
+//!    `floor_threshold_m`) are dropped.
+//! 4. Grid triangulation: each 2×2 pixel block gives up to two triangles, kept only if no edge
+//!    spans a depth jump larger than `discontinuity_m` (a silhouette edge, not a surface).
+//!    Triangles are counter-clockwise seen from the camera (their normals face it).
+//! 5. The largest connected component is kept (if `largest_component`).
+//!
+//! The result keeps, per vertex, the pixel it came from (`v · width + u`), so results can be
+//! related back to the depth image. [`fuse_depth_frames`] merges a few frames of a static subject
+//! into one (per-pixel median) before meshing, which removes most of the sensor's flicker.
+
+use crate::camera::Intrinsics;
+use crate::depth::DepthFrame;
+use crate::error::KinectError;
+use crate::geom::{cross, dot, norm, normalize, sub};
+use symcorr_attach::{Joint, Skeleton};
+use symcorr_mesh::TriMesh;
+
+/// Parameters of [`scan_mesh`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanOptions {
+    /// Nearest valid depth, metres (Kinect v1: 0.4 m in near mode, 0.8 m by default).
+    pub min_depth_m: f64,
+    /// Farthest valid depth, metres.
+    pub max_depth_m: f64,
+    /// Largest depth difference along a triangle edge, metres.
+    pub discontinuity_m: f64,
+    /// Remove the floor plane.
+    pub remove_floor: bool,
+    /// RANSAC samples for the floor.
+    pub floor_iterations: usize,
+    /// Distance to the floor plane below which a point is floor, metres.
+    pub floor_threshold_m: f64,
+    /// Margin around the skeleton's bounding box kept as foreground, metres.
+    pub background_margin_m: f64,
+    /// Keep only the largest connected component.
+    pub largest_component: bool,
+    /// Seed of the RANSAC sampler (results are deterministic for a given seed).
+    pub seed: u64,
+}
+
+impl Default for ScanOptions {
+    fn default() -> Self {
+        ScanOptions {
+            min_depth_m: 0.4,
+            max_depth_m: 8.0,
+            discontinuity_m: 0.05,
+            remove_floor: true,
+            floor_iterations: 300,
+            floor_threshold_m: 0.02,
+            background_margin_m: 0.3,
+            largest_component: true,
+            seed: 0x5eed,
+        }
+    }
+}
+
+/// A triangulated scan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanMesh {
+    /// The mesh, Kinect camera space, metres.
+    pub mesh: TriMesh,
+    /// Per vertex, the pixel id `v · width + u` it was unprojected from.
+    pub pixel_ids: Vec<u32>,
+    /// What the pipeline removed.
+    pub report: ScanReport,
+}
+
+/// Counts of what each stage kept or removed.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ScanReport {
+    /// Pixels with a valid depth.
+    pub valid_pixels: usize,
+    /// Points dropped as background (outside the skeleton's box).
+    pub background_removed: usize,
+    /// The floor plane `n·p + d = 0` (unit `n`), if one was found.
+    pub floor_plane: Option<[f64; 4]>,
+    /// Points dropped as floor.
+    pub floor_removed: usize,
+    /// Triangles rejected at depth discontinuities.
+    pub discontinuity_triangles: usize,
+    /// Vertices dropped with smaller components.
+    pub component_vertices_removed: usize,
+}
+
+/// The organised point cloud: per pixel (row-major) the camera-space point, or `None`.
+pub fn depth_to_points(
+    frame: &DepthFrame,
+    k: &Intrinsics,
+    min_depth_m: f64,
+    max_depth_m: f64,
+) -> Result<Vec<Option<[f64; 3]>>, KinectError> {
+    k.validate()?;
+    if frame.width != k.width
+        || frame.height != k.height
+        || frame.data_mm.len() != frame.width as usize * frame.height as usize
+    {
+        return Err(KinectError::DepthSize {
+            width: frame.width,
+            height: frame.height,
+            values: frame.data_mm.len(),
+            expected: format!("{}x{} (the intrinsics)", k.width, k.height),
+        });
+    }
+    let w = frame.width as usize;
+    Ok(frame
+        .data_mm
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| {
+            let z = f64::from(d) / 1000.0;
+            (d > 0 && z >= min_depth_m && z <= max_depth_m)
+                .then(|| k.unproject((i % w) as f64, (i / w) as f64, z))
+        })
+        .collect())
+}
+
+/// Per-pixel median of several depth frames of a static subject (zeros ignored; a pixel valid
+/// in fewer than half the frames becomes 0). All frames must have the same size.
+pub fn fuse_depth_frames(frames: &[DepthFrame]) -> Result<DepthFrame, KinectError> {
+    let first = frames
+        .first()
+        .ok_or_else(|| KinectError::Scan("no depth frame to fuse".into()))?;
+    for f in frames {
+        if f.width != first.width
+            || f.height != first.height
+            || f.data_mm.len() != first.data_mm.len()
+        {
+            return Err(KinectError::DepthSize {
+                width: f.width,
+                height: f.height,
+                values: f.data_mm.len(),
+                expected: format!("{}x{} like the first frame", first.width, first.height),
+            });
+        }
+    }
+    let mut out = vec![0u16; first.data_mm.len()];
+    let mut vals = Vec::with_capacity(frames.len());
+    for (i, o) in out.iter_mut().enumerate() {
+        vals.clear();
+        vals.extend(frames.iter().map(|f| f.data_mm[i]).filter(|&d| d > 0));
+        if vals.len() * 2 >= frames.len() && !vals.is_empty() {
+            vals.sort_unstable();
+            *o = vals[vals.len() / 2];
+        }
+    }
+    DepthFrame::new(first.width, first.height, out)
+}
+
+/// Small deterministic generator (xorshift64*) for RANSAC sampling.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// RANSAC plane among `points` whose normal is within 35° of `up`; returns (plane, inlier count).
+fn ransac_floor(
+    points: &[[f64; 3]],
+    up: [f64; 3],
+    below: Option<[f64; 3]>,
+    opts: &ScanOptions,
+) -> Option<([f64; 4], usize)> {
+    if points.len() < 3 {
+        return None;
+    }
+    let cos_max = 35f64.to_radians().cos();
+    let mut rng = Rng(opts.seed | 1);
+    let mut best: Option<([f64; 4], usize)> = None;
+    for _ in 0..opts.floor_iterations {
+        let a = points[rng.below(points.len())];
+        let b = points[rng.below(points.len())];
+        let c = points[rng.below(points.len())];
+        let Some(mut n) = normalize(cross(sub(b, a), sub(c, a))) else {
+            continue;
+        };
+        if dot(n, up) < 0.0 {
+            n = [-n[0], -n[1], -n[2]];
+        }
+        if dot(n, up) < cos_max {
+            continue;
+        }
+        let d = -dot(n, a);
+        // The floor is under the subject: the hip centre must be well above it.
+        if let Some(h) = below {
+            if dot(n, h) + d < 0.3 {
+                continue;
+            }
+        }
+        let count = points
+            .iter()
+            .filter(|p| (dot(n, **p) + d).abs() <= opts.floor_threshold_m)
+            .count();
+        if best.is_none_or(|(_, c)| count > c) {
+            best = Some(([n[0], n[1], n[2], d], count));
+        }
+    }
+    best
+}
+
+/// Builds the scan mesh of one depth frame (module docs). With a `skeleton` (same camera space),
+/// the background beyond its extent is removed and the floor is searched below its hips.
+///
+/// Errors: [`KinectError::DepthSize`] if the frame does not match the intrinsics,
+/// [`KinectError::Scan`] if nothing is left to triangulate.
+pub fn scan_mesh(
+    frame: &DepthFrame,
+    k: &Intrinsics,
+    skeleton: Option<&Skeleton>,
+    opts: &ScanOptions,
+) -> Result<ScanMesh, KinectError> {
+    let mut points = depth_to_points(frame, k, opts.min_depth_m, opts.max_depth_m)?;
+    let mut report = ScanReport {
+        valid_pixels: points.iter().filter(|p| p.is_some()).count(),
+        ..ScanReport::default()
+    };
+    if let Some(s) = skeleton {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &s.positions {
+            for c in 0..3 {
+                lo[c] = lo[c].min(p[c] - opts.background_margin_m);
+                hi[c] = hi[c].max(p[c] + opts.background_margin_m);
+            }
+        }
+        for p in points.iter_mut() {
+            if let Some(q) = p {
+                if (0..3).any(|c| q[c] < lo[c] || q[c] > hi[c]) {
+                    *p = None;
+                    report.background_removed += 1;
+                }
+            }
+        }
+    }
+    if opts.remove_floor {
+        let up = skeleton
+            .and_then(|s| {
+                normalize(sub(
+                    s.position(Joint::ShoulderCenter),
+                    s.position(Joint::HipCenter),
+                ))
+            })
+            .unwrap_or([0.0, 1.0, 0.0]);
+        let hip = skeleton.map(|s| s.position(Joint::HipCenter));
+        let candidates: Vec<[f64; 3]> = points.iter().flatten().copied().collect();
+        if let Some((plane, count)) = ransac_floor(&candidates, up, hip, opts) {
+            // A handful of coplanar points is not a floor.
+            if count >= 50 && count * 50 >= candidates.len() {
+                report.floor_plane = Some(plane);
+                for p in points.iter_mut() {
+                    if let Some(q) = p {
+                        if (dot([plane[0], plane[1], plane[2]], *q) + plane[3]).abs()
+                            <= opts.floor_threshold_m
+                        {
+                            *p = None;
+                            report.floor_removed += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    // Grid triangulation.
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let ok = |a: [f64; 3], b: [f64; 3]| (a[2] - b[2]).abs() <= opts.discontinuity_m;
+    let mut tris: Vec<[usize; 3]> = Vec::new();
+    for v in 0..h.saturating_sub(1) {
+        for u in 0..w.saturating_sub(1) {
+            let ia = v * w + u;
+            let (ib, ic, id) = (ia + 1, ia + w, ia + w + 1);
+            for [x, y, z] in [[ia, ib, ic], [ib, id, ic]] {
+                if let (Some(px), Some(py), Some(pz)) = (points[x], points[y], points[z]) {
+                    if ok(px, py) && ok(py, pz) && ok(pz, px) {
+                        tris.push([x, y, z]);
+                    } else {
+                        report.discontinuity_triangles += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    // Largest component (union-find over pixels through triangles).
+    if opts.largest_component && !tris.is_empty() {
+        let mut parent: Vec<usize> = (0..points.len()).collect();
+        fn find(parent: &mut [usize], mut x: usize) -> usize {
+            while parent[x] != x {
+                parent[x] = parent[parent[x]];
+                x = parent[x];
+            }
+            x
+        }
+        for t in &tris {
+            for e in [(t[0], t[1]), (t[1], t[2])] {
+                let (a, b) = (find(&mut parent, e.0), find(&mut parent, e.1));
+                if a != b {
+                    parent[a] = b;
+                }
+            }
+        }
+        let mut size = std::collections::HashMap::new();
+        for t in &tris {
+            *size.entry(find(&mut parent, t[0])).or_insert(0usize) += 1;
+        }
+        // Deterministic choice among equal sizes: the smallest root id.
+        let keep = size
+            .iter()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+            .map(|(r, _)| *r);
+        if let Some(keep) = keep {
+            let before: std::collections::HashSet<usize> = tris.iter().flatten().copied().collect();
+            tris.retain(|t| find(&mut parent, t[0]) == keep);
+            let after: std::collections::HashSet<usize> = tris.iter().flatten().copied().collect();
+            report.component_vertices_removed = before.len() - after.len();
+        }
+    }
+    if tris.is_empty() {
+        return Err(KinectError::Scan(format!(
+            "no triangle left ({} valid pixels, {} background, {} floor, {} across discontinuities)",
+            report.valid_pixels,
+            report.background_removed,
+            report.floor_removed,
+            report.discontinuity_triangles
+        )));
+    }
+
+    // Compact: vertices in pixel order.
+    let mut index = vec![u32::MAX; points.len()];
+    let mut used: Vec<usize> = tris.iter().flatten().copied().collect();
+    used.sort_unstable();
+    used.dedup();
+    let mut positions = Vec::with_capacity(used.len());
+    let mut pixel_ids = Vec::with_capacity(used.len());
+    for (n, &px) in used.iter().enumerate() {
+        index[px] = n as u32;
+        // Every used pixel belongs to a triangle, whose corners all have points.
+        if let Some(p) = points[px] {
+            positions.push(p);
+        }
+        pixel_ids.push(px as u32);
+    }
+    let triangles = tris
+        .iter()
+        .map(|t| [index[t[0]], index[t[1]], index[t[2]]])
+        .collect();
+    let mesh = TriMesh::new(positions, triangles)?;
+    Ok(ScanMesh {
+        mesh,
+        pixel_ids,
+        report,
+    })
+}
+
+/// The mean distance from the points to a plane `[n, d]` (helper for reports and tests).
+pub fn plane_distance(plane: [f64; 4], p: [f64; 3]) -> f64 {
+    (dot([plane[0], plane[1], plane[2]], p) + plane[3]) / norm([plane[0], plane[1], plane[2]])
+}

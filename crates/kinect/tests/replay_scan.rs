@@ -1,0 +1,398 @@
+//! Joint-log replay, handedness against a mesh, and depth → scan meshing on analytically rendered
+//! depth frames.
+
+use std::path::PathBuf;
+use symcorr_attach::{Joint, Skeleton};
+use symcorr_kinect::scan::{depth_to_points, fuse_depth_frames, scan_mesh, ScanOptions};
+use symcorr_kinect::{
+    check_handedness, read_joints, DepthFrame, FrameSelect, Handedness, Intrinsics, JointFrame,
+    JointLog, KinectError, SkeletonKind,
+};
+use symcorr_mesh::TriMesh;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/kinect")
+        .join(name)
+}
+
+fn standing() -> Skeleton {
+    read_joints(fixture("standing_v1.json")).unwrap().frames[0]
+        .skeleton
+        .clone()
+}
+
+fn log_of(skeletons: Vec<Skeleton>) -> JointLog {
+    JointLog {
+        skeleton_kind: SkeletonKind::KinectV1,
+        frames: skeletons
+            .into_iter()
+            .enumerate()
+            .map(|(i, skeleton)| JointFrame {
+                time_s: i as f64 * 0.1,
+                skeleton,
+            })
+            .collect(),
+    }
+}
+
+fn shifted(s: &Skeleton, d: [f64; 3]) -> Skeleton {
+    let mut out = s.clone();
+    for p in out.positions.iter_mut() {
+        for c in 0..3 {
+            p[c] += d[c];
+        }
+    }
+    out
+}
+
+#[test]
+fn replay_selects_frames_by_index_and_time() {
+    let base = standing();
+    let log = log_of(
+        (0..5)
+            .map(|i| shifted(&base, [0.01 * i as f64, 0.0, 0.0]))
+            .collect(),
+    );
+    assert_eq!(log.frame(3).unwrap(), &log.frames[3].skeleton);
+    assert!(matches!(log.frame(5), Err(KinectError::Replay(_))));
+    // 0.26 s is nearest to frame 3 (0.3 s).
+    assert_eq!(
+        log.select(FrameSelect::Time(0.26)).unwrap(),
+        log.frames[3].skeleton
+    );
+    assert_eq!(
+        log.select(FrameSelect::Time(-4.0)).unwrap(),
+        log.frames[0].skeleton
+    );
+    assert!(log.select(FrameSelect::Time(f64::NAN)).is_err());
+    let e = log
+        .select(FrameSelect::Window {
+            start_s: 5.0,
+            end_s: 6.0,
+        })
+        .unwrap_err();
+    assert!(matches!(e, KinectError::Replay(_)), "{e}");
+}
+
+#[test]
+fn robust_average_drops_outlier_frames_and_weights_by_confidence() {
+    let base = standing();
+    // Small symmetric jitter around the base pose, one frame 0.5 m off (a mis-track).
+    let mut frames: Vec<Skeleton> = [-0.004, 0.002, 0.0, -0.002, 0.004, 0.001, -0.001]
+        .iter()
+        .map(|&e| shifted(&base, [e, -e, e]))
+        .collect();
+    frames.insert(3, shifted(&base, [0.5, 0.0, 0.0]));
+    frames.insert(5, shifted(&base, [0.45, 0.1, 0.0]));
+    // The head is untracked (confidence 0) and wrong in two otherwise good frames.
+    for f in [0, 1] {
+        frames[f].positions[Joint::Head.index()][1] += 0.3;
+        frames[f].confidence[Joint::Head.index()] = 0.0;
+    }
+    let log = log_of(frames);
+    let avg = log
+        .select(FrameSelect::Window {
+            start_s: 0.0,
+            end_s: 10.0,
+        })
+        .unwrap();
+    for j in Joint::ALL {
+        let d: f64 = (0..3)
+            .map(|c| (avg.position(j)[c] - base.position(j)[c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(d < 0.005, "{j:?} off by {d}");
+    }
+    // A plain mean would have moved x by (0.5 + 0.45) / 9 ≈ 0.1 m.
+    assert!(avg.confidence[Joint::Head.index()] < 1.0);
+    assert_eq!(avg.confidence[Joint::Spine.index()], 1.0);
+}
+
+#[test]
+fn bone_length_report_finds_the_stretching_bone() {
+    let base = standing();
+    let rigid = log_of(
+        (0..4)
+            .map(|i| shifted(&base, [0.1 * i as f64, 0.0, 0.0]))
+            .collect(),
+    );
+    let r = rigid.bone_lengths();
+    assert_eq!(r.bones.len(), 19);
+    assert!(r.max_relative_std < 1e-12, "{}", r.max_relative_std);
+    assert!(r.is_consistent(0.01));
+    // Left forearm 30 % longer in one of four frames (hand moved along with the wrist).
+    let mut frames: Vec<Skeleton> = (0..4).map(|_| base.clone()).collect();
+    let (e, w) = (
+        base.position(Joint::ElbowLeft),
+        base.position(Joint::WristLeft),
+    );
+    let stretch = [0, 1, 2].map(|c| 0.3 * (w[c] - e[c]));
+    for j in [Joint::WristLeft, Joint::HandLeft] {
+        for (q, d) in frames[2].positions[j.index()].iter_mut().zip(stretch) {
+            *q += d;
+        }
+    }
+    let r = log_of(frames).bone_lengths();
+    assert_eq!(r.worst_bone, (Joint::ElbowLeft, Joint::WristLeft));
+    assert!(!r.is_consistent(0.05));
+    let fore = &r.bones[5];
+    assert_eq!(fore.bone, (Joint::ElbowLeft, Joint::WristLeft));
+    assert!((fore.max / fore.min - 1.3).abs() < 1e-9);
+    assert!(r.to_string().contains("elbow_left"));
+}
+
+/// An axis-aligned box as a closed triangle mesh, appended to `pos`/`tri`.
+fn push_box(pos: &mut Vec<[f64; 3]>, tri: &mut Vec<[u32; 3]>, lo: [f64; 3], hi: [f64; 3]) {
+    let b = pos.len() as u32;
+    for i in 0..8 {
+        pos.push([
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        ]);
+    }
+    for f in [
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ] {
+        tri.push([b + f[0], b + f[1], b + f[2]]);
+    }
+}
+
+/// A blocky body matching the standing fixture: torso, shins, and feet pointing to −z.
+fn blocky_body() -> TriMesh {
+    let (mut p, mut t) = (Vec::new(), Vec::new());
+    push_box(&mut p, &mut t, [-0.18, -0.05, 2.4], [0.18, 0.5, 2.6]);
+    for s in [-1.0, 1.0] {
+        let (x0, x1) = if s < 0.0 {
+            (-0.14, -0.06)
+        } else {
+            (0.06, 0.14)
+        };
+        push_box(&mut p, &mut t, [x0, -0.88, 2.47], [x1, -0.48, 2.57]);
+        push_box(&mut p, &mut t, [x0, -0.95, 2.32], [x1, -0.88, 2.56]);
+    }
+    TriMesh::new(p, t).unwrap()
+}
+
+#[test]
+fn handedness_detects_swapped_sides_from_the_feet() {
+    let s = standing();
+    let mesh = blocky_body();
+    let ok = check_handedness(&s, &mesh, 0.01);
+    assert_eq!(ok.verdict, Handedness::Consistent, "{ok:?}");
+    // Facing the sensor: −z.
+    assert!(ok.facing[2] < -0.99, "{:?}", ok.facing);
+    assert!(ok.foot_offset_m > 0.02);
+    let swapped = check_handedness(&s.swap_sides(), &mesh, 0.01);
+    assert_eq!(swapped.verdict, Handedness::Swapped, "{swapped:?}");
+    assert!((swapped.foot_offset_m + ok.foot_offset_m).abs() < 1e-9);
+    // No geometry near the feet: undetermined.
+    let (mut p, mut t) = (Vec::new(), Vec::new());
+    push_box(&mut p, &mut t, [-0.18, -0.05, 2.4], [0.18, 0.5, 2.6]);
+    let torso = TriMesh::new(p, t).unwrap();
+    assert_eq!(
+        check_handedness(&s, &torso, 0.01).verdict,
+        Handedness::Undetermined
+    );
+}
+
+const C: [f64; 3] = [0.0, 0.0, 2.5];
+const R: f64 = 0.3;
+const BLOB: [f64; 3] = [0.4, 0.35, 2.45];
+
+/// Ray-cast depth (mm) of a scene: a sphere (the "subject"), a small blob beside it, the floor
+/// y = −1 and a wall z = 4, seen through `k`.
+fn render(k: &Intrinsics) -> DepthFrame {
+    let sphere = |d: [f64; 3], c: [f64; 3], r: f64| -> Option<f64> {
+        let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let b = -2.0 * (d[0] * c[0] + d[1] * c[1] + d[2] * c[2]);
+        let cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2] - r * r;
+        let disc = b * b - 4.0 * a * cc;
+        (disc >= 0.0).then(|| (-b - disc.sqrt()) / (2.0 * a))
+    };
+    let mut data = Vec::new();
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let d = k.unproject(u as f64, v as f64, 1.0);
+            let mut t: f64 = 4.0;
+            if d[1] < 0.0 {
+                t = t.min(-1.0 / d[1]);
+            }
+            for (c, r) in [(C, R), (BLOB, 0.05)] {
+                if let Some(s) = sphere(d, c, r) {
+                    t = t.min(s);
+                }
+            }
+            data.push((t * 1000.0).round() as u16);
+        }
+    }
+    DepthFrame::new(k.width, k.height, data).unwrap()
+}
+
+fn subject_skeleton() -> Skeleton {
+    let mut p = [[0.0; 3]; 20];
+    for (i, q) in p.iter_mut().enumerate() {
+        let t = i as f64 / 19.0;
+        *q = [0.2 * (2.0 * t - 1.0), 0.2 - 0.4 * t, 2.4 + 0.2 * t];
+    }
+    p[Joint::HipCenter.index()] = [0.0, -0.2, 2.5];
+    p[Joint::ShoulderCenter.index()] = [0.0, 0.2, 2.5];
+    p[Joint::FootLeft.index()] = [-0.1, -0.95, 2.45];
+    p[Joint::FootRight.index()] = [0.1, -0.95, 2.45];
+    Skeleton::from_positions(p)
+}
+
+fn small_k() -> Intrinsics {
+    // Kinect v1 at 320×240.
+    Intrinsics {
+        width: 320,
+        height: 240,
+        fx: 285.63,
+        fy: 285.63,
+        cx: 160.0,
+        cy: 120.0,
+    }
+}
+
+#[test]
+fn scan_keeps_only_the_subject_surface() {
+    let k = small_k();
+    let frame = render(&k);
+    let s = subject_skeleton();
+    let scan = scan_mesh(&frame, &k, Some(&s), &ScanOptions::default()).unwrap();
+    let m = &scan.mesh;
+    assert!(m.num_vertices() > 500, "{}", m.num_vertices());
+    assert_eq!(scan.pixel_ids.len(), m.num_vertices());
+    for (i, p) in m.positions.iter().enumerate() {
+        let r = ((p[0] - C[0]).powi(2) + (p[1] - C[1]).powi(2) + (p[2] - C[2]).powi(2)).sqrt();
+        assert!(
+            (r - R).abs() < 0.01,
+            "vertex {i} at {p:?} is not on the sphere (r = {r})"
+        );
+        // The pixel id map points back at the pixel the vertex came from.
+        let [u, v] = k.project(*p);
+        let id = scan.pixel_ids[i];
+        assert!(
+            (u - (id % k.width) as f64).abs() < 1e-6 && (v - (id / k.width) as f64).abs() < 1e-6
+        );
+    }
+    // Triangles face the camera (counter-clockwise seen from it).
+    for t in 0..m.num_triangles() {
+        let [a, b, c] = m.corners(t);
+        let n = [
+            (b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]),
+            (b[2] - a[2]) * (c[0] - a[0]) - (b[0] - a[0]) * (c[2] - a[2]),
+            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]),
+        ];
+        assert!(
+            n[0] * a[0] + n[1] * a[1] + n[2] * a[2] < 0.0,
+            "triangle {t} faces away"
+        );
+    }
+    let plane = scan.report.floor_plane.expect("floor found");
+    assert!(
+        plane[1] > 0.999 && (plane[3] - 1.0).abs() < 0.01,
+        "{plane:?}"
+    );
+    assert!(scan.report.floor_removed > 1000);
+    assert!(scan.report.background_removed > 1000);
+    // The blob was inside the foreground box but is a separate, smaller component.
+    assert!(scan.report.component_vertices_removed > 10);
+}
+
+#[test]
+fn without_cleanup_the_grid_mesh_never_bridges_depth_jumps() {
+    let k = small_k();
+    let frame = render(&k);
+    let opts = ScanOptions {
+        remove_floor: false,
+        largest_component: false,
+        ..ScanOptions::default()
+    };
+    let scan = scan_mesh(&frame, &k, None, &opts).unwrap();
+    // Wall, floor, sphere and blob are all there...
+    let zs: Vec<f64> = scan.mesh.positions.iter().map(|p| p[2]).collect();
+    assert!(zs.iter().any(|&z| (z - 4.0).abs() < 1e-9));
+    assert!(zs.iter().any(|&z| z < 2.3));
+    assert!(scan.report.discontinuity_triangles > 100);
+    // ...but no triangle spans a jump larger than the threshold.
+    for t in 0..scan.mesh.num_triangles() {
+        let c = scan.mesh.corners(t);
+        for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+            assert!((c[a][2] - c[b][2]).abs() <= opts.discontinuity_m + 1e-12);
+        }
+    }
+    // Every valid pixel with a valid right and lower neighbour on the same surface is meshed:
+    // the grid has about two triangles per pixel.
+    assert!(scan.mesh.num_triangles() > 320 * 240);
+}
+
+#[test]
+fn scan_errors_are_typed() {
+    let k = small_k();
+    let frame = render(&k);
+    let e = scan_mesh(
+        &frame,
+        &Intrinsics::kinect_v1(),
+        None,
+        &ScanOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(e, KinectError::DepthSize { .. }), "{e}");
+    let empty = DepthFrame::new(320, 240, vec![0; 320 * 240]).unwrap();
+    let e = scan_mesh(&empty, &k, None, &ScanOptions::default()).unwrap_err();
+    assert!(matches!(e, KinectError::Scan(_)), "{e}");
+    assert!(fuse_depth_frames(&[]).is_err());
+    let other = DepthFrame::new(2, 2, vec![1; 4]).unwrap();
+    assert!(matches!(
+        fuse_depth_frames(&[frame, other]),
+        Err(KinectError::DepthSize { .. })
+    ));
+}
+
+#[test]
+fn fusion_takes_the_per_pixel_median() {
+    let k = small_k();
+    let clean = render(&k);
+    let mut noisy = Vec::new();
+    for f in 0..5u16 {
+        let mut d = clean.clone();
+        for (i, v) in d.data_mm.iter_mut().enumerate() {
+            match (i + f as usize) % 7 {
+                0 => *v = 0,                        // dropout
+                1 => *v = v.saturating_add(40 + f), // flicker
+                _ => {}
+            }
+        }
+        noisy.push(d);
+    }
+    let fused = fuse_depth_frames(&noisy).unwrap();
+    let wrong = fused
+        .data_mm
+        .iter()
+        .zip(&clean.data_mm)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(wrong, 0);
+    // A pixel valid in fewer than half the frames becomes 0.
+    let mut sparse: Vec<DepthFrame> = (0..4)
+        .map(|_| DepthFrame::new(1, 1, vec![0]).unwrap())
+        .collect();
+    sparse[0].data_mm[0] = 1234;
+    assert_eq!(fuse_depth_frames(&sparse).unwrap().data_mm[0], 0);
+    // Points of the fused frame are where the scene is.
+    let pts = depth_to_points(&fused, &k, 0.4, 8.0).unwrap();
+    assert_eq!(pts.iter().flatten().count(), 320 * 240);
+}

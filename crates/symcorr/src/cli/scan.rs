@@ -1,0 +1,365 @@
+//! `symcorr scan (--oni FILE | --depth PNG16 --intrinsics K.json | --device [--uri URI]) --joints J --out scan.ply`
+//!
+//! Turns one depth frame (or the per-pixel median of `--fuse N` consecutive frames) into a scan
+//! mesh: floor and background removed using the skeleton from `--joints`, largest component kept
+//! (symcorr-kinect's `scan` module). The skeleton is the robust average of the whole joint log
+//! unless `--joints-frame N` picks one frame.
+
+use super::CliError;
+use clap::Args;
+use std::path::PathBuf;
+use symcorr_kinect::joints::JointFormat;
+use symcorr_kinect::{
+    check_handedness, read_depth_png16, read_joints, read_joints_with_format, scan_mesh,
+    DepthFrame, FrameSelect, Handedness, Intrinsics, ScanOptions,
+};
+
+/// Arguments of `symcorr scan`.
+#[derive(Debug, Args)]
+pub struct ScanArgs {
+    /// OpenNI2 recording (.oni) to take the depth frame from (needs the `openni2` feature).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["depth", "device"])]
+    pub oni: Option<PathBuf>,
+    /// 16-bit greyscale PNG depth frame (millimetres); needs --intrinsics.
+    #[arg(
+        long,
+        value_name = "PNG16",
+        requires = "intrinsics",
+        conflicts_with = "device"
+    )]
+    pub depth: Option<PathBuf>,
+    /// Read live from an OpenNI2 device (needs the `openni2` feature).
+    #[arg(long)]
+    pub device: bool,
+    /// Device URI for --device (default: the first device OpenNI2 lists).
+    #[arg(long, value_name = "URI", requires = "device")]
+    pub uri: Option<String>,
+    /// Camera intrinsics (symcorr.intrinsics/1 JSON). Required with --depth; for recordings and
+    /// devices it overrides the stream's field of view.
+    #[arg(long, value_name = "K.json")]
+    pub intrinsics: Option<PathBuf>,
+    /// Joint file (symcorr.joints/1, Kinect SDK text, NTU .skeleton), same camera space.
+    #[arg(long, value_name = "J")]
+    pub joints: PathBuf,
+    /// Force the joint file format: json, kinect-text or ntu (default: detected from content).
+    #[arg(long, value_name = "FORMAT")]
+    pub joints_format: Option<String>,
+    /// Use this frame of the joint log (0-based) instead of the robust average of all frames.
+    #[arg(long, value_name = "N")]
+    pub joints_frame: Option<usize>,
+    /// Output mesh (.ply, .off, .obj, .glb, .gltf).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Depth frame of the recording/device stream to use (0-based count of delivered frames).
+    #[arg(long, value_name = "N", conflicts_with = "time")]
+    pub frame: Option<usize>,
+    /// Time in the recording (seconds from its first frame) of the depth frame to use.
+    #[arg(long, value_name = "S")]
+    pub time: Option<f64>,
+    /// Fuse this many consecutive frames (per-pixel median) into one before meshing.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub fuse: usize,
+    /// Largest depth jump along a triangle edge, metres.
+    #[arg(long, default_value_t = 0.05)]
+    pub discontinuity: f64,
+    /// Keep the floor (no RANSAC floor removal).
+    #[arg(long)]
+    pub keep_floor: bool,
+    /// Also write the per-vertex pixel ids (`v·width + u`) as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub pixel_map: Option<PathBuf>,
+}
+
+/// Runs `symcorr scan`.
+pub fn run(a: ScanArgs) -> Result<(), CliError> {
+    if a.fuse == 0 {
+        return Err(CliError("--fuse must be at least 1".into()));
+    }
+    let log = match &a.joints_format {
+        Some(name) => {
+            let f = JointFormat::from_name(name).ok_or_else(|| {
+                CliError(format!(
+                    "--joints-format {name:?}: expected json, kinect-text or ntu"
+                ))
+            })?;
+            read_joints_with_format(&a.joints, f)
+        }
+        None => read_joints(&a.joints),
+    }
+    .map_err(|e| CliError(e.to_string()))?;
+    let select = match a.joints_frame {
+        Some(i) => FrameSelect::Index(i),
+        None => FrameSelect::Window {
+            start_s: f64::NEG_INFINITY,
+            end_s: f64::INFINITY,
+        },
+    };
+    let skeleton = log
+        .select(select)
+        .map_err(|e| CliError::with(a.joints.display(), e))?;
+
+    let explicit = match &a.intrinsics {
+        Some(p) => Some(Intrinsics::read(p).map_err(|e| CliError(e.to_string()))?),
+        None => None,
+    };
+    let (frames, k) = if let Some(png) = &a.depth {
+        if a.fuse > 1 || a.frame.is_some() || a.time.is_some() {
+            return Err(CliError(
+                "--fuse, --frame and --time apply to recordings and devices, not to --depth".into(),
+            ));
+        }
+        let f = read_depth_png16(png).map_err(|e| CliError(e.to_string()))?;
+        let k = explicit.ok_or_else(|| CliError("--depth needs --intrinsics".into()))?;
+        (vec![f], k)
+    } else if a.oni.is_some() || a.device {
+        openni_frames(&a, explicit)?
+    } else {
+        return Err(CliError(
+            "give one depth source: --oni FILE, --depth PNG16 --intrinsics K.json, or --device"
+                .into(),
+        ));
+    };
+    let frame = if frames.len() == 1 {
+        frames
+            .into_iter()
+            .next()
+            .ok_or_else(|| CliError("no depth frame".into()))?
+    } else {
+        symcorr_kinect::fuse_depth_frames(&frames).map_err(|e| CliError(e.to_string()))?
+    };
+    let opts = ScanOptions {
+        discontinuity_m: a.discontinuity,
+        remove_floor: !a.keep_floor,
+        ..ScanOptions::default()
+    };
+    let scan =
+        scan_mesh(&frame, &k, Some(&skeleton), &opts).map_err(|e| CliError(e.to_string()))?;
+    symcorr_mesh::io::write(&a.out, &scan.mesh, None).map_err(|e| CliError(e.to_string()))?;
+    if let Some(p) = &a.pixel_map {
+        let json = serde_json::json!({
+            "format": "symcorr.pixelmap/1",
+            "width": frame.width,
+            "height": frame.height,
+            "pixel_ids": scan.pixel_ids,
+        });
+        let tmp = p.with_extension("json.tmp");
+        std::fs::write(&tmp, json.to_string())
+            .and_then(|_| std::fs::rename(&tmp, p))
+            .map_err(|e| CliError::with(p.display(), e))?;
+    }
+    let r = &scan.report;
+    println!(
+        "scan: {} vertices, {} triangles ({} valid pixels; removed {} background, {} floor, {} in smaller components)",
+        scan.mesh.num_vertices(),
+        scan.mesh.num_triangles(),
+        r.valid_pixels,
+        r.background_removed,
+        r.floor_removed,
+        r.component_vertices_removed
+    );
+    let hand = check_handedness(&skeleton, &scan.mesh, 0.01);
+    if hand.verdict == Handedness::Swapped {
+        eprintln!(
+            "symcorr: warning: the skeleton's left/right look swapped relative to the scan \
+             (feet point {:.3} m backwards)",
+            -hand.foot_offset_m
+        );
+    }
+    Ok(())
+}
+
+/// Intrinsics of an OpenNI2 stream: explicit ones, else from the stream's field of view, else
+/// the nominal Kinect v1 focal length scaled to the frame width.
+#[cfg_attr(not(feature = "openni2"), allow(dead_code))]
+fn stream_intrinsics(
+    explicit: Option<Intrinsics>,
+    frame: &DepthFrame,
+    fov: Option<(f32, f32)>,
+) -> Intrinsics {
+    if let Some(k) = explicit {
+        return k;
+    }
+    let (w, h) = (f64::from(frame.width), f64::from(frame.height));
+    let (fx, fy) = match fov {
+        Some((hf, vf)) if hf > 0.0 && vf > 0.0 => (
+            0.5 * w / (f64::from(hf) / 2.0).tan(),
+            0.5 * h / (f64::from(vf) / 2.0).tan(),
+        ),
+        _ => {
+            let k = Intrinsics::kinect_v1();
+            (k.fx * w / 640.0, k.fy * w / 640.0)
+        }
+    };
+    Intrinsics {
+        width: frame.width,
+        height: frame.height,
+        fx,
+        fy,
+        cx: w / 2.0,
+        cy: h / 2.0,
+    }
+}
+
+#[cfg(not(feature = "openni2"))]
+fn openni_frames(
+    _a: &ScanArgs,
+    _explicit: Option<Intrinsics>,
+) -> Result<(Vec<DepthFrame>, Intrinsics), CliError> {
+    Err(CliError(
+        "this symcorr was built without OpenNI2: rebuild with `--features openni2` \
+         (needs libopenni2-dev) to read .oni recordings or devices"
+            .into(),
+    ))
+}
+
+#[cfg(feature = "openni2")]
+fn openni_frames(
+    a: &ScanArgs,
+    explicit: Option<Intrinsics>,
+) -> Result<(Vec<DepthFrame>, Intrinsics), CliError> {
+    use symcorr_kinect::openni2::OpenNi;
+    let err = |e: symcorr_kinect::KinectError| CliError(e.to_string());
+    let ni = OpenNi::init().map_err(err)?;
+    let device = if let Some(path) = &a.oni {
+        let d = ni.open_file(path).map_err(err)?;
+        d.set_playback_speed(0.0).map_err(err)?;
+        d.set_repeat(false).map_err(err)?;
+        d
+    } else {
+        let uri = match &a.uri {
+            Some(u) => u.clone(),
+            None => ni
+                .devices()
+                .map_err(err)?
+                .into_iter()
+                .next()
+                .map(|d| d.uri)
+                .ok_or_else(|| CliError("no OpenNI2 device found (use --uri)".into()))?,
+        };
+        ni.open(&uri).map_err(err)?
+    };
+    let mut stream = device.depth_stream().map_err(err)?;
+    let fov = stream.field_of_view();
+    stream.start().map_err(err)?;
+    let first = stream.read_frame(5000).map_err(err)?;
+    let t0 = first.timestamp_us;
+    let mut current = first;
+    let mut count = 0usize;
+    loop {
+        let reached = match (a.frame, a.time) {
+            (Some(n), _) => count >= n,
+            (None, Some(s)) => (current.timestamp_us - t0) as f64 >= s * 1e6,
+            (None, None) => true,
+        };
+        if reached {
+            break;
+        }
+        current = stream.read_frame(5000).map_err(err)?;
+        count += 1;
+    }
+    let mut frames = vec![current.depth];
+    while frames.len() < a.fuse {
+        frames.push(stream.read_frame(5000).map_err(err)?.depth);
+    }
+    let k = stream_intrinsics(explicit, &frames[0], fov);
+    Ok((frames, k))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use symcorr_attach::Skeleton;
+    use symcorr_kinect::joints::JointLog;
+
+    /// A sphere of radius 0.3 m at 2.5 m in front of a wall at 4 m, seen by `k`.
+    fn sphere_frame(k: &Intrinsics) -> DepthFrame {
+        let mut data = Vec::new();
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let d = k.unproject(f64::from(u), f64::from(v), 1.0);
+                let (a, b, c) = (
+                    d[0] * d[0] + d[1] * d[1] + 1.0,
+                    -2.0 * 2.5,
+                    2.5 * 2.5 - 0.09,
+                );
+                let disc = b * b - 4.0 * a * c;
+                let t = if disc >= 0.0 {
+                    (-b - disc.sqrt()) / (2.0 * a)
+                } else {
+                    4.0
+                };
+                data.push((t * 1000.0).round() as u16);
+            }
+        }
+        DepthFrame::new(k.width, k.height, data).unwrap()
+    }
+
+    #[test]
+    fn scan_from_png_and_intrinsics_writes_the_subject_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let k = Intrinsics {
+            width: 160,
+            height: 120,
+            fx: 142.8,
+            fy: 142.8,
+            cx: 80.0,
+            cy: 60.0,
+        };
+        let png = dir.path().join("d.png");
+        symcorr_kinect::write_depth_png16(&png, &sphere_frame(&k)).unwrap();
+        let kj = dir.path().join("k.json");
+        k.write(&kj).unwrap();
+        let mut p = [[0.0; 3]; 20];
+        for (i, q) in p.iter_mut().enumerate() {
+            let t = i as f64 / 19.0;
+            *q = [0.2 * (2.0 * t - 1.0), 0.2 - 0.4 * t, 2.45 + 0.1 * t];
+        }
+        let joints = dir.path().join("j.json");
+        symcorr_kinect::write_joints_json(
+            &joints,
+            &JointLog::from_skeletons(vec![Skeleton::from_positions(p); 3], 30.0),
+        )
+        .unwrap();
+        let out = dir.path().join("scan.ply");
+        let map = dir.path().join("map.json");
+        let args = ScanArgs {
+            oni: None,
+            depth: Some(png),
+            device: false,
+            uri: None,
+            intrinsics: Some(kj),
+            joints,
+            joints_format: None,
+            joints_frame: None,
+            out: out.clone(),
+            frame: None,
+            time: None,
+            fuse: 1,
+            discontinuity: 0.05,
+            keep_floor: false,
+            pixel_map: Some(map.clone()),
+        };
+        run(args).unwrap();
+        let mesh = symcorr_mesh::io::read(&out).unwrap().mesh;
+        assert!(mesh.num_vertices() > 100);
+        for q in &mesh.positions {
+            let r = (q[0] * q[0] + q[1] * q[1] + (q[2] - 2.5) * (q[2] - 2.5)).sqrt();
+            assert!((r - 0.3).abs() < 0.01, "{q:?}");
+        }
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(map).unwrap()).unwrap();
+        assert_eq!(
+            m["pixel_ids"].as_array().unwrap().len(),
+            mesh.num_vertices()
+        );
+    }
+
+    #[test]
+    fn fov_gives_the_pinhole_focal_length() {
+        let f = DepthFrame::new(640, 480, vec![0; 640 * 480]).unwrap();
+        let k = stream_intrinsics(None, &f, Some((58.5f32.to_radians(), 45.6f32.to_radians())));
+        assert!((k.fx - 571.26).abs() < 1.0, "{}", k.fx);
+        let nominal = stream_intrinsics(None, &f, None);
+        assert_eq!(nominal, Intrinsics::kinect_v1());
+    }
+}
