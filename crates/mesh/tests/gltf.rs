@@ -300,3 +300,36 @@ fn position_accessor_index_out_of_range_is_an_error_not_a_panic() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn glb_header_lengths_are_checked() {
+    // Fuzz finding: gltf's GLB parser computed `length - 12` unchecked (overflow panic).
+    let mut b = b"glTF".to_vec();
+    b.extend(2u32.to_le_bytes());
+    b.extend(4u32.to_le_bytes());
+    let e = io::read_from_bytes(&b, Format::Glb).unwrap_err();
+    assert_eq!(malformed_element(e), "GLB header");
+    // A chunk longer than the file, a first chunk that is not JSON, a wrong version.
+    let (doc, bin) = scene(None);
+    let good = glb(&doc, &bin);
+    let mut bad = good.clone();
+    bad[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    assert!(
+        malformed_element(io::read_from_bytes(&bad, Format::Glb).unwrap_err())
+            .starts_with("GLB chunk 0")
+    );
+    let mut bad = good.clone();
+    bad[16..20].copy_from_slice(b"JSOX");
+    assert!(
+        malformed_element(io::read_from_bytes(&bad, Format::Glb).unwrap_err())
+            .starts_with("GLB chunk 0")
+    );
+    let mut bad = good.clone();
+    bad[4] = 1;
+    assert_eq!(
+        malformed_element(io::read_from_bytes(&bad, Format::Glb).unwrap_err()),
+        "GLB header"
+    );
+    // A GLB handed to the .gltf reader is still recognised.
+    check_scene(&io::read_from_bytes(&good, Format::Gltf).unwrap().mesh);
+}

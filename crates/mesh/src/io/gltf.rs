@@ -64,17 +64,24 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
     if expect_glb && !bytes.starts_with(b"glTF") {
         return Err(src.malformed("header", "not a GLB file (missing the `glTF` magic)"));
     }
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| src.malformed("document", e.to_string()))?;
-    validate(&gltf.document, src)?;
-    let doc = &gltf.document;
+    // The GLB container is split here (gltf 1.4.1's GLB parser underflows on a header length
+    // below 12 — a fuzz finding); the JSON goes to gltf-json, then our own validation pass.
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        split_glb(bytes, src)?
+    } else {
+        (bytes, None)
+    };
+    let root =
+        gltf::json::Root::from_slice(json).map_err(|e| src.malformed("JSON", e.to_string()))?;
+    let doc = &gltf::Document::from_json_without_validation(root);
+    validate(doc, src)?;
 
     let mut buffers: Vec<Cow<[u8]>> = Vec::new();
     for b in doc.buffers() {
         let what = || format!("buffer {}", b.index());
         let data: Cow<[u8]> = match b.source() {
-            gltf::buffer::Source::Bin => match &gltf.blob {
-                Some(blob) => Cow::Borrowed(blob.as_slice()),
+            gltf::buffer::Source::Bin => match blob {
+                Some(blob) => Cow::Borrowed(blob),
                 None => {
                     return Err(
                         src.malformed(what(), "refers to the GLB binary chunk, but there is none")
@@ -109,6 +116,64 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
     }
     let colors = (out.all_colored && !out.colors.is_empty()).then_some(out.colors);
     src.finish(out.positions, out.triangles, colors)
+}
+
+fn le32(b: &[u8], at: usize) -> Option<usize> {
+    let s = b.get(at..at.checked_add(4)?)?;
+    Some(u32::from_le_bytes([s[0], s[1], s[2], s[3]]) as usize)
+}
+
+/// Splits a GLB file into its JSON chunk and optional BIN chunk, checking every length.
+fn split_glb<'a>(bytes: &'a [u8], src: &Source) -> Result<(&'a [u8], Option<&'a [u8]>), MeshError> {
+    let short = |what: &str| src.malformed("GLB header", format!("file too short for {what}"));
+    let version = le32(bytes, 4).ok_or_else(|| short("the version"))?;
+    if version != 2 {
+        return Err(src.malformed(
+            "GLB header",
+            format!("unsupported GLB version {version} (expected 2)"),
+        ));
+    }
+    let length = le32(bytes, 8).ok_or_else(|| short("the length"))?;
+    if length < 12 || length > bytes.len() {
+        return Err(src.malformed(
+            "GLB header",
+            format!(
+                "declared length {length}, but the file has {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
+    let data = &bytes[..length];
+    let mut pos = 12;
+    let mut json: Option<&[u8]> = None;
+    let mut bin: Option<&[u8]> = None;
+    let mut index = 0;
+    while pos < data.len() {
+        let what = format!("GLB chunk {index} (byte {pos})");
+        let len = le32(data, pos).ok_or_else(|| src.malformed(&what, "truncated chunk header"))?;
+        let kind = data
+            .get(pos + 4..pos + 8)
+            .ok_or_else(|| src.malformed(&what, "truncated chunk header"))?;
+        let body = (pos + 8)
+            .checked_add(len)
+            .and_then(|end| data.get(pos + 8..end))
+            .ok_or_else(|| {
+                src.malformed(
+                    &what,
+                    format!("chunk of {len} bytes runs past the end of the file"),
+                )
+            })?;
+        match (index, kind) {
+            (0, b"JSON") => json = Some(body),
+            (0, _) => return Err(src.malformed(&what, "the first chunk must be JSON")),
+            (1, b"BIN\0") => bin = Some(body),
+            _ => {} // unknown chunks are skipped, as the spec says
+        }
+        pos += 8 + len;
+        index += 1;
+    }
+    let json = json.ok_or_else(|| src.malformed("GLB", "no JSON chunk"))?;
+    Ok((json, bin))
 }
 
 /// Runs the `gltf` crate's validation (which the document accessors rely on: they unwrap
