@@ -16,8 +16,9 @@ pub struct FilterStats {
     /// Points where no candidate survived and the nearest target vertex *of the same segment*
     /// by descriptor was used instead (the issue's fallback).
     pub fallbacks: usize,
-    /// Points whose segment does not occur on the target at all (e.g. a partial scan); their
-    /// candidates are left unfiltered.
+    /// Points whose segment does not occur on the target at all (attachment gave it no
+    /// vertex, or a partial scan misses it); for them only candidates on the *other side* are
+    /// dropped (a left segment keeps left and midline candidates), with the same fallback.
     pub segment_missing: usize,
 }
 
@@ -32,7 +33,8 @@ pub struct FilterStats {
 ///
 /// If no candidate survives, the list becomes the single target vertex of the same segment
 /// whose descriptor is nearest (counted in [`FilterStats::fallbacks`]). If the target has no
-/// vertex of that segment, the list is left as it was ([`FilterStats::segment_missing`]).
+/// vertex of that segment, the filter falls back to sides: candidates on a segment of the
+/// opposite side are dropped ([`FilterStats::segment_missing`]).
 ///
 /// ```
 /// use symcorr_attach::Segment::{ThighLeft, ThighRight};
@@ -54,9 +56,19 @@ pub fn skeleton_filter(
     template: &Descriptors,
     target: &Descriptors,
 ) -> FilterStats {
+    // Segments present on the target.
+    let mut present = [false; 17];
+    for s in target_labels {
+        present[s.index()] = true;
+    }
     let compatible = |p: u32, q: u32| -> bool {
-        target_labels[q as usize] == template_labels[p as usize]
-            && halves.is_none_or(|(hp, hq)| hp[p as usize] * hq[q as usize] >= 0)
+        let (sp, sq) = (template_labels[p as usize], target_labels[q as usize]);
+        let same = if present[sp.index()] {
+            sq == sp
+        } else {
+            side(sp) * side(sq) >= 0
+        };
+        same && halves.is_none_or(|(hp, hq)| hp[p as usize] * hq[q as usize] >= 0)
     };
     assert_eq!(cands.len(), points.len(), "one candidate list per point");
     // Target vertices per segment, for the fallback search.
@@ -64,6 +76,7 @@ pub fn skeleton_filter(
     for (v, s) in target_labels.iter().enumerate() {
         by_segment[s.index()].push(v as u32);
     }
+    let all: Vec<u32> = (0..target_labels.len() as u32).collect();
     let mut stats = FilterStats {
         points: points.len(),
         ..FilterStats::default()
@@ -71,10 +84,12 @@ pub fn skeleton_filter(
     for (list, &p) in cands.iter_mut().zip(points) {
         let seg = template_labels[p as usize];
         let before = list.len();
-        let pool = &by_segment[seg.index()];
+        let mut pool = &by_segment[seg.index()];
         if pool.is_empty() {
             stats.segment_missing += 1;
-            stats.kept += before;
+            pool = &all;
+        }
+        if pool.is_empty() {
             continue;
         }
         list.retain(|c| compatible(p, c.vertex));
@@ -91,12 +106,23 @@ pub fn skeleton_filter(
                     })
                     .min_by(|a, b| a.distance.total_cmp(&b.distance))
             };
-            // The same half if the target has one, else anywhere on the segment (the pool is
-            // non-empty, checked above).
+            // A compatible vertex if there is one, else the nearest of the pool (non-empty,
+            // checked above).
             list.extend(nearest(true).or_else(|| nearest(false)));
         }
     }
     stats
+}
+
+/// `+1` for a segment on the subject's left, `-1` on the right, `0` on the midline.
+fn side(s: Segment) -> i8 {
+    if s.mirror() == s {
+        0
+    } else if s.name().ends_with("_left") {
+        1
+    } else {
+        -1
+    }
 }
 
 #[cfg(test)]

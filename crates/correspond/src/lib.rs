@@ -22,7 +22,7 @@
 //! let d = Descriptors::new(2, 1, vec![1.0, 1.0]).unwrap();
 //! let labels = [ThighLeft, ThighRight];
 //! let profile = [0.3, 0.3];
-//! let side = Side { descriptors: &d, labels: &labels, profile: &profile, halves: None };
+//! let side = Side { descriptors: &d, labels: &labels, profile: &profile, halves: None, positions: None };
 //! let out = match_points(&side, &side, &[0, 1], &MatchOptions::default()).unwrap();
 //! assert_eq!(out.matches[0].target, 0);
 //! assert_eq!(out.matches[1].target, 1);
@@ -68,7 +68,7 @@ use std::time::Instant;
 use symcorr_attach::Segment;
 
 /// Default number of nearest candidates per template point (§3.1), chosen by measurement.
-pub const DEFAULT_NEAREST: usize = 20;
+pub const DEFAULT_NEAREST: usize = 5;
 
 /// Errors of the matching stages.
 #[derive(Debug, thiserror::Error)]
@@ -91,6 +91,9 @@ pub struct Side<'a> {
     /// Optional sagittal half per vertex for the midline segments (see [`skeleton_filter`]):
     /// `-1` right, `+1` left, `0` near the plane or not on a midline segment.
     pub halves: Option<&'a [i8]>,
+    /// Optional vertex positions: on the target side they give each match its candidate
+    /// spread, from which its confidence is computed ([`assign_confidence`]).
+    pub positions: Option<&'a [[f64; 3]]>,
 }
 
 impl Side<'_> {
@@ -99,6 +102,7 @@ impl Side<'_> {
         if self.labels.len() != n
             || self.profile.len() != n
             || self.halves.is_some_and(|h| h.len() != n)
+            || self.positions.is_some_and(|h| h.len() != n)
         {
             return Err(CorrespondError::InvalidArgument(format!(
                 "{name}: {n} descriptors, {} labels, {} profile values",
@@ -188,7 +192,29 @@ pub fn match_points(
     };
     timings.push(("skeleton_filter", t.elapsed().as_secs_f64()));
     let t = Instant::now();
-    let matches = select(&cands, points, template.profile, target.profile);
+    let mut matches = select(&cands, points, template.profile, target.profile);
+    if let Some(pos) = target.positions {
+        // Points without candidates got no match, so walk the lists in step with the matches.
+        let mut it = cands.iter().filter(|c| !c.is_empty());
+        for m in matches.iter_mut() {
+            let Some(list) = it.next() else { break };
+            let c = pos[m.target as usize];
+            let others: Vec<f64> = list
+                .iter()
+                .filter(|x| x.vertex != m.target)
+                .map(|x| {
+                    let q = pos[x.vertex as usize];
+                    ((q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2) + (q[2] - c[2]).powi(2)).sqrt()
+                })
+                .collect();
+            m.candidate_spread = Some(if others.is_empty() {
+                f64::INFINITY
+            } else {
+                others.iter().sum::<f64>() / others.len() as f64
+            });
+        }
+        assign_confidence(&mut matches);
+    }
     timings.push(("selection", t.elapsed().as_secs_f64()));
     Ok(PointMatches {
         matches,
@@ -218,12 +244,14 @@ mod tests {
             labels: &tl,
             profile: &tp,
             halves: None,
+            positions: None,
         };
         let us = Side {
             descriptors: &u,
             labels: &ul,
             profile: &up,
             halves: None,
+            positions: None,
         };
         let off = MatchOptions {
             skeleton_filter: false,
@@ -247,6 +275,7 @@ mod tests {
             labels: &[Torso],
             profile: &[0.0, 0.0],
             halves: None,
+            positions: None,
         };
         assert!(match_points(&s, &s, &[0], &MatchOptions::default()).is_err());
     }

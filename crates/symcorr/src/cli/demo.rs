@@ -64,13 +64,15 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         ))
     })?;
     let (a_name, b_name) = demo_pair(&ds);
-    let mut options = PipelineOptions::default();
-    options.mode = if args.dense {
-        Mode::Dense
-    } else {
-        Mode::Sparse {
-            samples: args.samples,
-        }
+    let options = PipelineOptions {
+        mode: if args.dense {
+            Mode::Dense
+        } else {
+            Mode::Sparse {
+                samples: args.samples,
+            }
+        },
+        ..PipelineOptions::default()
     };
     let pipeline = Pipeline::new(options.clone());
     let start = Instant::now();
