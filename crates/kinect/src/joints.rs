@@ -325,7 +325,7 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
         }
         let mut skeleton = partial.complete().map_err(|j| {
             ferr(format!(
-                "missing joint {:?} cannot be interpolated",
+                "missing joint {:?} cannot be interpolated (or its estimate is not finite)",
                 j.name()
             ))
         })?;

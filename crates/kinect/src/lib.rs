@@ -20,6 +20,19 @@
 //!   frames may lack joints, which are interpolated ([`mapping`]).
 //! * Files without timestamps get `time_s = frame / 30`.
 //! * Writes are atomic: a temporary file next to the target, then a rename.
+//! * Camera conventions ([`camera`]): Kinect camera space (+x to the sensor's left, +y up, +z
+//!   into the scene) and the Kinect SDK v1 projection `u = cx + fx·x/z`, `v = cy − fy·y/z`
+//!   (SDK v1's mirrored depth image). [`Intrinsics::kinect_v1`] is the SDK's nominal
+//!   571.26 px focal length at 640×480.
+//! * Kinect SDK text dumps write untracked joints as `0 0 0`; they are interpolated and flagged.
+//! * NTU files: frames without the selected body are skipped (some clips start without one).
+//! * Replay's robust average: coordinate-wise median, outlier frames (median joint deviation
+//!   > 3× typical + 1 cm) dropped, then confidence-weighted median ([`replay`]).
+//! * Scan meshing thresholds ([`ScanOptions`]): 5 cm depth discontinuity, 2 cm floor distance,
+//!   30 cm background margin around the skeleton, floor within 35° of horizontal and ≥ 30 cm
+//!   below the hips.
+//! * OpenNI2 is initialised once per process and never shut down (`oniShutdown` crashes on this
+//!   machine's OpenNI 2.2; see `openni2`).
 //!
 //! [`Skeleton`]: symcorr_attach::Skeleton
 

@@ -267,7 +267,7 @@ impl Partial {
     }
 
     /// Completes the skeleton with the interpolation rules of the module docs. Returns the
-    /// first joint that cannot be estimated as the error.
+    /// first joint that cannot be estimated (or whose estimate overflows) as the error.
     pub fn complete(mut self) -> Result<Skeleton, Joint> {
         let mut interpolated = [false; 20];
         // Each pass fills what its neighbours allow; three passes settle every chain.
@@ -290,8 +290,9 @@ impl Partial {
         let mut positions = [[0.0; 3]; 20];
         for j in Joint::ALL {
             match self.positions[j.index()] {
-                Some(p) => positions[j.index()] = p,
-                None => return Err(j),
+                // Interpolating between huge (finite) coordinates can overflow to infinity.
+                Some(p) if p.iter().all(|c| c.is_finite()) => positions[j.index()] = p,
+                _ => return Err(j),
             }
         }
         Ok(Skeleton {

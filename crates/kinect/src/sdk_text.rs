@@ -62,7 +62,7 @@ pub fn parse_kinect_text(text: &str, file: &str) -> Result<JointLog, KinectError
         }
         let skeleton = partial.complete().map_err(|j| {
             err(format!(
-                "joint {:?} is untracked (0 0 0) and cannot be interpolated",
+                "joint {:?} is untracked (0 0 0) and cannot be interpolated to a finite position",
                 j.name()
             ))
         })?;

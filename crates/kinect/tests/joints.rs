@@ -489,3 +489,18 @@ mod props {
         }
     }
 }
+
+#[test]
+fn interpolation_overflow_is_an_error_not_an_infinite_joint() {
+    // NiTE hips at ±1e308: their midpoint (hip_center) overflows while interpolating.
+    let nite = r#"{"format":"symcorr.joints/1","skeleton":"nite","frames":[{"joints":{
+        "head":[0,1,2],"neck":[0,0.8,2],"torso":[0,0.5,2],
+        "shoulder_left":[-0.2,0.8,2],"shoulder_right":[0.2,0.8,2],
+        "elbow_left":[-0.3,0.5,2],"elbow_right":[0.3,0.5,2],
+        "hand_left":[-0.3,0.2,2],"hand_right":[0.3,0.2,2],
+        "hip_left":[-1e308,0,2],"hip_right":[1e308,0,2],
+        "knee_left":[-0.1,-0.4,2],"knee_right":[0.1,-0.4,2],
+        "foot_left":[-0.1,-0.8,2],"foot_right":[0.1,-0.8,2]}}]}"#;
+    let e = parse_joints(nite, "n.json").unwrap_err();
+    assert!(matches!(e, KinectError::Frame { frame: 0, .. }), "{e}");
+}
