@@ -333,3 +333,31 @@ fn glb_header_lengths_are_checked() {
     // A GLB handed to the .gltf reader is still recognised.
     check_scene(&io::read_from_bytes(&good, Format::Gltf).unwrap().mesh);
 }
+
+#[test]
+fn deep_node_chain_and_child_order() {
+    // 20,000 nested nodes each translating +1 in x, the mesh at the bottom: iterative traversal
+    // (no stack overflow) and transforms compose down the chain.
+    let (mut doc, bin) = scene(None);
+    let depth = 20_000usize;
+    let mut nodes: Vec<Value> = (0..depth)
+        .map(|k| json!({"translation": [1.0, 0.0, 0.0], "children": [k + 1]}))
+        .collect();
+    nodes.push(json!({"mesh": 0}));
+    doc["nodes"] = json!(nodes);
+    doc["scenes"] = json!([{"nodes": [0]}]);
+    let m = io::read_from_bytes(&glb(&doc, &bin), Format::Glb)
+        .unwrap()
+        .mesh;
+    assert_eq!(m.positions[1], [depth as f64 + 1.0, 0.0, 0.0]);
+    // Children are visited in order, depth first: root 0 has children [1, 2] with meshes 1, 0.
+    let (mut doc, bin) = scene(None);
+    doc["nodes"] =
+        json!([{"children": [1, 2]}, {"mesh": 0}, {"mesh": 0, "translation": [0.0, 0.0, 7.0]}]);
+    doc["scenes"] = json!([{"nodes": [0]}]);
+    let m = io::read_from_bytes(&glb(&doc, &bin), Format::Glb)
+        .unwrap()
+        .mesh;
+    assert_eq!(m.num_vertices(), 6);
+    assert_eq!(m.positions[3], [0.0, 0.0, 7.0]);
+}

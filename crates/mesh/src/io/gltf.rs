@@ -105,7 +105,7 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
         Some(scene) => {
             let mut seen = vec![false; doc.nodes().len()];
             for node in scene.nodes() {
-                visit(&node, &IDENTITY, &mut seen, &buffers, src, &mut out)?;
+                visit(node, &mut seen, &buffers, src, &mut out)?;
             }
         }
         None => {
@@ -226,32 +226,35 @@ struct Output {
     primitives: usize,
 }
 
+/// Depth-first, pre-order walk from a scene root (iterative: a deep node chain cannot
+/// overflow the stack), adding every mesh instance with its world transform.
 fn visit(
-    node: &gltf::Node,
-    parent: &Mat4,
+    root: gltf::Node,
     seen: &mut [bool],
     buffers: &[Cow<[u8]>],
     src: &Source,
     out: &mut Output,
 ) -> Result<(), MeshError> {
-    // glTF node hierarchies are disjoint strict trees: a node reached twice means a cycle or a
-    // node with two parents, both invalid (and a cycle would never end).
-    let i = node.index();
-    if seen.get(i).copied().unwrap_or(true) {
-        return Err(src.malformed(
-            format!("node {i}"),
-            "is reached twice in the scene graph (cycle or two parents)",
-        ));
-    }
-    seen[i] = true;
-    let local = node.transform().matrix();
-    let local: Mat4 = local.map(|c| c.map(|x| x as f64));
-    let world = mul(parent, &local);
-    if let Some(mesh) = node.mesh() {
-        add_mesh(&mesh, &world, buffers, src, out)?;
-    }
-    for child in node.children() {
-        visit(&child, &world, seen, buffers, src, out)?;
+    let mut stack = vec![(root, IDENTITY)];
+    while let Some((node, parent)) = stack.pop() {
+        // glTF node hierarchies are disjoint strict trees: a node reached twice means a cycle
+        // or a node with two parents, both invalid (and a cycle would never end).
+        let i = node.index();
+        if seen.get(i).copied().unwrap_or(true) {
+            return Err(src.malformed(
+                format!("node {i}"),
+                "is reached twice in the scene graph (cycle or two parents)",
+            ));
+        }
+        seen[i] = true;
+        let local = node.transform().matrix();
+        let local: Mat4 = local.map(|c| c.map(|x| x as f64));
+        let world = mul(&parent, &local);
+        if let Some(mesh) = node.mesh() {
+            add_mesh(&mesh, &world, buffers, src, out)?;
+        }
+        let children: Vec<gltf::Node> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok(())
 }
