@@ -22,7 +22,7 @@ pub struct DemoArgs {
     /// Output folder.
     #[arg(long, default_value = "symcorr-demo")]
     pub out: PathBuf,
-    /// Bundled dataset folder (default: $SYMCORR_FIXTURES, else the repository's fixtures/synth).
+    /// Bundled dataset folder (default: $SYMCORR_FIXTURES, else the repository's fixtures/synth/bodies).
     #[arg(long)]
     pub fixtures: Option<PathBuf>,
     /// Match every template vertex instead of a 1,000-point sample.
@@ -37,7 +37,7 @@ pub struct DemoArgs {
 fn default_fixtures() -> PathBuf {
     std::env::var_os("SYMCORR_FIXTURES")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth"))
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies"))
 }
 
 /// The pair shown: the first pair of the fixtures' pairs file whose two bodies have different

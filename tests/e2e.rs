@@ -1,0 +1,290 @@
+//! End-to-end tests of the `symcorr` binary on the generated fixtures (fixtures/synth/bodies):
+//! the demo, `match` and `bench` outputs, the accuracy thresholds of the pipeline issue on a
+//! fixture pair, and bad inputs (one-line error, exit status 1, no output file left).
+//!
+//! Kept quick for the dev profile: sparse mode with a few hundred samples.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use symcorr_correspond::{evaluate, EvalGraph};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_symcorr"))
+}
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies")
+}
+
+fn run(cmd: &mut Command) -> Output {
+    let out = cmd.output().expect("symcorr runs");
+    if !out.status.success() {
+        eprintln!(
+            "stdout:\n{}\nstderr:\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    out
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+fn mesh(name: &str) -> PathBuf {
+    fixtures().join("meshes").join(format!("{name}.ply"))
+}
+
+fn joints(name: &str) -> PathBuf {
+    fixtures().join("joints").join(format!("{name}.json"))
+}
+
+fn mirror() -> Vec<u32> {
+    std::fs::read_to_string(fixtures().join("mirror.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn demo_writes_files_that_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = run(bin()
+        .args(["demo", "--samples", "200", "--out"])
+        .arg(&out)
+        .arg("--fixtures")
+        .arg(fixtures()));
+    assert!(o.status.success());
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("Table 1 row"), "{stdout}");
+    assert!(stdout.contains("wrote"), "{stdout}");
+    let corr = read_json(&out.join("correspondence.json"));
+    assert_eq!(corr["format"], "symcorr.correspondence/1");
+    let n_t = corr["template"]["vertices"].as_u64().unwrap() as usize;
+    let n_u = corr["target"]["vertices"].as_u64().unwrap() as usize;
+    let pairs = corr["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 200);
+    for p in pairs {
+        let p = p.as_array().unwrap();
+        assert!((p[0].as_u64().unwrap() as usize) < n_t);
+        assert!((p[1].as_u64().unwrap() as usize) < n_u);
+        let c = p[2].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&c));
+    }
+    assert_eq!(corr["segments"]["template"].as_array().unwrap().len(), n_t);
+    assert_eq!(corr["segments"]["target"].as_array().unwrap().len(), n_u);
+    assert!(corr["timings_s"]["eigenpairs"].as_f64().unwrap() > 0.0);
+    for (name, n) in [
+        ("template_matches", n_t),
+        ("target_matches", n_u),
+        ("template_segments", n_t),
+        ("target_segments", n_u),
+    ] {
+        let m = symcorr_mesh::io::read(out.join(format!("{name}.ply"))).unwrap();
+        assert_eq!(m.mesh.num_vertices(), n);
+        assert_eq!(m.colors.as_ref().map(Vec::len), Some(n));
+    }
+    // Matched points share colours (where a target vertex received one match; when several
+    // template points land on one target vertex it can show only one of their colours).
+    let t = symcorr_mesh::io::read(out.join("template_matches.ply")).unwrap();
+    let u = symcorr_mesh::io::read(out.join("target_matches.ply")).unwrap();
+    let (tc, uc) = (t.colors.unwrap(), u.colors.unwrap());
+    let mut hits = std::collections::HashMap::new();
+    for p in pairs {
+        *hits.entry(p[1].as_u64().unwrap()).or_insert(0) += 1;
+    }
+    let mut checked = 0;
+    for p in pairs {
+        let (a, b) = (p[0].as_u64().unwrap(), p[1].as_u64().unwrap());
+        if hits[&b] == 1 {
+            assert_eq!(tc[a as usize], uc[b as usize]);
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} single matches");
+    let svg = std::fs::read_to_string(out.join("curve.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<polyline").count(), 2);
+}
+
+/// A fixture pair (same body shape, exact joints) matches under the pipeline issue's
+/// thresholds: mean error ≤ 0.083, no flips; the ablation does worse.
+#[test]
+fn fixture_pair_matches_under_thresholds() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = ("s0_rest", "s0_walk-10");
+    let mut results = Vec::new();
+    for filter in [true, false] {
+        let out = dir.path().join(format!("corr_{filter}.json"));
+        let mut cmd = bin();
+        cmd.arg("match")
+            .arg(mesh(a))
+            .arg(mesh(b))
+            .arg("--template-joints")
+            .arg(joints(a))
+            .arg("--target-joints")
+            .arg(joints(b))
+            .arg("--out")
+            .arg(&out)
+            .args(["--samples", "300"]);
+        if !filter {
+            cmd.arg("--no-skeleton-filter");
+        }
+        assert!(run(&mut cmd).status.success());
+        let corr = read_json(&out);
+        let pairs: Vec<(u32, u32)> = corr["pairs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| (p[0].as_u64().unwrap() as u32, p[1].as_u64().unwrap() as u32))
+            .collect();
+        assert_eq!(pairs.len(), 300);
+        let target = symcorr_mesh::io::read(mesh(b)).unwrap().mesh;
+        let m = mirror();
+        let e = evaluate(
+            &EvalGraph::new(&target),
+            target.total_area(),
+            &pairs,
+            |p| p,
+            Some(&m),
+        );
+        results.push((e.mean_error(), e.flip_rate().unwrap()));
+    }
+    let (mean, flips) = results[0];
+    eprintln!("filter: {results:?}");
+    assert!(mean <= 0.083, "mean error {mean}");
+    assert_eq!(flips, 0.0);
+    assert!(
+        results[1].1 > flips,
+        "the ablation should flip: {results:?}"
+    );
+}
+
+#[test]
+fn bench_writes_summary_pair_files_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let pairs = dir.path().join("pairs.txt");
+    std::fs::write(&pairs, "# one pair\ns1_rest s1_arms-down\n").unwrap();
+    let json = dir.path().join("summary.json");
+    let out_dir = dir.path().join("pairs");
+    let o = run(bin()
+        .arg("bench")
+        .arg(fixtures())
+        .arg("--pairs")
+        .arg(&pairs)
+        .args(["--samples", "150", "--json"])
+        .arg(&json)
+        .arg("--out-dir")
+        .arg(&out_dir));
+    assert!(o.status.success());
+    let s = read_json(&json);
+    for key in [
+        "mean_error",
+        "flip_rate",
+        "within_0.05",
+        "within_0.10",
+        "table1_row",
+        "seconds_per_pair",
+        "pairs",
+    ] {
+        assert!(s.get(key).is_some(), "summary lacks {key}");
+    }
+    assert_eq!(s["table1_row"].as_array().unwrap().len(), 10);
+    assert_eq!(s["pairs"].as_array().unwrap().len(), 1);
+    let w5 = s["within_0.05"].as_f64().unwrap();
+    let w10 = s["within_0.10"].as_f64().unwrap();
+    assert!(w5 <= w10 && w10 <= 1.0);
+    let corr = read_json(&out_dir.join("s1_rest__s1_arms-down.json"));
+    assert_eq!(corr["pairs"].as_array().unwrap().len(), 150);
+    let svg = std::fs::read_to_string(out_dir.join("curve.svg")).unwrap();
+    assert!(svg.contains("<polyline"));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("s1_rest → s1_arms-down"), "{stdout}");
+}
+
+/// Runs `match` with the given template/target/joints, expecting a user error: exit status 1,
+/// one line on stderr starting with `symcorr:`, no output file, nothing left in the folder.
+fn expect_user_error(template: &Path, target: &Path, tj: &Path, uj: &Path) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("corr.json");
+    let o = bin()
+        .arg("match")
+        .arg(template)
+        .arg(target)
+        .arg("--template-joints")
+        .arg(tj)
+        .arg("--target-joints")
+        .arg(uj)
+        .arg("--out")
+        .arg(&out)
+        .args(["--samples", "50"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "stderr: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    assert!(stderr.starts_with("symcorr: "), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!out.exists());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    stderr
+}
+
+#[test]
+fn bad_inputs_give_one_line_errors_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = ("s0_rest", "s0_arms-down");
+    // Mismatched files: a joint file where a mesh is expected.
+    let e = expect_user_error(&joints(a), &mesh(b), &joints(a), &joints(b));
+    assert!(e.contains(".json"), "{e}");
+    // Missing joints: no such file, and a joint file lacking a joint.
+    let missing = dir.path().join("nope.json");
+    let e = expect_user_error(&mesh(a), &mesh(b), &missing, &joints(b));
+    assert!(e.contains("nope.json"), "{e}");
+    let text = std::fs::read_to_string(joints(a)).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["frames"][0]["joints"]
+        .as_object_mut()
+        .unwrap()
+        .remove("elbow_left");
+    let lacking = dir.path().join("lacking.json");
+    std::fs::write(&lacking, v.to_string()).unwrap();
+    expect_user_error(&mesh(a), &mesh(b), &lacking, &joints(b));
+    // A 3-vertex mesh.
+    let tri = dir.path().join("tri.off");
+    std::fs::write(&tri, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+    expect_user_error(&tri, &mesh(b), &joints(a), &joints(b));
+    // A corrupted (truncated) file.
+    let bytes = std::fs::read(mesh(a)).unwrap();
+    let cut = dir.path().join("cut.ply");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let e = expect_user_error(&cut, &mesh(b), &joints(a), &joints(b));
+    assert!(e.contains("cut.ply"), "{e}");
+}
+
+#[test]
+fn usage_errors_exit_2_and_help_has_examples() {
+    let o = bin().args(["match", "only-one.off"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    for sub in ["match", "bench", "demo"] {
+        let o = bin().args([sub, "--help"]).output().unwrap();
+        assert!(o.status.success());
+        let s = String::from_utf8_lossy(&o.stdout);
+        assert!(s.contains("Examples:"), "{sub}: {s}");
+    }
+    // A bench dataset that is not one.
+    let dir = tempfile::tempdir().unwrap();
+    let o = bin().arg("bench").arg(dir.path()).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stderr)
+            .trim_end()
+            .lines()
+            .count(),
+        1
+    );
+}
