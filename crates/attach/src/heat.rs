@@ -27,12 +27,20 @@ struct Source {
     visible: bool,
 }
 
-fn sources(x: [f64; 3], v: u32, p: &[[f64; 3]; 20], active: &[usize], bvh: &TriangleBvh) -> Source {
+fn sources(
+    x: [f64; 3],
+    v: u32,
+    p: &[[f64; 3]; 20],
+    active: &[usize],
+    reach: &[f64; 19],
+    bvh: &TriangleBvh,
+) -> Source {
+    // Distances divided by the bone's reach: a bone with reach 2 claims vertices twice as far.
     let mut d: Vec<(f64, usize, [f64; 3])> = active
         .iter()
         .map(|&b| {
             let (q, d) = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]);
-            (d, b, q)
+            (d / reach[b], b, q)
         })
         .collect();
     d.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -70,6 +78,7 @@ pub(crate) fn bone_heat(
     mesh: &TriMesh,
     p: &[[f64; 3]; 20],
     active: &[usize],
+    reach: &[f64; 19],
     c: f64,
     min_weight: f64,
 ) -> Result<Heat, AttachError> {
@@ -107,8 +116,10 @@ pub(crate) fn bone_heat(
             .iter()
             .copied()
             .min_by(|&a, &b| {
-                let da = closest_on_segment(x, p[BONES[a].0.index()], p[BONES[a].1.index()]).1;
-                let db = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]).1;
+                let da = closest_on_segment(x, p[BONES[a].0.index()], p[BONES[a].1.index()]).1
+                    / reach[a];
+                let db = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]).1
+                    / reach[b];
                 da.total_cmp(&db)
             })
             .unwrap_or(0)
@@ -130,7 +141,7 @@ pub(crate) fn bone_heat(
         let bvh = TriangleBvh::new(mesh);
         let src: Vec<Source> = (0..m)
             .into_par_iter()
-            .map(|i| sources(sub_mesh.positions[i], old_id[i], p, active, &bvh))
+            .map(|i| sources(sub_mesh.positions[i], old_id[i], p, active, reach, &bvh))
             .collect();
         let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;
         // Per component: at least one heat source, or every vertex uses its nearest bone.

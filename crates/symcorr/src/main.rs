@@ -27,6 +27,8 @@ enum Command {
     Demo(cli::demo::DemoArgs),
     /// Depth frame (.oni recording, PNG-16, or device) + joints → scan mesh.
     Scan(cli::scan::ScanArgs),
+    /// Attach a skeleton to a mesh: 17 segment labels (symcorr.labels/1) and a coloured mesh.
+    Label(cli::label::LabelArgs),
 }
 
 fn main() -> ExitCode {
@@ -37,6 +39,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => cli::bench::run(a),
         Command::Demo(a) => cli::demo::run(a),
         Command::Scan(a) => cli::scan::run(a),
+        Command::Label(a) => cli::label::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod demo;
+pub mod label;
 pub mod match_cmd;
 pub mod progress;
 pub mod scan;

@@ -1,0 +1,193 @@
+//! `symcorr label MESH --joints J --out labels.json [--frame N] [--ply coloured.ply]
+//! [--glb coloured.glb] [--weights]`: attach the skeleton (symcorr-attach) and write
+//! `symcorr.labels/1` plus optional segment-coloured meshes (fixed 17-colour palette).
+
+use super::CliError;
+use serde_json::{json, Map, Value};
+use std::path::PathBuf;
+use symcorr::dataset::{read_mesh, read_skeleton};
+use symcorr::output::atomic_write;
+use symcorr_attach::{attach, palette, AttachOptions, Joint, Segment, BONES};
+
+/// Arguments of `symcorr label`.
+#[derive(clap::Args)]
+#[command(
+    after_help = "Example:\n  symcorr label body.ply --joints body.json --out labels.json --ply labels.ply"
+)]
+pub struct LabelArgs {
+    /// Mesh file (OBJ, OFF, PLY, glTF/GLB).
+    pub mesh: PathBuf,
+    /// Joints (symcorr.joints/1 JSON, Kinect SDK text, NTU .skeleton; detected from content).
+    #[arg(long)]
+    pub joints: PathBuf,
+    /// Output `symcorr.labels/1` JSON.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Frame of the joint file (0-based; default the first).
+    #[arg(long)]
+    pub frame: Option<usize>,
+    /// Also write the mesh coloured by segment as PLY.
+    #[arg(long)]
+    pub ply: Option<PathBuf>,
+    /// Also write the mesh coloured by segment as binary glTF.
+    #[arg(long)]
+    pub glb: Option<PathBuf>,
+    /// Include the sparse bone-heat weights (`[bone, weight]` pairs per vertex) in the JSON.
+    #[arg(long)]
+    pub weights: bool,
+    /// Refuse (exit 1) instead of fixing a skeleton whose left and right are swapped.
+    #[arg(long)]
+    pub refuse_mirrored: bool,
+}
+
+/// Runs `symcorr label`.
+pub fn run(a: LabelArgs) -> Result<(), CliError> {
+    let mesh = read_mesh(&a.mesh).map_err(|e| CliError(e.to_string()))?;
+    let skeleton = read_skeleton(&a.joints, a.frame).map_err(|e| CliError(e.to_string()))?;
+    let options = AttachOptions {
+        mirror: if a.refuse_mirrored {
+            symcorr_attach::MirrorPolicy::Refuse
+        } else {
+            symcorr_attach::MirrorPolicy::Fix
+        },
+        ..AttachOptions::default()
+    };
+    let att = attach(&mesh, &skeleton, &options).map_err(|e| {
+        CliError(format!(
+            "{} with {}: {e}",
+            a.mesh.display(),
+            a.joints.display()
+        ))
+    })?;
+    let d = &att.diagnostics;
+    let mut joints = Map::new();
+    for j in Joint::ALL {
+        if att.joints.confidence[j.index()] > 0.0 || att.joints.interpolated[j.index()] {
+            joints.insert(j.name().into(), json!(att.joints.position(j)));
+        }
+    }
+    let al = &d.alignment;
+    let mut doc = json!({
+        "format": "symcorr.labels/1",
+        "mesh": {"path": a.mesh.display().to_string(), "vertices": mesh.num_vertices()},
+        "segments": Segment::ALL.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        "labels": att.labels.iter().map(|s| s.index()).collect::<Vec<_>>(),
+        "joints": joints,
+        "diagnostics": {
+            "alignment": {"scale": al.scale, "rotation": al.rotation, "translation": al.translation,
+                          "fit_before": al.fit_before, "fit_after": al.fit_after},
+            "mirrored_fixed": d.mirror.swapped,
+            "repaired_joints": d.repaired_joints.iter()
+                .map(|(j, r)| json!({"joint": j.name(), "repair": format!("{r:?}").to_lowercase()}))
+                .collect::<Vec<_>>(),
+            "joint_moves": d.joint_moves.iter()
+                .map(|m| json!({"joint": m.joint.name(), "distance": m.distance(), "reason": m.reason}))
+                .collect::<Vec<_>>(),
+            "components": d.components.iter()
+                .map(|c| json!({"vertices": c.vertices, "visible_vertices": c.visible_vertices,
+                                "fallback": c.fallback}))
+                .collect::<Vec<_>>(),
+            "nearest_bone_vertices": d.nearest_bone_vertices,
+        },
+    });
+    if a.weights {
+        let bones: Vec<String> = BONES
+            .iter()
+            .map(|(p, c)| format!("{}-{}", p.name(), c.name()))
+            .collect();
+        let rows: Vec<Value> = (0..mesh.num_vertices())
+            .map(|v| {
+                json!(att
+                    .weights
+                    .row(v)
+                    .iter()
+                    .map(|&(b, w)| json!([b, w]))
+                    .collect::<Vec<_>>())
+            })
+            .collect();
+        doc["bones"] = json!(bones);
+        doc["weights"] = Value::Array(rows);
+    }
+    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
+    atomic_write(&a.out, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    let colours: Vec<[u8; 3]> = att.labels.iter().map(|&s| palette::colour(s)).collect();
+    for path in [&a.ply, &a.glb].into_iter().flatten() {
+        symcorr_mesh::io::write(path, &mesh, Some(&colours))
+            .map_err(|e| CliError(e.to_string()))?;
+    }
+    eprintln!(
+        "labelled {} vertices ({} joints moved, alignment scale {}, mirrored fixed: {}, {} component(s), {} fallback)",
+        mesh.num_vertices(),
+        d.joint_moves.len(),
+        al.scale,
+        d.mirror.swapped,
+        d.components.len(),
+        d.components.iter().filter(|c| c.fallback).count()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn label_writes_json_and_coloured_meshes() {
+        let dir = tempfile::tempdir().unwrap();
+        let sk = symcorr_attach::testbody::t_pose(1.0);
+        let (mesh, _) = symcorr_attach::testbody::capsule_body(&sk, 0.04);
+        let mesh_path = dir.path().join("body.ply");
+        symcorr_mesh::io::write(&mesh_path, &mesh, None).unwrap();
+        let mut joints = Map::new();
+        for j in Joint::ALL {
+            joints.insert(j.name().into(), json!(sk.position(j)));
+        }
+        let jdoc = json!({"format": "symcorr.joints/1", "skeleton": "kinect_v1", "units": "m",
+                          "frames": [{"time_s": 0.0, "joints": joints}]});
+        let joints_path = dir.path().join("body.json");
+        std::fs::write(&joints_path, jdoc.to_string()).unwrap();
+        let out = dir.path().join("labels.json");
+        let ply = dir.path().join("labels.ply");
+        let glb = dir.path().join("labels.glb");
+        run(LabelArgs {
+            mesh: mesh_path.clone(),
+            joints: joints_path.clone(),
+            out: out.clone(),
+            frame: None,
+            ply: Some(ply.clone()),
+            glb: Some(glb.clone()),
+            weights: true,
+            refuse_mirrored: false,
+        })
+        .unwrap();
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        assert_eq!(v["format"], "symcorr.labels/1");
+        assert_eq!(v["labels"].as_array().unwrap().len(), mesh.num_vertices());
+        assert_eq!(v["segments"].as_array().unwrap().len(), 17);
+        assert_eq!(v["weights"].as_array().unwrap().len(), mesh.num_vertices());
+        assert!(v["joints"]["elbow_left"].is_array());
+        let back = symcorr_mesh::io::read(&ply).unwrap();
+        let colours = back.colors.unwrap();
+        let labels = v["labels"].as_array().unwrap();
+        for (c, l) in colours.iter().zip(labels) {
+            assert_eq!(*c, palette::PALETTE[l.as_u64().unwrap() as usize]);
+        }
+        assert!(symcorr_mesh::io::read(&glb).is_ok());
+        // A frame the file does not have is a user error, and nothing is written.
+        let out2 = dir.path().join("none.json");
+        let e = run(LabelArgs {
+            mesh: mesh_path,
+            joints: joints_path,
+            out: out2.clone(),
+            frame: Some(3),
+            ply: None,
+            glb: None,
+            weights: false,
+            refuse_mirrored: false,
+        })
+        .err()
+        .unwrap();
+        assert!(e.to_string().contains("frame 3"), "{e}");
+        assert!(!out2.exists());
+    }
+}
