@@ -139,3 +139,22 @@ fn write_is_atomic_and_reads_back() {
     assert_eq!(std::fs::read(&path).unwrap(), before);
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
+
+#[cfg(unix)]
+#[test]
+fn written_files_are_not_private_temp_files() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.off");
+    let mesh = TriMesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    io::write(&path, &mesh, None).unwrap();
+    let mode = |p: &std::path::Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    // Same mode as a file written directly (0666 minus the umask), not the temp file's 0600.
+    let direct = dir.path().join("direct.txt");
+    std::fs::write(&direct, b"x").unwrap();
+    assert_eq!(mode(&path), mode(&direct));
+}

@@ -276,7 +276,16 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(io_err)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".symcorr-tmp-");
+    // Temporary files are created 0600; the output should get the usual mode (0666 minus the
+    // umask, applied by the OS at creation), like a file written directly.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(&dir).map_err(io_err)?;
     tmp.write_all(bytes).map_err(io_err)?;
     tmp.as_file().sync_all().map_err(io_err)?;
     tmp.persist(path).map_err(|e| io_err(e.error))?;
