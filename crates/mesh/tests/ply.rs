@@ -191,3 +191,29 @@ fn malformed_ascii_inputs() {
     let e = ply(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n").unwrap_err();
     assert!(matches!(e, MeshError::InFile { .. }), "{e}");
 }
+
+#[test]
+fn face_element_before_vertex_element_and_float_colours() {
+    let text = "ply\nformat ascii 1.0\nelement face 2\nproperty list char uint vertex_indices\n\
+                element vertex 4\nproperty double x\nproperty double y\nproperty double z\n\
+                property float red\nproperty float green\nproperty float blue\nend_header\n\
+                3 0 1 2\n3 0 2 3\n\
+                0 0 0 1 0 0\n1 0 0 0 1 0\n1 1 0 0 0 1\n0 1 0.5 0.5 0.5 0.5\n";
+    let m = ply(text.as_bytes()).unwrap();
+    assert_eq!(m.mesh, quad());
+    assert_eq!(
+        m.colors.unwrap(),
+        vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [128, 128, 128]]
+    );
+    // Out-of-range float colour and forward index beyond the declared vertex count.
+    let bad = text.replace("0 1 0.5 0.5 0.5 0.5", "0 1 0.5 0.5 1.5 0.5");
+    assert!(matches!(
+        ply(bad.as_bytes()).unwrap_err(),
+        MeshError::Parse { .. }
+    ));
+    let bad = text.replace("3 0 2 3\n", "3 0 2 4\n");
+    assert!(ply(bad.as_bytes())
+        .unwrap_err()
+        .to_string()
+        .contains("face 1"));
+}
