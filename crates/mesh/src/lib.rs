@@ -37,7 +37,9 @@
 //!   accessor bytes are read here with checked offsets. All triangle primitives (incl. strips
 //!   and fans) of the default scene (else scene 0; with no scene, every mesh untransformed) are
 //!   concatenated in depth-first node order with world transforms applied; a mirroring
-//!   transform flips winding. Sparse and bufferView-less accessors are rejected.
+//!   transform flips winding. Sparse and bufferView-less accessors are rejected, and so is a
+//!   scene instancing more than max(4 Mi, 64 × input bytes) vertices or triangles (a small
+//!   file can otherwise describe an arbitrarily large scene).
 //!
 //! **Writers** ([`io::write`], [`io::write_with`], [`io::write_to_bytes`]) produce OFF/COFF,
 //! OBJ, PLY (binary little-endian by default — doubles, so exact — or ascii) and glTF 2.0 (GLB,

@@ -361,3 +361,27 @@ fn deep_node_chain_and_child_order() {
     assert_eq!(m.num_vertices(), 6);
     assert_eq!(m.positions[3], [0.0, 0.0, 7.0]);
 }
+
+#[test]
+fn instancing_bomb_is_refused() {
+    // 2,000 root nodes each instancing a mesh of 1,000 primitives over the same 4 vertices:
+    // 8 M vertices from a ~100 kB file.
+    let (mut doc, bin) = scene(None);
+    let prims: Vec<Value> = (0..1000)
+        .map(|_| json!({"attributes": {"POSITION": 2}, "mode": 5}))
+        .collect();
+    doc["meshes"] = json!([{"primitives": prims}]);
+    doc["nodes"] = json!((0..2000).map(|_| json!({"mesh": 0})).collect::<Vec<_>>());
+    doc["scenes"] = json!([{"nodes": (0..2000).collect::<Vec<_>>()}]);
+    let bytes = glb(&doc, &bin);
+    assert!(bytes.len() < 200_000);
+    let e = io::read_from_bytes(&bytes, Format::Glb).unwrap_err();
+    assert!(e.to_string().contains("instantiates more than"), "{e}");
+    // The same with 20 nodes (80,000 vertices) is fine.
+    doc["nodes"] = json!((0..20).map(|_| json!({"mesh": 0})).collect::<Vec<_>>());
+    doc["scenes"] = json!([{"nodes": (0..20).collect::<Vec<_>>()}]);
+    let m = io::read_from_bytes(&glb(&doc, &bin), Format::Glb)
+        .unwrap()
+        .mesh;
+    assert_eq!(m.num_vertices(), 80_000);
+}

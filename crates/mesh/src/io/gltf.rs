@@ -99,7 +99,11 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
         buffers.push(data);
     }
 
-    let mut out = Output::default();
+    let input_bytes = bytes.len() + buffers.iter().map(|b| b.len()).sum::<usize>();
+    let mut out = Output {
+        limit: instance_limit(input_bytes),
+        ..Output::default()
+    };
     let scene = doc.default_scene().or_else(|| doc.scenes().next());
     match scene {
         Some(scene) => {
@@ -224,6 +228,16 @@ struct Output {
     colors: Vec<[u8; 3]>,
     all_colored: bool,
     primitives: usize,
+    /// Most vertices (and triangles) the scene may instantiate, see [`instance_limit`].
+    limit: usize,
+}
+
+/// Node instancing multiplies meshes, so a small file can describe an enormous scene (a few
+/// kB of JSON instancing one primitive thousands of times, thousands of times over). The
+/// reader refuses scenes with more than max(4 Mi, 64 × input bytes) vertices or triangles —
+/// far above any real instancing of a scanned body, far below exhausting memory.
+fn instance_limit(input_bytes: usize) -> usize {
+    (1usize << 22).max(input_bytes.saturating_mul(64))
 }
 
 /// Depth-first, pre-order walk from a scene root (iterative: a deep node chain cannot
@@ -291,6 +305,15 @@ fn add_mesh(
         if base + n > u32::MAX as usize {
             return Err(src.malformed(&what, "too many vertices for u32 indices"));
         }
+        if base + n > out.limit {
+            return Err(src.malformed(
+                &what,
+                format!(
+                    "the scene instantiates more than {} vertices (limit for a file of this size)",
+                    out.limit
+                ),
+            ));
+        }
         out.positions.extend(
             pos.chunks_exact(3)
                 .map(|p| apply(world, [p[0], p[1], p[2]])),
@@ -338,6 +361,15 @@ fn add_mesh(
             }
             None => (0..n as u32).collect(),
         };
+        if out.triangles.len() + indices.len() > out.limit {
+            return Err(src.malformed(
+                &what,
+                format!(
+                    "the scene instantiates more than {} triangles (limit for a file of this size)",
+                    out.limit
+                ),
+            ));
+        }
         let b = base as u32; // base + n ≤ u32::MAX, checked above
         let mut push = |t: [u32; 3]| {
             let t = if flip { [t[0], t[2], t[1]] } else { t };
