@@ -775,3 +775,38 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
         triangle_map,
     })
 }
+
+impl TriMesh {
+    /// Boundary loops as vertex sequences in the triangles' orientation (see
+    /// [`ValidationReport::boundary_loops`]); empty for a closed surface. Triangles with a
+    /// repeated vertex are ignored.
+    pub fn boundary_loops(&self) -> Vec<Vec<u32>> {
+        let proper = self.proper_triangles();
+        Topology::new(self, &proper).boundary_loops(self.num_vertices())
+    }
+
+    /// For every vertex, whether it lies on the boundary (on an edge used by exactly one
+    /// triangle). Triangles with a repeated vertex are ignored.
+    pub fn boundary_vertices(&self) -> Vec<bool> {
+        let proper = self.proper_triangles();
+        let mut on = vec![false; self.num_vertices()];
+        for g in Topology::new(self, &proper)
+            .groups()
+            .filter(|g| g.len() == 1)
+        {
+            on[g[0].0 as usize] = true;
+            on[g[0].1 as usize] = true;
+        }
+        on
+    }
+
+    fn proper_triangles(&self) -> Vec<u32> {
+        let n = self.num_vertices();
+        (0..self.num_triangles() as u32)
+            .filter(|&t| {
+                let [a, b, c] = self.triangles[t as usize];
+                a != b && b != c && a != c && [a, b, c].iter().all(|&i| (i as usize) < n)
+            })
+            .collect()
+    }
+}

@@ -47,6 +47,12 @@ fn open_square_has_one_boundary_loop() {
     let s = l.iter().position(|&v| v == 0).unwrap();
     l.rotate_left(s);
     assert_eq!(l, vec![0, 1, 2, 3]);
+    assert_eq!(m.boundary_loops(), r.boundary_loops);
+    assert_eq!(m.boundary_vertices(), vec![true; 4]);
+    let (p, t) = tetra_at([0.0; 3]);
+    let closed = TriMesh::new(p, t).unwrap();
+    assert!(closed.boundary_loops().is_empty());
+    assert_eq!(closed.boundary_vertices(), vec![false; 4]);
 }
 
 #[test]
