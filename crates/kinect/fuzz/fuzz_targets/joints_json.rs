@@ -10,9 +10,14 @@ fuzz_target!(|data: &[u8]| {
         if let Ok(log) = parse_joints_json(text, "fuzz") {
             for f in &log.frames {
                 assert!(f.skeleton.positions.iter().flatten().all(|c| c.is_finite()));
-                assert!(f.skeleton.confidence.iter().all(|c| (0.0..=1.0).contains(c)));
+                assert!(f
+                    .skeleton
+                    .confidence
+                    .iter()
+                    .all(|c| (0.0..=1.0).contains(c)));
             }
-            let again = parse_joints_json(&to_json_string(&log), "fuzz").expect("writer output parses");
+            let again =
+                parse_joints_json(&to_json_string(&log), "fuzz").expect("writer output parses");
             assert_eq!(again.frames.len(), log.frames.len());
         }
     }
