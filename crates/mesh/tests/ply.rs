@@ -196,7 +196,7 @@ fn malformed_ascii_inputs() {
 fn face_element_before_vertex_element_and_float_colours() {
     let text = "ply\nformat ascii 1.0\nelement face 2\nproperty list char uint vertex_indices\n\
                 element vertex 4\nproperty double x\nproperty double y\nproperty double z\n\
-                property float red\nproperty float green\nproperty float blue\nend_header\n\
+                property float diffuse_red\nproperty float diffuse_green\nproperty float diffuse_blue\nend_header\n\
                 3 0 1 2\n3 0 2 3\n\
                 0 0 0 1 0 0\n1 0 0 0 1 0\n1 1 0 0 0 1\n0 1 0.5 0.5 0.5 0.5\n";
     let m = ply(text.as_bytes()).unwrap();

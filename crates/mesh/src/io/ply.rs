@@ -8,7 +8,7 @@
 //! Accepted: properties in any order and of any scalar type (`char/int8 … double/float64`);
 //! extra properties and extra elements are skipped; the face list may be called
 //! `vertex_indices` or `vertex_index`, with any integer count and index type, and polygons of any
-//! size are fan-triangulated. Vertex colours `red green blue` are kept (uchar as is; float/double
+//! size are fan-triangulated. Vertex colours `red green blue` (or `diffuse_red …`) are kept (uchar as is; float/double
 //! in [0, 1] scaled by 255; other integers must be in 0..=255).
 
 use std::fmt::Write as _;
@@ -227,9 +227,9 @@ fn parse_header(bytes: &[u8], src: &Source) -> Result<Header, MeshError> {
                         (true, "x") => Role::Coord(0),
                         (true, "y") => Role::Coord(1),
                         (true, "z") => Role::Coord(2),
-                        (true, "red") => Role::Color(0),
-                        (true, "green") => Role::Color(1),
-                        (true, "blue") => Role::Color(2),
+                        (true, "red" | "diffuse_red") => Role::Color(0),
+                        (true, "green" | "diffuse_green") => Role::Color(1),
+                        (true, "blue" | "diffuse_blue") => Role::Color(2),
                         _ => Role::Ignore,
                     };
                     if role != Role::Ignore
