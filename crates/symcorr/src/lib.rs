@@ -15,13 +15,30 @@
 //! `symcorr.correspondence/1` JSON, coloured meshes and the error-curve plot.
 //!
 //! # Decisions the design leaves open
-//! * Defaults ([`DEFAULT_EIGENPAIRS`], [`DEFAULT_BASE_RADIUS`],
-//!   [`symcorr_correspond::DEFAULT_NEAREST`]) were chosen by measurement on the generated
-//!   bodies (see the README); si-HKS parameters are symcorr-spectral's (Bronstein & Kokkinos).
+//! * **si-HKS window relative to the area**: times `t = area·2^τ`, `τ ∈ [−8, 3]`, step 1/16,
+//!   6 frequencies, from [`DEFAULT_EIGENPAIRS`] = 60 eigenpairs. Bronstein & Kokkinos's absolute
+//!   window (`t = 2^1…2^25`) lies, for a body in metres, where every non-constant
+//!   eigenfunction has decayed, and gave mean error ≈ 0.10; sweeping the window on a 6-pair
+//!   subset of `fixtures/synth/bodies` (500 samples): `[−12, 0]` 0.067, `[−10, 2]` 0.059,
+//!   `[−8, 3]` 0.053, `[−8, 5]` 0.057, `[−6, 4]` 0.062, `[−4, 4]` 0.078.
+//! * **Candidates**: the N = 5 nearest si-HKS descriptors (same subset: N = 1 0.0625,
+//!   5 0.062, 10 0.064, 20 0.067, 100 0.078, 800 0.114 at the `[−12, 0]` window): eq. 8's
+//!   scalar selects poorly among many candidates, so few are best.
+//! * **Base set radius** 0.1·√area ([`DEFAULT_BASE_RADIUS`]).
+//! * **Midline halves**: the skeleton filter also splits pelvis, torso and head by the
+//!   skeleton's sagittal plane ([`midline_halves`]); without it those segments flip freely.
+//! * **Confidence** from the spread of the filtered candidates (see
+//!   [`symcorr_correspond::assign_confidence`]); it makes the Table 1 row increase
+//!   monotonically (0.028 for the best 10 % to 0.045 for all, exact joints).
 //! * Attachment runs concurrently with the spectral stages (rayon::join); stage timings are
 //!   wall-clock per stage, so they overlap and do not add up to the total.
 //! * Metrics use edge-path Dijkstra geodesics stopped at the ground truth (see
 //!   [`symcorr_correspond::evaluate`]).
+//! * `symcorr bench` reports `seconds_per_pair` as the standalone cost of a pair (preparing
+//!   both meshes plus matching, wall clock while the other pairs run in parallel), and
+//!   `wall_seconds` for the whole run (meshes prepared once each).
+//! * The demo reads its fixtures at run time from `$SYMCORR_FIXTURES`, else the repository's
+//!   `fixtures/synth/bodies` (path fixed at compile time), or `--fixtures DIR`.
 //! * The pipeline is ready for a refinement stage after selection (DESIGN.md, Algorithm 7):
 //!   [`Correspondence`] holds plain matches, and everything a refinement needs per mesh
 //!   (labels, refined joints, descriptors) is in [`PreparedMesh`].
