@@ -4,9 +4,15 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
+use symcorr_synth::dataset::resolve_pose;
 use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat};
+use symcorr_synth::fixtures::WALK_PERIOD_S;
+use symcorr_synth::kinect::{write_scan, write_sequence};
+use symcorr_synth::mapping::{kinect_joints, reference_labels, SelfIntersectionCheck};
 use symcorr_synth::noise::JointNoise;
-use symcorr_synth::{fixtures, Assets, Model, Result, Shape, SynthError};
+use symcorr_synth::poses::{interpolate, walk_pose};
+use symcorr_synth::render::{Camera, Realism};
+use symcorr_synth::{fixtures, Assets, Model, Pose, Result, Shape, SynthError};
 
 #[derive(Parser)]
 #[command(
@@ -99,12 +105,94 @@ enum Cmd {
         #[command(flatten)]
         noise: NoiseArgs,
     },
+    /// Render one virtual-Kinect view of a posed body (depth, per-pixel vertex ids, joints).
+    Scan {
+        #[command(flatten)]
+        view: ViewArgs,
+        /// Pose: rest, t-pose, arms-down, walk-PP, random-SEED, file:PATH.
+        #[arg(long, default_value = "rest")]
+        pose: String,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Render a sequence: the walk cycle, or an interpolation between two poses.
+    Sequence {
+        #[command(flatten)]
+        view: ViewArgs,
+        /// Number of frames.
+        #[arg(long, default_value_t = 30)]
+        frames: usize,
+        /// Frame rate (frames per second).
+        #[arg(long, default_value_t = 30.0)]
+        fps: f64,
+        /// Interpolate Euler angles linearly from this pose … (default: walk cycle).
+        #[arg(long, requires = "to")]
+        from: Option<String>,
+        /// … to this pose over the sequence.
+        #[arg(long)]
+        to: Option<String>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Regenerate the committed fixture set (fixtures/synth) bit for bit.
     Fixtures {
         /// Output folder (the committed set lives in fixtures/synth).
         #[arg(long)]
         out: PathBuf,
     },
+}
+
+#[derive(Args, Clone)]
+struct ViewArgs {
+    /// Shape as `target=w,target=w` (empty: base shape).
+    #[arg(long, default_value = "")]
+    shape: String,
+    /// Camera position `x,y,z` in the body frame (metres; the subject faces +z).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.0, 2.6])]
+    camera: Vec<f64>,
+    /// Point the camera looks at, `x,y,z`.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, -0.05, 0.0])]
+    look_at: Vec<f64>,
+    /// Sensor realism: `ideal` or `kinect` (noise, quantisation, dropout, floor, wall).
+    #[arg(long, default_value = "kinect")]
+    realism: String,
+    /// Seed of the sensor noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+impl ViewArgs {
+    fn camera(&self) -> Result<Camera> {
+        let v3 = |v: &[f64]| -> Result<[f64; 3]> {
+            match v {
+                [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+                _ => Err(SynthError::Invalid(
+                    "camera and look-at need 3 finite numbers".into(),
+                )),
+            }
+        };
+        let (p, l) = (v3(&self.camera)?, v3(&self.look_at)?);
+        if p == l {
+            return Err(SynthError::Invalid(
+                "camera position equals look-at point".into(),
+            ));
+        }
+        Ok(Camera::kinect_v1(p, l))
+    }
+    fn realism(&self) -> Result<Realism> {
+        match self.realism.as_str() {
+            "ideal" => Ok(Realism {
+                seed: self.seed,
+                ..Realism::default()
+            }),
+            "kinect" => Ok(Realism::kinect(self.seed)),
+            r => Err(SynthError::Invalid(format!(
+                "--realism {r}: expected ideal or kinect"
+            ))),
+        }
+    }
 }
 
 fn parse_named_shape(s: &str) -> Result<(String, Shape)> {
@@ -181,6 +269,67 @@ fn run(cli: Cli) -> Result<()> {
                 labels.as_deref(),
                 noise.noise()?,
             )?;
+        }
+        Cmd::Scan { view, pose, out } => {
+            let base = model.body(&Shape::default())?;
+            let labels = reference_labels(&base)?;
+            let check = SelfIntersectionCheck::new(&base.rest.triangles, &labels);
+            let body = model.body(&Shape::parse(&view.shape)?)?;
+            let pose = resolve_pose(&model, &body, &check, &pose)?;
+            let posed = body.pose(&pose)?;
+            std::fs::create_dir_all(&out)
+                .map_err(|e| SynthError::Invalid(format!("{}: {e}", out.display())))?;
+            symcorr_mesh::io::write(out.join("body.ply"), &posed.mesh, None)?;
+            let joints = kinect_joints(&body, &posed)?;
+            write_scan(
+                &out,
+                &posed.mesh,
+                &joints,
+                &view.camera()?,
+                &view.realism()?,
+                "body.ply",
+            )?;
+        }
+        Cmd::Sequence {
+            view,
+            frames,
+            fps,
+            from,
+            to,
+            out,
+        } => {
+            if frames == 0 || !(fps.is_finite() && fps > 0.0) {
+                return Err(SynthError::Invalid(
+                    "--frames must be ≥ 1 and --fps > 0".into(),
+                ));
+            }
+            let base = model.body(&Shape::default())?;
+            let labels = reference_labels(&base)?;
+            let check = SelfIntersectionCheck::new(&base.rest.triangles, &labels);
+            let body = model.body(&Shape::parse(&view.shape)?)?;
+            let poses: Vec<Pose> = match (from, to) {
+                (Some(a), Some(b)) => {
+                    let a = resolve_pose(&model, &body, &check, &a)?;
+                    let b = resolve_pose(&model, &body, &check, &b)?;
+                    (0..frames)
+                        .map(|f| {
+                            interpolate(
+                                &a,
+                                &b,
+                                if frames > 1 {
+                                    f as f64 / (frames - 1) as f64
+                                } else {
+                                    0.0
+                                },
+                            )
+                        })
+                        .collect()
+                }
+                _ => (0..frames)
+                    .map(|f| walk_pose(model.assets.walk.as_ref(), f as f64 / fps / WALK_PERIOD_S))
+                    .collect(),
+            };
+            write_sequence(&out, &body, &poses, fps, &view.camera()?, &view.realism()?)?;
         }
         Cmd::Fixtures { out } => fixtures::write_fixtures(&model, Path::new(&out))?,
     }

@@ -238,3 +238,16 @@ pub fn random_pose_unchecked(rng: &mut impl rand_core::RngCore) -> Pose {
 pub fn unit_f64(rng: &mut impl rand_core::RngCore) -> f64 {
     (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
 }
+
+/// Linear interpolation of Euler angles between two poses (`t` = 0 gives `a`, 1 gives `b`;
+/// bones missing from one pose count as rest).
+pub fn interpolate(a: &Pose, b: &Pose, t: f64) -> Pose {
+    let mut out = Pose::default();
+    for name in a.rotations.keys().chain(b.rotations.keys()) {
+        let ea = a.rotations.get(name).copied().unwrap_or([0.0; 3]);
+        let eb = b.rotations.get(name).copied().unwrap_or([0.0; 3]);
+        out.rotations
+            .insert(name.clone(), [0, 1, 2].map(|k| ea[k] + t * (eb[k] - ea[k])));
+    }
+    out
+}
