@@ -13,6 +13,9 @@ use symcorr_spectral::{Laplacian, DEGENERATE_REL};
 /// Pinocchio's 1.0001).
 const TIE: f64 = 1e-4;
 
+/// Bones farther than `FAR` × the nearest bone's distance are not tried as heat sources.
+const FAR: f64 = 2.0;
+
 pub(crate) struct Heat {
     pub weights: BoneWeights,
     pub components: Vec<ComponentReport>,
@@ -50,6 +53,12 @@ fn sources(
         visible: false,
     };
     for (i, &(di, _, _)) in d.iter().enumerate() {
+        // A bone much farther than the nearest one is no sensible heat source (and would pull
+        // the vertex to a distant segment): stop looking; the vertex gets its weights by
+        // diffusion from its neighbours. Also bounds the number of visibility queries.
+        if di > FAR * d[0].0 {
+            break;
+        }
         // Visibility of the bone at its closest point (Baran & Popović test the segment
         // from the vertex to the bone against the surface).
         if bvh.segment_blocked(x, d[i].2, v) {
