@@ -32,6 +32,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    restore_sigpipe();
     let args = Args::parse();
     let result = match args.command {
         Command::Spectrum(a) => cli::spectrum::run(a),
@@ -47,5 +48,16 @@ fn main() -> ExitCode {
             eprintln!("symcorr: {e}");
             ExitCode::from(1)
         }
+    }
+}
+
+/// Rust ignores SIGPIPE, so `symcorr spectrum … | head` would make `println!` panic on the closed
+/// pipe. Restore the default action: the process ends quietly when its reader goes away, like
+/// every other Unix filter.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid handler.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

@@ -37,7 +37,9 @@ pub struct DemoArgs {
 fn default_fixtures() -> PathBuf {
     std::env::var_os("SYMCORR_FIXTURES")
         .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies"))
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies")
+        })
 }
 
 /// The pair shown: the first pair of the fixtures' pairs file whose two bodies have different
