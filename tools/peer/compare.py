@@ -569,6 +569,13 @@ def main():
     print_table(rows, info, header)
     if sym_summary is None:
         print(f"\nsymcorr: not in the table — {sym_msg}")
+    else:
+        wall = sym_summary.get("wall_seconds", sym_summary["_wall_s"])
+        print(f"\nsymcorr: s / pair is bench's `seconds_per_pair` (its own definition: "
+              f"prepare(template) + prepare(target) + match, pairs run concurrently on the "
+              f"{os.environ['RAYON_NUM_THREADS']}-thread pool); bench wall clock "
+              f"{wall:.1f} s / {len(pairs)} pairs = {wall / max(len(pairs), 1):.2f} s per pair "
+              "including its evaluation.")
     if missing_sym:
         print(f"\nsymcorr wrote no correspondence file for {len(missing_sym)} pair(s): "
               + ", ".join(missing_sym[:5]))
