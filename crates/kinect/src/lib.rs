@@ -61,31 +61,16 @@ pub use mapping::SkeletonKind;
 pub use replay::{BoneLengthReport, FrameSelect};
 pub use scan::{fuse_depth_frames, scan_mesh, ScanMesh, ScanOptions};
 
-use std::io::Write;
 use std::path::Path;
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename, so that
-/// a failure never leaves a half-written `path`.
+/// Writes `bytes` to `path` atomically (temporary file + rename) through the one owner of that,
+/// [`symcorr_mesh::io::write_file_atomic`].
 pub(crate) fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), KinectError> {
-    let file = path.display().to_string();
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(KinectError::io(&file, e));
-    }
-    Ok(())
+    symcorr_mesh::io::write_file_atomic(path, bytes).map_err(|e| match e {
+        symcorr_mesh::MeshError::Io { file, source } => KinectError::io(&file, source),
+        other => KinectError::io(
+            &path.display().to_string(),
+            std::io::Error::other(other.to_string()),
+        ),
+    })
 }

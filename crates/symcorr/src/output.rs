@@ -4,39 +4,22 @@
 
 use crate::{Correspondence, PipelineError, PreparedMesh};
 use serde_json::{json, Value};
-use std::io::Write;
 use std::path::Path;
 use symcorr_attach::palette;
 
 /// The `format` tag of correspondence files.
 pub const CORRESPONDENCE_FORMAT: &str = "symcorr.correspondence/1";
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename)
+/// through the one owner of that, [`symcorr_mesh::io::write_file_atomic`].
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
-    let file = path.display().to_string();
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(PipelineError::File {
-            file,
-            message: e.to_string(),
-        });
-    }
-    Ok(())
+    symcorr_mesh::io::write_file_atomic(path, bytes).map_err(|e| PipelineError::File {
+        file: path.display().to_string(),
+        message: match e {
+            symcorr_mesh::MeshError::Io { source, .. } => source.to_string(),
+            other => other.to_string(),
+        },
+    })
 }
 
 /// Stage timings of a pair: each per-mesh stage summed over the two meshes, then the pair
