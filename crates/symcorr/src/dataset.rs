@@ -184,7 +184,20 @@ pub fn read_mirror(path: &Path) -> Result<Vec<u32>, PipelineError> {
 /// Reads a joint file (any supported format, detected from the content) and picks a frame
 /// (`None`: the first).
 pub fn read_skeleton(path: &Path, frame: Option<usize>) -> Result<Skeleton, PipelineError> {
-    let log = symcorr_kinect::read_joints(path)?;
+    read_skeleton_as(path, frame, None)
+}
+
+/// Like [`read_skeleton`], with the joint format forced (`--joints-format`) instead of detected
+/// from the content when `format` is `Some`.
+pub fn read_skeleton_as(
+    path: &Path,
+    frame: Option<usize>,
+    format: Option<symcorr_kinect::JointFormat>,
+) -> Result<Skeleton, PipelineError> {
+    let log = match format {
+        Some(f) => symcorr_kinect::read_joints_with_format(path, f)?,
+        None => symcorr_kinect::read_joints(path)?,
+    };
     let n = log.frames.len();
     let i = frame.unwrap_or(0);
     log.frames

@@ -5,7 +5,7 @@
 use super::CliError;
 use serde_json::{json, Map, Value};
 use std::path::PathBuf;
-use symcorr::dataset::{read_mesh, read_skeleton};
+use symcorr::dataset::{read_mesh, read_skeleton_as};
 use symcorr::output::atomic_write;
 use symcorr_attach::{attach, palette, AttachOptions, Joint, Segment, BONES};
 
@@ -26,6 +26,10 @@ pub struct LabelArgs {
     /// Frame of the joint file (0-based; default the first).
     #[arg(long)]
     pub frame: Option<usize>,
+    /// Force the joint file's format instead of detecting it from content:
+    /// json, kinect-text or ntu.
+    #[arg(long, value_name = "FORMAT")]
+    pub joints_format: Option<String>,
     /// Also write the mesh coloured by segment as PLY.
     #[arg(long)]
     pub ply: Option<PathBuf>,
@@ -43,7 +47,9 @@ pub struct LabelArgs {
 /// Runs `symcorr label`.
 pub fn run(a: LabelArgs) -> Result<(), CliError> {
     let mesh = read_mesh(&a.mesh).map_err(|e| CliError(e.to_string()))?;
-    let skeleton = read_skeleton(&a.joints, a.frame).map_err(|e| CliError(e.to_string()))?;
+    let format = super::joints_format(a.joints_format.as_deref())?;
+    let skeleton =
+        read_skeleton_as(&a.joints, a.frame, format).map_err(|e| CliError(e.to_string()))?;
     let options = AttachOptions {
         mirror: if a.refuse_mirrored {
             symcorr_attach::MirrorPolicy::Refuse
@@ -154,6 +160,7 @@ mod tests {
             joints: joints_path.clone(),
             out: out.clone(),
             frame: None,
+            joints_format: Some("json".into()),
             ply: Some(ply.clone()),
             glb: Some(glb.clone()),
             weights: true,
@@ -176,10 +183,11 @@ mod tests {
         // A frame the file does not have is a user error, and nothing is written.
         let out2 = dir.path().join("none.json");
         let e = run(LabelArgs {
-            mesh: mesh_path,
-            joints: joints_path,
+            mesh: mesh_path.clone(),
+            joints: joints_path.clone(),
             out: out2.clone(),
             frame: Some(3),
+            joints_format: None,
             ply: None,
             glb: None,
             weights: false,
@@ -189,5 +197,24 @@ mod tests {
         .unwrap();
         assert!(e.to_string().contains("frame 3"), "{e}");
         assert!(!out2.exists());
+        // --joints-format forces the parser: a JSON file read as a Kinect SDK text dump, or an
+        // unknown format name, is a user error, and nothing is written.
+        for format in ["kinect-text", "bvh"] {
+            let e = run(LabelArgs {
+                mesh: mesh_path.clone(),
+                joints: joints_path.clone(),
+                out: out2.clone(),
+                frame: None,
+                joints_format: Some(format.into()),
+                ply: None,
+                glb: None,
+                weights: false,
+                refuse_mirrored: false,
+            })
+            .err()
+            .unwrap();
+            assert!(!e.to_string().contains('\n'), "{e}");
+            assert!(!out2.exists(), "{format}");
+        }
     }
 }

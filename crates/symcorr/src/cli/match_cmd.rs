@@ -4,7 +4,7 @@
 use super::CliError;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::dataset::{read_mesh, read_skeleton};
+use symcorr::dataset::{read_mesh, read_skeleton_as};
 use symcorr::output::{
     atomic_write, correspondence_json, match_colours, pair_timings, segment_colours,
 };
@@ -39,6 +39,10 @@ pub struct MatchArgs {
     /// Frame of the joint logs to use (default: the first).
     #[arg(long)]
     pub frame: Option<usize>,
+    /// Force the joint files' format instead of detecting it from content:
+    /// json, kinect-text or ntu.
+    #[arg(long, value_name = "FORMAT")]
+    pub joints_format: Option<String>,
     /// Also write coloured meshes into DIR: matched points share colours
     /// (template_matches.ply, target_matches.ply) and segment colours
     /// (template_segments.ply, target_segments.ply), plus .glb copies.
@@ -134,9 +138,10 @@ pub fn load_prepared(
     mesh: &Path,
     joints: &Path,
     frame: Option<usize>,
+    format: Option<symcorr_kinect::JointFormat>,
 ) -> Result<PreparedMesh, CliError> {
     let m = read_mesh(mesh).map_err(|e| CliError(e.to_string()))?;
-    let sk = read_skeleton(joints, frame).map_err(|e| CliError(e.to_string()))?;
+    let sk = read_skeleton_as(joints, frame, format).map_err(|e| CliError(e.to_string()))?;
     pipeline
         .prepare(m, &sk)
         .map_err(|e| CliError::with(mesh.display(), e))
@@ -174,12 +179,29 @@ pub fn write_coloured(
 
 pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let pipeline = args.method.pipeline(args.dense)?;
+    let format = super::joints_format(args.joints_format.as_deref())?;
     check_output_dir(&args.out)?;
     let start = Instant::now();
     let progress = super::progress::Spinner::new("preparing meshes");
     let (a, b) = rayon::join(
-        || load_prepared(&pipeline, &args.template, &args.template_joints, args.frame),
-        || load_prepared(&pipeline, &args.target, &args.target_joints, args.frame),
+        || {
+            load_prepared(
+                &pipeline,
+                &args.template,
+                &args.template_joints,
+                args.frame,
+                format,
+            )
+        },
+        || {
+            load_prepared(
+                &pipeline,
+                &args.target,
+                &args.target_joints,
+                args.frame,
+                format,
+            )
+        },
     );
     let (a, b) = (a?, b?);
     progress.set("matching");

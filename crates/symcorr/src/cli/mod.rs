@@ -13,6 +13,18 @@ pub mod spectrum;
 #[error("{0}")]
 pub struct CliError(pub String);
 
+/// Parses a `--joints-format` value (DESIGN.md: joints are detected from content unless forced).
+pub fn joints_format(name: Option<&str>) -> Result<Option<symcorr_kinect::JointFormat>, CliError> {
+    name.map(|n| {
+        symcorr_kinect::JointFormat::from_name(n).ok_or_else(|| {
+            CliError(format!(
+                "--joints-format {n:?}: expected json, kinect-text or ntu"
+            ))
+        })
+    })
+    .transpose()
+}
+
 impl CliError {
     /// Wraps any error with a context prefix, e.g. the file it concerns.
     pub fn with(context: impl std::fmt::Display, e: impl std::fmt::Display) -> Self {

@@ -8,7 +8,6 @@
 use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
-use symcorr_kinect::joints::JointFormat;
 use symcorr_kinect::{
     check_handedness, read_depth_png16, read_joints, read_joints_with_format, scan_mesh,
     DepthFrame, FrameSelect, Handedness, Intrinsics, ScanOptions,
@@ -75,15 +74,8 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
     if a.fuse == 0 {
         return Err(CliError("--fuse must be at least 1".into()));
     }
-    let log = match &a.joints_format {
-        Some(name) => {
-            let f = JointFormat::from_name(name).ok_or_else(|| {
-                CliError(format!(
-                    "--joints-format {name:?}: expected json, kinect-text or ntu"
-                ))
-            })?;
-            read_joints_with_format(&a.joints, f)
-        }
+    let log = match super::joints_format(a.joints_format.as_deref())? {
+        Some(f) => read_joints_with_format(&a.joints, f),
         None => read_joints(&a.joints),
     }
     .map_err(|e| CliError(e.to_string()))?;
