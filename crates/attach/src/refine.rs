@@ -230,7 +230,7 @@ pub(crate) fn refine(
     // Boundary vertices (edges with one triangle): a cross-section containing one is open (a
     // single-view scan), where only limbs can be centred (circle fit on the visible arc); the
     // torso's and the shoulders'/hips' depth centres are unknowable there.
-    let on_boundary = boundary_vertices(mesh);
+    let on_boundary = mesh.boundary_vertices();
     let max_move = options.max_joint_move * height;
     let mut mark = vec![0u32; mesh.num_vertices()];
     let orig = *p;
@@ -342,33 +342,6 @@ pub(crate) fn refine(
     }
     symmetric_bone_lengths(p, usable, options.bone_length_tolerance, &mut moves);
     Refined { moves, skipped }
-}
-
-/// Vertices on an edge that belongs to exactly one triangle.
-fn boundary_vertices(mesh: &TriMesh) -> Vec<bool> {
-    let mut e: Vec<[u32; 2]> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| {
-            [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
-                .map(|(a, b)| if a < b { [a, b] } else { [b, a] })
-        })
-        .collect();
-    e.sort_unstable();
-    let mut out = vec![false; mesh.num_vertices()];
-    let mut i = 0;
-    while i < e.len() {
-        let mut k = i + 1;
-        while k < e.len() && e[k] == e[i] {
-            k += 1;
-        }
-        if k - i == 1 {
-            out[e[i][0] as usize] = true;
-            out[e[i][1] as usize] = true;
-        }
-        i = k;
-    }
-    out
 }
 
 /// Left/right bone pairs whose lengths should agree.

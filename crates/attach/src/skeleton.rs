@@ -61,7 +61,7 @@ impl Joint {
     }
 
     /// The `symcorr.joints/1` name, e.g. `"shoulder_left"`.
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Joint::HipCenter => "hip_center",
             Joint::Spine => "spine",

@@ -94,28 +94,16 @@ impl SkeletonKind {
     }
 }
 
-const KINECT_V1_NAMES: [&str; 20] = [
-    "hip_center",
-    "spine",
-    "shoulder_center",
-    "head",
-    "shoulder_left",
-    "elbow_left",
-    "wrist_left",
-    "hand_left",
-    "shoulder_right",
-    "elbow_right",
-    "wrist_right",
-    "hand_right",
-    "hip_left",
-    "knee_left",
-    "ankle_left",
-    "foot_left",
-    "hip_right",
-    "knee_right",
-    "ankle_right",
-    "foot_right",
-];
+/// Kinect v1's 20 joints in SDK order: the canonical [`Joint`] names (one owner of the spelling).
+const KINECT_V1_NAMES: [&str; 20] = {
+    let mut names = [""; 20];
+    let mut i = 0;
+    while i < 20 {
+        names[i] = Joint::ALL[i].name();
+        i += 1;
+    }
+    names
+};
 
 /// NiTE's 15 joints in `nite::JointType` order.
 pub const NITE_NAMES: [&str; 15] = [
