@@ -133,8 +133,19 @@ fn fixture_pair_matches_under_thresholds() {
             .args(["--samples", "300"]);
         if !filter {
             cmd.arg("--no-skeleton-filter");
+        } else {
+            cmd.arg("--json");
         }
-        assert!(run(&mut cmd).status.success());
+        let o = run(&mut cmd);
+        assert!(o.status.success());
+        if filter {
+            // `--json`: one machine-readable summary on stdout.
+            let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
+            assert_eq!(summary["matches"], 300);
+            assert_eq!(summary["repair"]["target"]["changed"], false);
+            assert!(summary["timings_s"]["eigenpairs"].as_f64().unwrap() > 0.0);
+            assert_eq!(summary["files"][0], out.display().to_string());
+        }
         let corr = read_json(&out);
         let pairs: Vec<(u32, u32)> = corr["pairs"]
             .as_array()

@@ -317,6 +317,53 @@ impl BenchReport {
     }
 }
 
+/// Evaluates `corr` against the identity ground truth of a dataset (input vertex `i` of the
+/// template corresponds to input vertex `i` of the target) on `target`'s evaluation graph
+/// (built on its repaired mesh), with `mirror` (input ids of the target) for the flip rate.
+///
+/// The stages run on repaired meshes, so ids are translated: template id → input id = the
+/// target's input id of the truth → the target's repaired id. A match whose true point the
+/// target's repair removed is left out of the evaluation.
+pub fn evaluate_identity(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    graph: &EvalGraph,
+    corr: &Correspondence,
+    mirror: Option<&[u32]>,
+) -> (Evaluation, Vec<f64>) {
+    let to_target = target.prepared_ids();
+    let mut pairs = Vec::with_capacity(corr.matches.len());
+    let mut truth = Vec::with_capacity(corr.matches.len());
+    let mut confidence = Vec::with_capacity(corr.matches.len());
+    for m in &corr.matches {
+        let input = template.input_id(m.template) as usize;
+        if let Some(&Some(q)) = to_target.get(input) {
+            truth.push(q);
+            pairs.push((truth.len() as u32 - 1, m.target));
+            confidence.push(m.confidence);
+        }
+    }
+    // The mirror map in the target's repaired ids (a removed mirror image maps to itself:
+    // such a point cannot be counted as a flip).
+    let mirror: Option<Vec<u32>> = mirror.map(|m| {
+        (0..target.num_vertices() as u32)
+            .map(|v| {
+                m.get(target.input_id(v) as usize)
+                    .and_then(|&i| to_target.get(i as usize).copied().flatten())
+                    .unwrap_or(v)
+            })
+            .collect()
+    });
+    let evaluation = evaluate(
+        graph,
+        target.area,
+        &pairs,
+        |i| truth[i as usize],
+        mirror.as_deref(),
+    );
+    (evaluation, confidence)
+}
+
 /// Progress events of [`run_bench`].
 #[derive(Debug, Clone, Copy)]
 pub enum Progress {
@@ -366,24 +413,25 @@ pub fn run_bench(
             &prepared[index[a.as_str()]].1,
             &prepared[index[b.as_str()]].1,
         );
-        if pa.num_vertices() != pb.num_vertices() {
+        let (na, nb) = (
+            pa.input_mesh().num_vertices(),
+            pb.input_mesh().num_vertices(),
+        );
+        if na != nb {
             return Err(file_err(
                 &dataset.root,
                 format!(
-                    "pair {a} {b}: {} and {} vertices; a benchmark needs the same vertex order in every mesh",
-                    pa.num_vertices(),
-                    pb.num_vertices()
+                    "pair {a} {b}: {na} and {nb} vertices; a benchmark needs the same vertex order in every mesh",
                 ),
             ));
         }
         if let Some(m) = &dataset.mirror {
-            if m.len() != pb.num_vertices() {
+            if m.len() != nb || m.iter().any(|&i| i as usize >= nb) {
                 return Err(file_err(
                     &dataset.root.join("mirror.txt"),
                     format!(
-                        "{} entries, the meshes have {} vertices",
+                        "{} entries (or an id ≥ {nb}): the meshes have {nb} vertices",
                         m.len(),
-                        pb.num_vertices()
                     ),
                 ));
             }
@@ -408,18 +456,13 @@ pub fn run_bench(
             let t = Instant::now();
             let corr = pipeline.run(&ta.1, &tb.1)?;
             let match_seconds = t.elapsed().as_secs_f64();
-            let evaluation = evaluate(
+            let (evaluation, conf) = evaluate_identity(
+                &ta.1,
+                &tb.1,
                 &graphs[b.as_str()],
-                tb.1.area,
-                &corr
-                    .matches
-                    .iter()
-                    .map(|m| (m.template, m.target))
-                    .collect::<Vec<_>>(),
-                |p| p,
+                &corr,
                 dataset.mirror.as_deref(),
             );
-            let conf: Vec<f64> = corr.matches.iter().map(|m| m.confidence).collect();
             let row = table1_row(&evaluation.errors, &conf);
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(Progress::Matched {

@@ -49,21 +49,34 @@ pub fn correspondence_json(
     corr: &Correspondence,
     timings: &[(String, f64)],
 ) -> Value {
+    // Ids in the file are the input files' ids (the stages ran on the repaired meshes).
     let pairs: Vec<Value> = corr
         .matches
         .iter()
-        .map(|m| json!([m.template, m.target, round6(m.confidence)]))
+        .map(|m| {
+            json!([
+                template.input_id(m.template),
+                target.input_id(m.target),
+                round6(m.confidence)
+            ])
+        })
         .collect();
-    let labels =
-        |p: &PreparedMesh| -> Vec<usize> { p.labels().iter().map(|s| s.index()).collect() };
+    // One label per input vertex; `null` for a vertex the repair removed.
+    let labels = |p: &PreparedMesh| -> Vec<Value> {
+        let mut out = vec![Value::Null; p.input_mesh().num_vertices()];
+        for (v, s) in p.labels().iter().enumerate() {
+            out[p.input_id(v as u32) as usize] = json!(s.index());
+        }
+        out
+    };
     let timings: serde_json::Map<String, Value> = timings
         .iter()
         .map(|(n, s)| (n.clone(), json!(round6(*s))))
         .collect();
     json!({
         "format": CORRESPONDENCE_FORMAT,
-        "template": {"path": template_path, "vertices": template.num_vertices()},
-        "target": {"path": target_path, "vertices": target.num_vertices()},
+        "template": {"path": template_path, "vertices": template.input_mesh().num_vertices()},
+        "target": {"path": target_path, "vertices": target.input_mesh().num_vertices()},
         "pairs": pairs,
         "segments": {"template": labels(template), "target": labels(target)},
         "skeleton_filter": {
@@ -74,6 +87,26 @@ pub fn correspondence_json(
             "segment_missing": corr.filter.segment_missing,
         },
         "timings_s": timings,
+    })
+}
+
+/// The repair report as JSON (stable keys; counts refer to the input mesh).
+pub fn repair_json(r: &symcorr_mesh::RepairReport, mesh: &symcorr_mesh::TriMesh) -> Value {
+    json!({
+        "changed": !r.unchanged(),
+        "removed_degenerate_triangles": r.removed_degenerate_triangles,
+        "removed_zero_area_triangles": r.removed_zero_area_triangles,
+        "removed_duplicate_triangles": r.removed_duplicate_triangles,
+        "removed_non_manifold_edge_triangles": r.removed_non_manifold_edge_triangles,
+        "removed_components": r.removed_components,
+        "removed_vertices": r.removed_vertices,
+        "added_split_vertices": r.added_split_vertices,
+        "components": r.after.components(),
+        "boundary_loops": r.after.boundary_loops.len(),
+        "non_manifold_edges": r.after.non_manifold_edges.len(),
+        "non_manifold_vertices": r.after.non_manifold_vertices.len(),
+        "vertices_after": mesh.num_vertices(),
+        "triangles_after": mesh.num_triangles(),
     })
 }
 
@@ -158,6 +191,16 @@ pub fn match_colours(
 
 fn d2(a: [f64; 3], b: [f64; 3]) -> f64 {
     (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
+}
+
+/// Per-vertex colours of `p`'s repaired mesh spread onto the input mesh's vertices (grey for a
+/// vertex the repair removed), so that a coloured output has the input file's vertex ids.
+pub fn input_colours(p: &PreparedMesh, colours: &[[u8; 3]]) -> Vec<[u8; 3]> {
+    let mut out = vec![[128u8, 128, 128]; p.input_mesh().num_vertices()];
+    for (v, c) in colours.iter().enumerate() {
+        out[p.input_id(v as u32) as usize] = *c;
+    }
+    out
 }
 
 /// Segment colours (symcorr-attach's palette) per vertex.

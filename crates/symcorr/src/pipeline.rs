@@ -8,7 +8,7 @@ use symcorr_correspond::{
     base_profile, farthest_point_sample, match_points, Descriptors, FilterStats, Match,
     MatchOptions, Side,
 };
-use symcorr_mesh::TriMesh;
+use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
 use symcorr_spectral::{
     base_vertex_set, eigenpairs, gaussian_curvature, si_hks, EdgeGraph, EigenOptions, Laplacian,
     SiHksParams,
@@ -87,8 +87,17 @@ impl Default for PrepareOptions {
 /// reused for every pair the mesh is in (`symcorr bench` prepares each mesh of a dataset once).
 #[derive(Debug, Clone)]
 pub struct PreparedMesh {
-    /// The mesh.
+    /// The mesh every stage works on: the input after the default repair
+    /// ([`RepairOptions::default`]: degenerate, zero-area and duplicate triangles and
+    /// unreferenced vertices removed). Vertex ids of every field refer to this mesh;
+    /// [`PreparedMesh::input_id`] maps them back to the input file's ids.
     pub mesh: TriMesh,
+    /// What the repair found and changed (counts refer to the input).
+    pub repair: RepairReport,
+    /// `vertex_map[v]` = the input id of vertex `v` of [`PreparedMesh::mesh`].
+    pub vertex_map: Vec<u32>,
+    /// The input mesh, kept only when the repair changed it (outputs are written in its ids).
+    pub input: Option<TriMesh>,
     /// Total surface area.
     pub area: f64,
     /// si-HKS descriptor per vertex (§3.1).
@@ -109,13 +118,15 @@ pub struct PreparedMesh {
 }
 
 impl PreparedMesh {
-    /// Runs the per-mesh stages: Laplacian, eigenpairs, si-HKS, curvature, base vertex set and
-    /// its distance profile, and (in parallel) skeleton attachment.
+    /// Runs the per-mesh stages: the default mesh repair, Laplacian, eigenpairs, si-HKS,
+    /// curvature, base vertex set and its distance profile, and (in parallel) skeleton
+    /// attachment.
     ///
-    /// Errors: [`PipelineError::Spectral`] (e.g. a vertex in no triangle, a non-converging
-    /// eigensolve), [`PipelineError::Attach`] (a skeleton that does not fit the mesh).
+    /// Errors: [`PipelineError::Mesh`] (broken invariants, nothing left after the repair),
+    /// [`PipelineError::Spectral`] (e.g. a non-converging eigensolve), [`PipelineError::Attach`]
+    /// (a skeleton that does not fit the mesh).
     pub fn new(
-        mesh: TriMesh,
+        input: TriMesh,
         skeleton: &Skeleton,
         options: &PrepareOptions,
     ) -> Result<PreparedMesh, PipelineError> {
@@ -125,6 +136,20 @@ impl PreparedMesh {
                 options.eigenpairs
             )));
         }
+        // Scans and exported meshes carry degenerate faces and stray vertices that would make
+        // the Laplacian singular; remove them and keep the map back to the input ids.
+        let repaired = repair(&input, &RepairOptions::default())?;
+        if repaired.mesh.num_triangles() == 0 {
+            return Err(PipelineError::InvalidOption(
+                "no triangle left after removing degenerate ones".into(),
+            ));
+        }
+        let (mesh, vertex_map, report) = (repaired.mesh, repaired.vertex_map, repaired.report);
+        let input = if report.unchanged() {
+            None
+        } else {
+            Some(input)
+        };
         let (spectral, attached) = rayon::join(
             || spectral_stages(&mesh, options),
             || {
@@ -146,6 +171,9 @@ impl PreparedMesh {
             halves,
             area,
             mesh,
+            repair: report,
+            vertex_map,
+            input,
             descriptors: sp.descriptors,
             curvature: sp.curvature,
             base_set: sp.base_set,
@@ -160,9 +188,32 @@ impl PreparedMesh {
         &self.attachment.labels
     }
 
-    /// Number of vertices.
+    /// Number of vertices (of the repaired mesh the stages work on).
     pub fn num_vertices(&self) -> usize {
         self.mesh.num_vertices()
+    }
+
+    /// The input file's id of vertex `v` of [`PreparedMesh::mesh`].
+    pub fn input_id(&self, v: u32) -> u32 {
+        self.vertex_map[v as usize]
+    }
+
+    /// The mesh as read, before the repair (the same as [`PreparedMesh::mesh`] when the repair
+    /// changed nothing).
+    pub fn input_mesh(&self) -> &TriMesh {
+        self.input.as_ref().unwrap_or(&self.mesh)
+    }
+
+    /// `input → prepared` id map: `None` for input vertices the repair removed. A split vertex
+    /// maps to its first copy.
+    pub fn prepared_ids(&self) -> Vec<Option<u32>> {
+        let mut out = vec![None; self.input_mesh().num_vertices()];
+        for (v, &i) in self.vertex_map.iter().enumerate() {
+            if out[i as usize].is_none() {
+                out[i as usize] = Some(v as u32);
+            }
+        }
+        out
     }
 
     fn side(&self) -> Side<'_> {
@@ -474,6 +525,56 @@ mod tests {
         );
         assert!(e.flip_rate().unwrap() < 0.01);
         assert!(e.mean_error() < e_off.mean_error());
+    }
+
+    /// A template with a stray vertex in front (every id shifted by one) and a degenerate
+    /// triangle: the stages run on the repaired mesh, and the correspondence file speaks the
+    /// input's ids.
+    #[test]
+    fn repaired_input_ids_reach_the_correspondence_file() {
+        let sk = t_pose(1.0);
+        let (mesh, _) = capsule_body(&sk, 0.035);
+        let n = mesh.num_vertices();
+        let mut positions = vec![[5.0, 5.0, 5.0]];
+        positions.extend_from_slice(&mesh.positions);
+        let mut triangles: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .map(|t| [t[0] + 1, t[1] + 1, t[2] + 1])
+            .collect();
+        triangles.push([1, 1, 2]);
+        let broken = TriMesh::new(positions, triangles).unwrap();
+        let pipeline = Pipeline::new(PipelineOptions {
+            mode: Mode::Sparse { samples: 100 },
+            ..PipelineOptions::default()
+        });
+        let a = pipeline.prepare(broken, &sk).unwrap();
+        assert_eq!(a.num_vertices(), n);
+        assert_eq!(a.repair.removed_vertices, 1);
+        assert_eq!(a.repair.removed_degenerate_triangles, 1);
+        assert_eq!(a.input_mesh().num_vertices(), n + 1);
+        assert_eq!(a.input_id(0), 1);
+        assert_eq!(a.prepared_ids()[0], None);
+        assert_eq!(a.prepared_ids()[1], Some(0));
+        let b = pipeline.prepare(mesh, &sk).unwrap();
+        assert!(b.input.is_none(), "a clean mesh is not copied");
+        let corr = pipeline.run(&a, &b).unwrap();
+        let doc = crate::output::correspondence_json("a", &a, "b", &b, &corr, &[]);
+        assert_eq!(doc["template"]["vertices"], n + 1);
+        assert_eq!(doc["target"]["vertices"], n);
+        let labels = doc["segments"]["template"].as_array().unwrap();
+        assert_eq!(labels.len(), n + 1);
+        assert!(labels[0].is_null());
+        assert!(labels[1..].iter().all(|l| l.is_u64()));
+        // Same surface on both sides: nearly every point matches itself, i.e. input id i of
+        // the template onto id i − 1 of the target.
+        let pairs = doc["pairs"].as_array().unwrap();
+        let own = pairs
+            .iter()
+            .filter(|p| p[0].as_u64().unwrap() == p[1].as_u64().unwrap() + 1)
+            .count();
+        assert!(pairs.iter().all(|p| p[0].as_u64().unwrap() >= 1));
+        assert!(own * 10 >= pairs.len() * 9, "{own} of {}", pairs.len());
     }
 
     /// Mirror map of a mesh symmetric under x ↦ −x: nearest vertex of the reflected position.

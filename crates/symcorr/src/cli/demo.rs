@@ -8,10 +8,12 @@ use super::CliError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::dataset::{read_mesh, read_skeleton, BenchReport, Dataset, PairResult};
+use symcorr::dataset::{
+    evaluate_identity, read_mesh, read_skeleton, BenchReport, Dataset, PairResult,
+};
 use symcorr::output::{atomic_write, correspondence_json, curve_svg, pair_timings};
 use symcorr::{Mode, Pipeline, PipelineOptions};
-use symcorr_correspond::{cumulative_curve, evaluate, table1_row, EvalGraph};
+use symcorr_correspond::{cumulative_curve, table1_row, EvalGraph};
 
 /// Arguments of `symcorr demo`.
 #[derive(clap::Args, Debug)]
@@ -105,13 +107,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
             .run(&a, &b)
             .map_err(|e| CliError(e.to_string()))?;
         let match_seconds = t.elapsed().as_secs_f64();
-        let pairs: Vec<(u32, u32)> = corr
-            .matches
-            .iter()
-            .map(|m| (m.template, m.target))
-            .collect();
-        let evaluation = evaluate(&graph, b.area, &pairs, |p| p, ds.mirror.as_deref());
-        let conf: Vec<f64> = corr.matches.iter().map(|m| m.confidence).collect();
+        let (evaluation, conf) = evaluate_identity(&a, &b, &graph, &corr, ds.mirror.as_deref());
         let row = table1_row(&evaluation.errors, &conf);
         results.push(PairResult {
             template: a_name.clone(),

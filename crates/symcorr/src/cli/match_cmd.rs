@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr::dataset::{read_mesh, read_skeleton_as};
 use symcorr::output::{
-    atomic_write, correspondence_json, match_colours, pair_timings, segment_colours,
+    atomic_write, correspondence_json, input_colours, match_colours, pair_timings, repair_json,
+    segment_colours,
 };
 use symcorr::{Mode, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_correspond::CandidateOptions;
@@ -48,6 +49,10 @@ pub struct MatchArgs {
     /// (template_segments.ply, target_segments.ply), plus .glb copies.
     #[arg(long, value_name = "DIR")]
     pub ply_out: Option<PathBuf>,
+    /// Print a machine-readable summary (JSON) on stdout instead of the text lines: `matches`,
+    /// `template_points`, `fallbacks`, `seconds`, `timings_s`, `repair` (per mesh), `files`.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Method options shared by `match` and `bench`.
@@ -159,12 +164,15 @@ pub fn write_coloured(
     let ts = segment_colours(template);
     let us = segment_colours(target);
     let mut written = Vec::new();
-    for (name, mesh, colours) in [
-        ("template_matches", &template.mesh, &tc),
-        ("target_matches", &target.mesh, &uc),
-        ("template_segments", &template.mesh, &ts),
-        ("target_segments", &target.mesh, &us),
+    // Written on the input meshes, so vertex `i` of each file is vertex `i` of the input.
+    for (name, side, colours) in [
+        ("template_matches", template, &tc),
+        ("target_matches", target, &uc),
+        ("template_segments", template, &ts),
+        ("target_segments", target, &us),
     ] {
+        let mesh = side.input_mesh();
+        let colours = &input_colours(side, colours);
         let ply = dir.join(format!("{name}.ply"));
         symcorr_mesh::io::write(&ply, mesh, Some(colours)).map_err(|e| CliError(e.to_string()))?;
         written.push(ply);
@@ -223,12 +231,33 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     if let Some(dir) = &args.ply_out {
         files.extend(write_coloured(dir, &a, &b, &corr)?);
     }
+    let seconds = start.elapsed().as_secs_f64();
+    let points = corr.filter.points.max(corr.matches.len());
+    if args.json {
+        let doc = serde_json::json!({
+            "matches": corr.matches.len(),
+            "template_points": points,
+            "fallbacks": corr.filter.fallbacks,
+            "seconds": seconds,
+            "timings_s": timings.iter().map(|(n, s)| (n.clone(), serde_json::json!(s))).collect::<serde_json::Map<_, _>>(),
+            "repair": {
+                "template": repair_json(&a.repair, &a.mesh),
+                "target": repair_json(&b.repair, &b.mesh),
+            },
+            "files": files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
+        });
+        println!("{doc}");
+        return Ok(());
+    }
+    for (side, p) in [("template", &a), ("target", &b)] {
+        if !p.repair.unchanged() {
+            println!("{side}: {}", p.repair.to_string().replace('\n', "; "));
+        }
+    }
     println!(
-        "{} matches ({} template points, {} skeleton-filter fallbacks) in {:.2} s",
+        "{} matches ({points} template points, {} skeleton-filter fallbacks) in {seconds:.2} s",
         corr.matches.len(),
-        corr.filter.points.max(corr.matches.len()),
         corr.filter.fallbacks,
-        start.elapsed().as_secs_f64()
     );
     for f in files {
         println!("wrote {}", f.display());

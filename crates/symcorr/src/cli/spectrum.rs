@@ -26,26 +26,6 @@ pub struct SpectrumArgs {
     pub json: bool,
 }
 
-/// The repair report as JSON (stable keys; counts refer to the input mesh).
-fn repair_json(r: &symcorr_mesh::RepairReport, mesh: &symcorr_mesh::TriMesh) -> Value {
-    json!({
-        "changed": !r.unchanged(),
-        "removed_degenerate_triangles": r.removed_degenerate_triangles,
-        "removed_zero_area_triangles": r.removed_zero_area_triangles,
-        "removed_duplicate_triangles": r.removed_duplicate_triangles,
-        "removed_non_manifold_edge_triangles": r.removed_non_manifold_edge_triangles,
-        "removed_components": r.removed_components,
-        "removed_vertices": r.removed_vertices,
-        "added_split_vertices": r.added_split_vertices,
-        "components": r.after.components(),
-        "boundary_loops": r.after.boundary_loops.len(),
-        "non_manifold_edges": r.after.non_manifold_edges.len(),
-        "non_manifold_vertices": r.after.non_manifold_vertices.len(),
-        "vertices_after": mesh.num_vertices(),
-        "triangles_after": mesh.num_triangles(),
-    })
-}
-
 pub fn run(args: SpectrumArgs) -> Result<(), CliError> {
     let (out, text) = compute(&args)?;
     if args.json {
@@ -72,7 +52,7 @@ fn compute(args: &SpectrumArgs) -> Result<(Value, String), CliError> {
         .map_err(|e| CliError::with(&path, e))?;
     let mesh = repaired.mesh;
     let load_s = clock.elapsed().as_secs_f64();
-    let repair = repair_json(&repaired.report, &mesh);
+    let repair = symcorr::output::repair_json(&repaired.report, &mesh);
 
     let n = mesh.num_vertices();
     if args.k == 0 || args.k > n {
