@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Generates the benchmark datasets behind the README's correspondence figures (issues 6 and 7:
+# "20+ pose pairs, same shape and different shapes", exact and noisy joints) into
+# target/bench-data/ (inside the clone, never committed):
+#   bodies20/        20 poses x 2 shapes, exact joints            (58 pairs)
+#   bodies20_noisy/  the same meshes, joints with sigma = 3 cm and 10 % on the surface
+# Shapes and noise are those of the committed fixtures (tools/synth/src/fixtures.rs).
+# Usage: bash tools/bench/make_datasets.sh   then e.g.
+#   cargo run --release -- bench target/bench-data/bodies20 --mode dense --json dense.json
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+out=target/bench-data
+poses="rest,t-pose,arms-down"
+for w in 0 10 20 30 40 50 60 70 80 90; do poses+=",walk-$w"; done
+for s in 1 2 3 4 5 6 7; do poses+=",random-$s"; done
+cargo build --release -q -p symcorr-synth
+synth=target/release/symcorr-synth
+common=(--shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" --poses "$poses")
+"$synth" dataset --out "$out/bodies20" "${common[@]}"
+"$synth" dataset --out "$out/bodies20_noisy" "${common[@]}" \
+  --noise-sigma-cm 3 --surface-fraction 0.1 --noise-seed 2026
+for d in bodies20 bodies20_noisy; do
+  echo "$out/$d: $(ls "$out/$d/meshes" | wc -l) meshes, $(wc -l < "$out/$d/pairs.txt") pairs"
+done
