@@ -6,6 +6,16 @@
 //! the vertex mirror-symmetric to vertex `i`) and `pairs.txt` (`template target` per line;
 //! blank lines and `#` comments ignored).
 //!
+//! Extension for partial scans (not in DESIGN.md's layout, optional): `truth/NAME.txt` gives,
+//! for a mesh whose vertices are *not* in the common order (a single-view scan), one line per
+//! vertex: the id of the corresponding vertex in the common order, or `-1` when it has none.
+//! A pair whose target has a truth file is evaluated on the visible part: only template points
+//! that some target vertex corresponds to; the truth `q*` of template point `p` is the first
+//! target vertex whose truth is `p`, and the mirror image of `q*` the first target vertex whose
+//! truth is `mirror(p)` (no flip is counted where that is not visible). A partial target's own
+//! area depends on the view, so its errors are normalised by the template's √area instead.
+//! Templates must be in the common order (no truth file).
+//!
 //! Each mesh is prepared once ([`PreparedMesh`]), then the pairs run in parallel (rayon).
 
 use crate::{Correspondence, Pipeline, PipelineError, PreparedMesh};
@@ -32,6 +42,8 @@ pub struct Dataset {
     pub mirror: Option<Vec<u32>>,
     /// `(template, target)` names.
     pub pairs: Vec<(String, String)>,
+    /// `truth/NAME.txt` per name that has one (partial scans; see the module docs).
+    pub truth: BTreeMap<String, PathBuf>,
 }
 
 fn file_err(path: &Path, message: impl Into<String>) -> PipelineError {
@@ -132,12 +144,27 @@ impl Dataset {
         } else {
             None
         };
+        let truth_dir = root.join("truth");
+        let truth = if truth_dir.is_dir() {
+            list_by_stem(&truth_dir, |e| e == "txt")?
+        } else {
+            BTreeMap::new()
+        };
+        for (a, _) in &list {
+            if truth.contains_key(a) {
+                return Err(file_err(
+                    &truth[a],
+                    format!("{a} is a template: templates must be in the common vertex order"),
+                ));
+            }
+        }
         Ok(Dataset {
             root: root.to_path_buf(),
             meshes,
             joints,
             mirror,
             pairs: list,
+            truth,
         })
     }
 
@@ -152,6 +179,22 @@ impl Dataset {
         v.dedup();
         v
     }
+}
+
+/// Reads `truth/NAME.txt`: one line per vertex, the common-order id or `-1` (none).
+pub fn read_truth(path: &Path) -> Result<Vec<Option<u32>>, PipelineError> {
+    let text = std::fs::read_to_string(path).map_err(|e| file_err(path, e.to_string()))?;
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| match line.trim().parse::<i64>() {
+            Ok(-1) => Ok(None),
+            Ok(v) if (0..=u32::MAX as i64).contains(&v) => Ok(Some(v as u32)),
+            _ => Err(file_err(
+                path,
+                format!("line {}: expected a vertex id or -1, got {line:?}", i + 1),
+            )),
+        })
+        .collect()
 }
 
 /// Reads `mirror.txt`: one vertex index per line (line `i` = mirror of vertex `i`).
@@ -317,46 +360,81 @@ impl BenchReport {
     }
 }
 
-/// Evaluates `corr` against the identity ground truth of a dataset (input vertex `i` of the
-/// template corresponds to input vertex `i` of the target) on `target`'s evaluation graph
-/// (built on its repaired mesh), with `mirror` (input ids of the target) for the flip rate.
+/// Evaluates `corr` against the dataset's ground truth on `target`'s evaluation graph (built
+/// on its repaired mesh), with `mirror` (common-order ids) for the flip rate.
 ///
-/// The stages run on repaired meshes, so ids are translated: template id → input id = the
-/// target's input id of the truth → the target's repaired id. A match whose true point the
-/// target's repair removed is left out of the evaluation.
-pub fn evaluate_identity(
+/// Without `target_truth`, input vertex `i` of the template corresponds to input vertex `i` of
+/// the target (DESIGN.md's layout). With it (a partial scan, see the module docs), target
+/// input vertex `v` corresponds to common id `target_truth[v]`; only visible template points
+/// are evaluated and errors are normalised by the template's area. The stages run on repaired
+/// meshes, so ids are translated through [`PreparedMesh::input_id`] and
+/// [`PreparedMesh::prepared_ids`]; a match whose true point the repair removed is left out.
+///
+/// Returns the evaluation and the confidences of the evaluated matches (for the Table 1 row).
+pub fn evaluate_pair(
     template: &PreparedMesh,
     target: &PreparedMesh,
+    target_truth: Option<&[Option<u32>]>,
     graph: &EvalGraph,
     corr: &Correspondence,
     mirror: Option<&[u32]>,
 ) -> (Evaluation, Vec<f64>) {
     let to_target = target.prepared_ids();
+    // Common id → target input id.
+    let common_to_input: Vec<Option<u32>> = match target_truth {
+        None => (0..to_target.len() as u32).map(Some).collect(),
+        Some(t) => {
+            let n = template.input_mesh().num_vertices();
+            let mut out = vec![None; n];
+            for (v, c) in t.iter().enumerate() {
+                if let Some(c) = c {
+                    if let Some(slot) = out.get_mut(*c as usize) {
+                        slot.get_or_insert(v as u32);
+                    }
+                }
+            }
+            out
+        }
+    };
+    let common_to_target = |c: u32| -> Option<u32> {
+        let input = (*common_to_input.get(c as usize)?)?;
+        *to_target.get(input as usize)?
+    };
     let mut pairs = Vec::with_capacity(corr.matches.len());
     let mut truth = Vec::with_capacity(corr.matches.len());
     let mut confidence = Vec::with_capacity(corr.matches.len());
     for m in &corr.matches {
-        let input = template.input_id(m.template) as usize;
-        if let Some(&Some(q)) = to_target.get(input) {
+        if let Some(q) = common_to_target(template.input_id(m.template)) {
             truth.push(q);
             pairs.push((truth.len() as u32 - 1, m.target));
             confidence.push(m.confidence);
         }
     }
-    // The mirror map in the target's repaired ids (a removed mirror image maps to itself:
-    // such a point cannot be counted as a flip).
+    // The mirror map in the target's repaired ids (an invisible or removed mirror image maps
+    // to the vertex itself: such a point cannot count as a flip).
     let mirror: Option<Vec<u32>> = mirror.map(|m| {
         (0..target.num_vertices() as u32)
             .map(|v| {
-                m.get(target.input_id(v) as usize)
-                    .and_then(|&i| to_target.get(i as usize).copied().flatten())
+                let input = target.input_id(v) as usize;
+                let common = match target_truth {
+                    None => Some(input as u32),
+                    Some(t) => t.get(input).copied().flatten(),
+                };
+                common
+                    .and_then(|c| m.get(c as usize).copied())
+                    .and_then(common_to_target)
                     .unwrap_or(v)
             })
             .collect()
     });
+    let area = if target_truth.is_some() {
+        template.area
+    } else {
+        target.area
+    };
     let evaluation = evaluate(
         graph,
-        target.area,
+        area,
         &pairs,
         |i| truth[i as usize],
         mirror.as_deref(),
@@ -389,6 +467,12 @@ pub fn run_bench(
     let names = dataset.used_names();
     let total = names.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
+    let mut truths: BTreeMap<&str, Vec<Option<u32>>> = BTreeMap::new();
+    for (name, path) in &dataset.truth {
+        if names.contains(name) {
+            truths.insert(name.as_str(), read_truth(path)?);
+        }
+    }
     let prepared: Vec<(String, PreparedMesh, f64)> = names
         .par_iter()
         .map(|name| {
@@ -417,20 +501,36 @@ pub fn run_bench(
             pa.input_mesh().num_vertices(),
             pb.input_mesh().num_vertices(),
         );
-        if na != nb {
-            return Err(file_err(
-                &dataset.root,
-                format!(
-                    "pair {a} {b}: {na} and {nb} vertices; a benchmark needs the same vertex order in every mesh",
-                ),
-            ));
+        match truths.get(b.as_str()) {
+            None if na != nb => {
+                return Err(file_err(
+                    &dataset.root,
+                    format!(
+                        "pair {a} {b}: {na} and {nb} vertices; a benchmark needs the same vertex order in every mesh (or truth/{b}.txt for a partial scan)",
+                    ),
+                ));
+            }
+            Some(t) if t.len() != nb => {
+                return Err(file_err(
+                    &dataset.truth[b],
+                    format!("{} lines, meshes/{b} has {nb} vertices", t.len()),
+                ));
+            }
+            Some(t) if t.iter().flatten().any(|&c| c as usize >= na) => {
+                return Err(file_err(
+                    &dataset.truth[b],
+                    format!("an id ≥ {na}, the number of vertices of the template {a}"),
+                ));
+            }
+            _ => {}
         }
         if let Some(m) = &dataset.mirror {
-            if m.len() != nb || m.iter().any(|&i| i as usize >= nb) {
+            // The mirror map is in the common order: the template's.
+            if m.len() != na || m.iter().any(|&i| i as usize >= na) {
                 return Err(file_err(
                     &dataset.root.join("mirror.txt"),
                     format!(
-                        "{} entries (or an id ≥ {nb}): the meshes have {nb} vertices",
+                        "{} entries (or an id ≥ {na}): the meshes have {na} vertices",
                         m.len(),
                     ),
                 ));
@@ -456,9 +556,10 @@ pub fn run_bench(
             let t = Instant::now();
             let corr = pipeline.run(&ta.1, &tb.1)?;
             let match_seconds = t.elapsed().as_secs_f64();
-            let (evaluation, conf) = evaluate_identity(
+            let (evaluation, conf) = evaluate_pair(
                 &ta.1,
                 &tb.1,
+                truths.get(b.as_str()).map(Vec::as_slice),
                 &graphs[b.as_str()],
                 &corr,
                 dataset.mirror.as_deref(),
@@ -488,4 +589,103 @@ pub fn run_bench(
         wall_seconds,
         prepared: prepared.into_iter().map(|(n, p, _)| (n, p)).collect(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Mode, PipelineOptions};
+    use symcorr_attach::testbody::{capsule_body, t_pose};
+    use symcorr_mesh::TriMesh;
+
+    /// A partial target (the front half of the capsule body, vertices renumbered in reverse,
+    /// plus a stray vertex the repair removes) with its truth table: a perfect map evaluates
+    /// to zero error and no flips, its mirror image to flips, and back-side template points
+    /// are left out.
+    #[test]
+    fn partial_target_is_evaluated_through_its_truth_table() {
+        let sk = t_pose(1.0);
+        let (mesh, _) = capsule_body(&sk, 0.04);
+        let n = mesh.num_vertices();
+        let p = &mesh.positions;
+        let mirror: Vec<u32> = (0..n)
+            .map(|v| {
+                let q = [-p[v][0], p[v][1], p[v][2]];
+                (0..n)
+                    .min_by(|&a, &b| {
+                        let d = |i: usize| (0..3).map(|k| (p[i][k] - q[k]).powi(2)).sum::<f64>();
+                        d(a).total_cmp(&d(b))
+                    })
+                    .unwrap() as u32
+            })
+            .collect();
+        // Front half: triangles whose centroid has z > 0.
+        let front: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .copied()
+            .filter(|t| t.iter().map(|&v| p[v as usize][2]).sum::<f64>() > 0.0)
+            .collect();
+        let mut used: Vec<u32> = front.iter().flatten().copied().collect();
+        used.sort_unstable();
+        used.dedup();
+        used.reverse();
+        let mut new_id = vec![u32::MAX; n];
+        for (i, &v) in used.iter().enumerate() {
+            new_id[v as usize] = i as u32;
+        }
+        let mut positions: Vec<[f64; 3]> = used.iter().map(|&v| p[v as usize]).collect();
+        positions.push([9.0, 9.0, 9.0]);
+        let triangles = front
+            .iter()
+            .map(|t| t.map(|v| new_id[v as usize]))
+            .collect();
+        let mut truth: Vec<Option<u32>> = used.iter().map(|&v| Some(v)).collect();
+        truth.push(None);
+        let scan = TriMesh::new(positions, triangles).unwrap();
+
+        let pipeline = Pipeline::new(PipelineOptions {
+            mode: Mode::Sparse { samples: 200 },
+            ..PipelineOptions::default()
+        });
+        let a = pipeline.prepare(mesh, &sk).unwrap();
+        let b = pipeline.prepare(scan, &sk).unwrap();
+        assert!(b.repair.removed_vertices >= 1, "the stray vertex goes");
+        let corr = pipeline.run(&a, &b).unwrap();
+        let graph = EvalGraph::new(&b.mesh);
+        let to_b = b.prepared_ids();
+        let target_of = |common: u32| -> Option<u32> {
+            let v = new_id[common as usize];
+            if v == u32::MAX {
+                None
+            } else {
+                to_b[v as usize]
+            }
+        };
+        let visible = corr
+            .matches
+            .iter()
+            .filter(|m| target_of(m.template).is_some())
+            .count();
+        assert!(visible > 50 && visible < 180, "{visible} visible of 200");
+
+        let mut perfect = corr.clone();
+        let mut mirrored = corr.clone();
+        for (m, w) in perfect.matches.iter_mut().zip(&mut mirrored.matches) {
+            if let Some(q) = target_of(m.template) {
+                m.target = q;
+            }
+            if let Some(q) = target_of(mirror[w.template as usize]) {
+                w.target = q;
+            }
+        }
+        let (e, conf) = evaluate_pair(&a, &b, Some(&truth), &graph, &perfect, Some(&mirror));
+        assert_eq!(e.errors.len(), visible);
+        assert_eq!(conf.len(), visible);
+        assert!(e.mean_error() < 1e-12, "{}", e.mean_error());
+        assert_eq!(e.flip_rate(), Some(0.0));
+        let (e, _) = evaluate_pair(&a, &b, Some(&truth), &graph, &mirrored, Some(&mirror));
+        assert!(e.mean_error() > 0.05, "{}", e.mean_error());
+        assert!(e.flip_rate().unwrap() > 0.5, "{:?}", e.flip_rate());
+    }
 }

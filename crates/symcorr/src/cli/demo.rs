@@ -8,9 +8,7 @@ use super::CliError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::dataset::{
-    evaluate_identity, read_mesh, read_skeleton, BenchReport, Dataset, PairResult,
-};
+use symcorr::dataset::{evaluate_pair, read_mesh, read_skeleton, BenchReport, Dataset, PairResult};
 use symcorr::output::{atomic_write, correspondence_json, curve_svg, pair_timings};
 use symcorr::{Mode, Pipeline, PipelineOptions};
 use symcorr_correspond::{cumulative_curve, table1_row, EvalGraph};
@@ -107,7 +105,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
             .run(&a, &b)
             .map_err(|e| CliError(e.to_string()))?;
         let match_seconds = t.elapsed().as_secs_f64();
-        let (evaluation, conf) = evaluate_identity(&a, &b, &graph, &corr, ds.mirror.as_deref());
+        let (evaluation, conf) = evaluate_pair(&a, &b, None, &graph, &corr, ds.mirror.as_deref());
         let row = table1_row(&evaluation.errors, &conf);
         results.push(PairResult {
             template: a_name.clone(),
