@@ -4,6 +4,7 @@
 # target/bench-data/ (inside the clone, never committed):
 #   bodies20/        20 poses x 2 shapes, exact joints            (58 pairs)
 #   bodies20_noisy/  the same meshes, joints with sigma = 3 cm and 10 % on the surface
+#   bodies20_scans/  the same templates, each target a single-view virtual-Kinect scan
 # Shapes and noise are those of the committed fixtures (tools/synth/src/fixtures.rs).
 # Usage: bash tools/bench/make_datasets.sh   then e.g.
 #   cargo run --release -- bench target/bench-data/bodies20 --mode dense --json dense.json
@@ -22,3 +23,7 @@ common=(--shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" --poses "$
 for d in bodies20 bodies20_noisy; do
   echo "$out/$d: $(ls "$out/$d/meshes" | wc -l) meshes, $(wc -l < "$out/$d/pairs.txt") pairs"
 done
+# Single-view scans (issue 7): every pair's target is a virtual-Kinect view (sensor noise on)
+# of the target body, with truth/NAME_scan.txt (body vertex per scan vertex).
+"$synth" dataset --out "$out/bodies20_scans" "${common[@]}" --scans --scan-realism kinect
+echo "$out/bodies20_scans: $(wc -l < "$out/bodies20_scans/pairs.txt") scan pairs"

@@ -59,6 +59,21 @@ pub struct DatasetSpec {
     /// folder's `meshes/` and `labels/` — a joint-noise variant that shares another dataset's
     /// meshes.
     pub share_meshes_with: Option<PathBuf>,
+    /// Make every pair's target a single-view scan of the target body (see [`ScanSpec`]).
+    pub scans: Option<ScanSpec>,
+}
+
+/// How the targets of a scan dataset are seen: one virtual-Kinect view per target body, made
+/// into a mesh by `symcorr_kinect::scan_mesh`, written as `meshes/NAME_scan.ply` with
+/// `joints/NAME_scan.json` (camera space, the same joint noise as the body's) and
+/// `truth/NAME_scan.txt` (the body vertex seen at each scan vertex's pixel, `-1` for none);
+/// `pairs.txt` then lists `template NAME_scan`. Templates stay full bodies in the common order.
+#[derive(Debug, Clone, Copy)]
+pub struct ScanSpec {
+    /// The camera (body frame).
+    pub camera: crate::render::Camera,
+    /// Sensor realism.
+    pub realism: crate::render::Realism,
 }
 
 /// Joint positions as a single-frame symcorr.joints/1 log.
@@ -241,6 +256,36 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
                 )?;
             }
             write_joints(&out.join("joints").join(format!("{name}.json")), &skel)?;
+            if let Some(sc) = &spec.scans {
+                let t = crate::kinect::scan_target(
+                    &posed.mesh,
+                    &skel,
+                    &sc.camera,
+                    &sc.realism,
+                    stream,
+                )?;
+                let scan_name = format!("{name}_scan");
+                symcorr_mesh::io::write(
+                    out.join("meshes")
+                        .join(format!("{scan_name}.{}", spec.format.ext())),
+                    &t.mesh,
+                    None,
+                )?;
+                write_joints(
+                    &out.join("joints").join(format!("{scan_name}.json")),
+                    &t.joints,
+                )?;
+                mkdir(&out.join("truth"))?;
+                let truth: String = t
+                    .truth
+                    .iter()
+                    .map(|v| match v {
+                        Some(v) => format!("{v}\n"),
+                        None => "-1\n".to_string(),
+                    })
+                    .collect();
+                write_text(&out.join("truth").join(format!("{scan_name}.txt")), &truth)?;
+            }
             manifest_bodies.push(json!({
                 "name": name,
                 "shape": sname,
@@ -254,7 +299,12 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
     }
     let mirror_text: String = mirror.iter().map(|m| format!("{m}\n")).collect();
     write_text(&out.join("mirror.txt"), &mirror_text)?;
-    let pairs = default_pairs(&shape_names, &pose_names);
+    let mut pairs = default_pairs(&shape_names, &pose_names);
+    if spec.scans.is_some() {
+        for (_, b) in pairs.iter_mut() {
+            b.push_str("_scan");
+        }
+    }
     let pairs_text: String = pairs.iter().map(|(a, b)| format!("{a} {b}\n")).collect();
     write_text(&out.join("pairs.txt"), &pairs_text)?;
     let segments: Vec<&str> = symcorr_attach::Segment::ALL

@@ -50,6 +50,7 @@ pub fn write_fixtures(model: &Model, out: &Path) -> Result<()> {
         noise: None,
         command: FIXTURES_COMMAND.into(),
         share_meshes_with: None,
+        scans: None,
     };
     write_dataset(model, &spec, &out.join("bodies"))?;
     let noisy = DatasetSpec {

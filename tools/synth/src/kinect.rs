@@ -21,7 +21,7 @@ use crate::dataset::{mkdir, write_text};
 use crate::error::{Result, SynthError};
 use crate::mapping::kinect_joints;
 use crate::math::Rigid;
-use crate::render::{render, Camera, Realism, Rendering};
+use crate::render::{render, Camera, Realism, Rendering, NO_VERTEX};
 
 fn kerr(e: symcorr_kinect::KinectError) -> SynthError {
     SynthError::Invalid(e.to_string())
@@ -115,4 +115,50 @@ pub fn write_sequence(
     };
     write_joints_json(out.join("joints.json"), &log).map_err(kerr)?;
     write_camera_files(out, camera, "(posed per frame; see joints.json)", realism)
+}
+
+/// A single-view scan as a benchmark target: the mesh `symcorr_kinect::scan_mesh` builds from
+/// one rendered view (default [`symcorr_kinect::ScanOptions`]), the joints in camera space, and
+/// per scan vertex the body vertex seen at its pixel (`None` where no body vertex was: floor,
+/// wall) — the `truth/NAME.txt` of a symcorr benchmark dataset.
+pub struct ScanTarget {
+    /// The scan mesh (Kinect camera space).
+    pub mesh: TriMesh,
+    /// The skeleton in camera space.
+    pub joints: Skeleton,
+    /// Body vertex per scan vertex.
+    pub truth: Vec<Option<u32>>,
+}
+
+/// Renders `mesh` (world frame) from `camera` and turns the view into a [`ScanTarget`].
+/// `stream` separates the sensor noise of different bodies that share a seed.
+pub fn scan_target(
+    mesh: &TriMesh,
+    joints_world: &Skeleton,
+    camera: &Camera,
+    realism: &Realism,
+    stream: u64,
+) -> Result<ScanTarget> {
+    let r = render(mesh, camera, realism, stream);
+    let joints = skeleton_to_camera(joints_world, &camera.world_to_camera());
+    let scan = symcorr_kinect::scan_mesh(
+        &r.depth_frame(),
+        &camera.intrinsics,
+        Some(&joints),
+        &symcorr_kinect::ScanOptions::default(),
+    )
+    .map_err(kerr)?;
+    let truth = scan
+        .pixel_ids
+        .iter()
+        .map(|&px| match r.vertex_id.get(px as usize) {
+            Some(&v) if v != NO_VERTEX => Some(v),
+            _ => None,
+        })
+        .collect();
+    Ok(ScanTarget {
+        mesh: scan.mesh,
+        joints,
+        truth,
+    })
 }

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use symcorr_synth::dataset::resolve_pose;
-use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat};
+use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat, ScanSpec};
 use symcorr_synth::fixtures::WALK_PERIOD_S;
 use symcorr_synth::kinect::{write_scan, write_sequence};
 use symcorr_synth::mapping::{kinect_joints, reference_labels, SelfIntersectionCheck};
@@ -84,6 +84,17 @@ enum Cmd {
         format: String,
         #[command(flatten)]
         noise: NoiseArgs,
+        /// Make each pair's target a single-view virtual-Kinect scan (meshes/NAME_scan,
+        /// joints in camera space, truth/NAME_scan.txt = body vertex per scan vertex), seen
+        /// from the default camera (0, 0, 2.6) looking at (0, -0.05, 0).
+        #[arg(long)]
+        scans: bool,
+        /// Sensor realism of the scans: `ideal` or `kinect`.
+        #[arg(long, default_value = "kinect")]
+        scan_realism: String,
+        /// Seed of the scans' sensor noise.
+        #[arg(long, default_value_t = 1)]
+        scan_seed: u64,
     },
     /// Pose one body and write its mesh, joints and labels.
     Pose {
@@ -223,7 +234,30 @@ fn run(cli: Cli) -> Result<()> {
             poses,
             format,
             noise,
+            scans,
+            scan_realism,
+            scan_seed,
         } => {
+            let scans = if scans {
+                let realism = match scan_realism.as_str() {
+                    "ideal" => Realism {
+                        seed: scan_seed,
+                        ..Realism::default()
+                    },
+                    "kinect" => Realism::kinect(scan_seed),
+                    r => {
+                        return Err(SynthError::Invalid(format!(
+                            "--scan-realism {r}: expected ideal or kinect"
+                        )))
+                    }
+                };
+                Some(ScanSpec {
+                    camera: Camera::kinect_v1([0.0, 0.0, 2.6], [0.0, -0.05, 0.0]),
+                    realism,
+                })
+            } else {
+                None
+            };
             let format = match format.as_str() {
                 "ply" => MeshFormat::Ply,
                 "off" => MeshFormat::Off,
@@ -243,6 +277,7 @@ fn run(cli: Cli) -> Result<()> {
                 noise: noise.noise()?,
                 command: command_line(),
                 share_meshes_with: None,
+                scans,
             };
             let s = write_dataset(&model, &spec, &out)?;
             eprintln!(

@@ -358,3 +358,57 @@ fn committed_fixtures_regenerate_bit_for_bit() {
     }
     assert!(files > 50, "{files} files");
 }
+
+/// A scan dataset (`DatasetSpec::scans`): each pair's target is a single-view scan whose truth
+/// file names, for each scan vertex, the body vertex seen at its pixel — that vertex, moved into
+/// camera space, lies next to the scan vertex.
+#[test]
+fn scan_dataset_truth_names_the_vertex_seen() {
+    use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat, ScanSpec};
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera::kinect_v1([0.0, 0.0, 2.6], [0.0, -0.05, 0.0]);
+    let spec = DatasetSpec {
+        shapes: vec![("s".into(), Shape::default())],
+        poses: vec!["rest".into(), "t-pose".into()],
+        format: MeshFormat::Ply,
+        noise: None,
+        command: "test".into(),
+        share_meshes_with: None,
+        scans: Some(ScanSpec {
+            camera,
+            realism: Realism::default(),
+        }),
+    };
+    write_dataset(model(), &spec, dir.path()).unwrap();
+    let pairs = std::fs::read_to_string(dir.path().join("pairs.txt")).unwrap();
+    assert_eq!(pairs.trim(), "s_rest s_t-pose_scan");
+    let body = symcorr_mesh::io::read(dir.path().join("meshes/s_t-pose.ply"))
+        .unwrap()
+        .mesh;
+    let scan = symcorr_mesh::io::read(dir.path().join("meshes/s_t-pose_scan.ply"))
+        .unwrap()
+        .mesh;
+    let truth: Vec<i64> = std::fs::read_to_string(dir.path().join("truth/s_t-pose_scan.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    assert_eq!(truth.len(), scan.num_vertices());
+    let to_cam = camera.world_to_camera();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut worst: f64 = 0.0;
+    for (v, &t) in truth.iter().enumerate() {
+        if t < 0 {
+            continue;
+        }
+        seen.insert(t);
+        let q = to_cam.apply(body.positions[t as usize]);
+        worst = worst.max(d(scan.positions[v], q));
+    }
+    // Ideal sensor: a pixel sees a point of a triangle whose nearest vertex is named; body
+    // triangles are ~1–2 cm across.
+    assert!(worst < 0.03, "worst distance {worst} m");
+    // A front view sees a good part of the body, not all of it.
+    let frac = seen.len() as f64 / body.num_vertices() as f64;
+    assert!(frac > 0.25 && frac < 0.7, "{frac}");
+}
