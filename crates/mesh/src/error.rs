@@ -67,4 +67,7 @@ pub enum MeshError {
     /// A repair removed every triangle (e.g. all of them were degenerate).
     #[error("repair left no triangles: {reason}")]
     NothingLeft { reason: String },
+    /// A result would have more vertices than 32-bit vertex ids can name.
+    #[error("{vertices} vertices do not fit 32-bit vertex ids")]
+    TooLarge { vertices: usize },
 }

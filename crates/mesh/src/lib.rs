@@ -68,6 +68,7 @@
 mod error;
 pub mod geometry;
 pub mod io;
+pub mod subdivide;
 mod validate;
 
 pub use error::MeshError;
