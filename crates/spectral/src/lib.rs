@@ -51,6 +51,8 @@ mod eigen;
 mod geodesic;
 mod laplacian;
 mod sampling;
+#[doc(hidden)]
+pub mod testmesh;
 
 pub use curvature::gaussian_curvature;
 pub use descriptors::{hks, hks_times, si_hks, wks, SiHksParams, WksParams};
