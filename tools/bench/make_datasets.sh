@@ -5,6 +5,7 @@
 #   bodies20/        20 poses x 2 shapes, exact joints            (58 pairs)
 #   bodies20_noisy/  the same meshes, joints with sigma = 3 cm and 10 % on the surface
 #   bodies20_scans/  the same templates, each target a single-view virtual-Kinect scan
+#   bodies50k/       4 poses x 2 shapes, Loop-subdivided once (53,514 vertices)
 # Shapes and noise are those of the committed fixtures (tools/synth/src/fixtures.rs).
 # Usage: bash tools/bench/make_datasets.sh   then e.g.
 #   cargo run --release -- bench target/bench-data/bodies20 --mode dense --json dense.json
@@ -27,3 +28,8 @@ done
 # of the target body, with truth/NAME_scan.txt (body vertex per scan vertex).
 "$synth" dataset --out "$out/bodies20_scans" "${common[@]}" --scans --scan-realism kinect
 echo "$out/bodies20_scans: $(wc -l < "$out/bodies20_scans/pairs.txt") scan pairs"
+# Larger meshes (issue 7: "50k <-> 50k"): the same bodies Loop-subdivided once (53,514 vertices),
+# 4 poses x 2 shapes, for timing and for accuracy at a finer triangulation.
+"$synth" dataset --out "$out/bodies50k" --shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" \
+  --poses rest,t-pose,walk-30,random-3 --subdivide 1
+echo "$out/bodies50k: $(wc -l < "$out/bodies50k/pairs.txt") pairs of $(wc -l < "$out/bodies50k/mirror.txt")-vertex meshes"

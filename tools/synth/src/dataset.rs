@@ -17,6 +17,7 @@ use rand_core::SeedableRng;
 use serde_json::json;
 use symcorr_attach::Skeleton;
 use symcorr_kinect::joints::{write_joints_json, JointLog};
+use symcorr_mesh::TriMesh;
 
 use crate::body::{Body, Model, Pose, Shape};
 use crate::error::{Result, SynthError};
@@ -61,6 +62,59 @@ pub struct DatasetSpec {
     pub share_meshes_with: Option<PathBuf>,
     /// Make every pair's target a single-view scan of the target body (see [`ScanSpec`]).
     pub scans: Option<ScanSpec>,
+    /// Loop-subdivide every posed mesh this many times (0: none). New vertices follow the
+    /// input's (`symcorr_mesh::subdivide`), so all meshes still share one vertex order; the
+    /// mirror map and the reference labels are extended (see [`subdivided_tables`]).
+    pub subdivide: u32,
+}
+
+/// The mirror map and reference labels of a mesh after `levels` Loop subdivisions of
+/// `triangles`: the vertex of edge `[a, b]` mirrors to the vertex of edge `[m(a), m(b)]` and
+/// takes the label of `a` (the lower id). An edge whose mirror image is not an edge (a quad
+/// split along the other diagonal on the other side) mirrors to the vertex nearest its
+/// reflection `x ↦ −x` (the rest mesh is symmetric about x = 0); the number of such edges is
+/// returned.
+pub fn subdivided_tables(
+    triangles: &[[u32; 3]],
+    positions: &[[f64; 3]],
+    mirror: &[u32],
+    labels: &[u8],
+    levels: u32,
+) -> Result<(Vec<u32>, Vec<u8>, usize)> {
+    let mut mesh = TriMesh::new(positions.to_vec(), triangles.to_vec())?;
+    let (mut mirror, mut labels) = (mirror.to_vec(), labels.to_vec());
+    let mut unmatched = 0;
+    for _ in 0..levels {
+        let s = symcorr_mesh::subdivide::loop_subdivide(&mesh)?;
+        let n = mesh.num_vertices() as u32;
+        let mut missing = Vec::new();
+        for &[a, b] in &s.edges {
+            let (ma, mb) = (mirror[a as usize], mirror[b as usize]);
+            let key = if ma < mb { [ma, mb] } else { [mb, ma] };
+            match s.edges.binary_search(&key) {
+                Ok(i) => mirror.push(n + i as u32),
+                Err(_) => {
+                    missing.push(mirror.len());
+                    mirror.push(ma);
+                }
+            }
+            labels.push(labels[a as usize]);
+        }
+        // A quad split along the other diagonal on the other side: its edge vertex mirrors to
+        // the vertex nearest its reflection x ↦ −x (the body frame's sagittal plane).
+        let p = &s.mesh.positions;
+        for &v in &missing {
+            let q = [-p[v][0], p[v][1], p[v][2]];
+            let d2 = |w: &[f64; 3]| (0..3).map(|k| (w[k] - q[k]).powi(2)).sum::<f64>();
+            let best = (0..p.len())
+                .min_by(|&x, &y| d2(&p[x]).total_cmp(&d2(&p[y])))
+                .unwrap_or(v);
+            mirror[v] = best as u32;
+        }
+        unmatched += missing.len();
+        mesh = s.mesh;
+    }
+    Ok((mirror, labels, unmatched))
 }
 
 /// How the targets of a scan dataset are seen: one virtual-Kinect view per target body, made
@@ -204,7 +258,23 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
     let base = model.body(&Shape::default())?;
     let labels = reference_labels(&base)?;
     let check = SelfIntersectionCheck::new(&base.rest.triangles, &labels);
-    let mirror = model.assets.body_mirror()?;
+    let (mirror, labels) = if spec.subdivide > 0 {
+        let (m, l, unmatched) = subdivided_tables(
+            &base.rest.triangles,
+            &base.rest.positions,
+            &model.assets.body_mirror()?,
+            &labels,
+            spec.subdivide,
+        )?;
+        if unmatched > 0 {
+            eprintln!(
+                "note: {unmatched} subdivision edges have no mirror edge (quads split along the other diagonal); mirrored by position"
+            );
+        }
+        (m, l)
+    } else {
+        (model.assets.body_mirror()?, labels)
+    };
     mkdir(&out.join("joints"))?;
     match &spec.share_meshes_with {
         None => {
@@ -237,9 +307,12 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
         let body = model.body(shape)?;
         for (pname, pose) in pose_names.iter().zip(&poses) {
             let name = format!("{sname}_{pname}");
-            let posed = body.pose(pose)?;
+            let mut posed = body.pose(pose)?;
             let hits = check.find(&posed.mesh).len();
             let exact = kinect_joints(&body, &posed)?;
+            for _ in 0..spec.subdivide {
+                posed.mesh = symcorr_mesh::subdivide::loop_subdivide(&posed.mesh)?.mesh;
+            }
             let skel = match &spec.noise {
                 Some(n) => apply_joint_noise(&exact, &posed.mesh, n, stream),
                 None => exact,
@@ -322,7 +395,7 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
         "units": "m",
         "frame": "MakeHuman body frame: x = subject's left, y up, z = subject's front",
         "source": "MakeHuman/MPFB2 CC0 assets (fixtures/mpfb2), game_engine rig, linear blend skinning",
-        "vertices": base.rest.num_vertices(),
+        "vertices": mirror.len(),
         "segments": segments,
         "shapes": shapes_json,
         "noise": spec.noise.map(|n| json!({
@@ -330,6 +403,11 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
             "drop_fraction": n.drop_fraction, "seed": n.seed})),
         "bodies": manifest_bodies,
     });
+    let mut manifest = manifest;
+    if spec.subdivide > 0 {
+        // Only when used, so the committed fixtures' manifests stay as they were.
+        manifest["subdivide"] = json!(spec.subdivide);
+    }
     let text =
         serde_json::to_string_pretty(&manifest).map_err(|e| SynthError::Invalid(e.to_string()))?;
     write_text(&out.join("manifest.json"), &(text + "\n"))?;

@@ -51,6 +51,7 @@ pub fn write_fixtures(model: &Model, out: &Path) -> Result<()> {
         command: FIXTURES_COMMAND.into(),
         share_meshes_with: None,
         scans: None,
+        subdivide: 0,
     };
     write_dataset(model, &spec, &out.join("bodies"))?;
     let noisy = DatasetSpec {

@@ -378,6 +378,7 @@ fn scan_dataset_truth_names_the_vertex_seen() {
             camera,
             realism: Realism::default(),
         }),
+        subdivide: 0,
     };
     write_dataset(model(), &spec, dir.path()).unwrap();
     let pairs = std::fs::read_to_string(dir.path().join("pairs.txt")).unwrap();
@@ -411,4 +412,38 @@ fn scan_dataset_truth_names_the_vertex_seen() {
     // A front view sees a good part of the body, not all of it.
     let frac = seen.len() as f64 / body.num_vertices() as f64;
     assert!(frac > 0.25 && frac < 0.7, "{frac}");
+}
+
+/// Subdivided datasets: the extended mirror map is (up to the few edges re-mirrored by
+/// position) an involution and a symmetry of the subdivided rest mesh.
+#[test]
+fn subdivided_mirror_map_is_a_symmetry() {
+    let m = model();
+    let base = m.body(&Shape::default()).unwrap();
+    let labels = reference_labels(&base).unwrap();
+    let mirror = m.assets.body_mirror().unwrap();
+    let (sub_mirror, sub_labels, unmatched) = symcorr_synth::dataset::subdivided_tables(
+        &base.rest.triangles,
+        &base.rest.positions,
+        &mirror,
+        &labels,
+        1,
+    )
+    .unwrap();
+    let sub = symcorr_mesh::subdivide::loop_subdivide(&base.rest)
+        .unwrap()
+        .mesh;
+    assert_eq!(sub_mirror.len(), sub.num_vertices());
+    assert_eq!(sub_labels.len(), sub.num_vertices());
+    assert!(unmatched < sub.num_vertices() / 100, "{unmatched}");
+    let involution = (0..sub_mirror.len())
+        .filter(|&v| sub_mirror[sub_mirror[v] as usize] as usize == v)
+        .count();
+    assert!(involution as f64 > 0.99 * sub_mirror.len() as f64);
+    let mut worst: f64 = 0.0;
+    for (v, &w) in sub_mirror.iter().enumerate() {
+        let p = sub.positions[v];
+        worst = worst.max(d([-p[0], p[1], p[2]], sub.positions[w as usize]));
+    }
+    assert!(worst < 0.01, "worst reflection error {worst} m");
 }
