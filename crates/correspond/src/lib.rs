@@ -52,17 +52,25 @@
 
 mod candidates;
 mod filter;
+mod landmarks;
 mod metrics;
+mod refine;
 mod sample;
 mod selection;
+mod symmetry;
 
 pub use candidates::{candidates, Candidate, CandidateOptions, Descriptors};
 pub use filter::{skeleton_filter, FilterStats};
+pub use landmarks::{joint_landmarks, landmark_coordinates, skeleton_landmarks};
 pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
+pub use refine::{
+    coverage, nearest_in_pools, zoomout, SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult,
+};
 pub use sample::farthest_point_sample;
 pub use selection::{assign_confidence, base_profile, select, Match};
+pub use symmetry::refine_symmetry_plane;
 
 use std::time::Instant;
 use symcorr_attach::Segment;

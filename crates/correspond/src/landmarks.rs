@@ -1,0 +1,192 @@
+//! Skeleton landmark coordinates (DESIGN.md, Algorithm 7): surface landmarks taken from the
+//! refined joints correspond by joint name across meshes, and every vertex's geodesic distances
+//! to them (over √area) are coordinates that an isometry preserves and that already tell left
+//! from right (the distance to the left hand is not the distance to the right hand).
+
+use crate::CorrespondError;
+use faer::Mat;
+use rayon::prelude::*;
+use symcorr_attach::{Joint, Skeleton};
+use symcorr_spectral::HeatGeodesics;
+
+/// One landmark per joint of [`Joint::ALL`], in that order: the mesh vertex nearest (Euclidean)
+/// to the refined joint position. Empty meshes give an empty list.
+///
+/// ```
+/// use symcorr_attach::{Joint, Skeleton};
+/// use symcorr_correspond::joint_landmarks;
+/// let mut sk = Skeleton::from_positions([[0.0; 3]; 20]);
+/// sk.positions[Joint::Head.index()] = [0.0, 2.0, 0.0];
+/// let pos = [[0.0, 0.1, 0.0], [0.0, 1.9, 0.0]];
+/// let l = joint_landmarks(&pos, &sk);
+/// assert_eq!(l[Joint::Head.index()], 1);
+/// assert_eq!(l[Joint::HipCenter.index()], 0);
+/// ```
+pub fn joint_landmarks(positions: &[[f64; 3]], joints: &Skeleton) -> Vec<u32> {
+    if positions.is_empty() {
+        return Vec::new();
+    }
+    Joint::ALL
+        .iter()
+        .map(|&j| {
+            let c = joints.position(j);
+            positions
+                .iter()
+                .enumerate()
+                .map(|(v, p)| {
+                    let d = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
+                    (v, d)
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map_or(0, |(v, _)| v as u32)
+        })
+        .collect()
+}
+
+/// Landmark coordinates: column `i` holds every vertex's geodesic distance (heat method) to the
+/// landmark source set `sources[i]`, divided by `√area` so that meshes of different size
+/// compare. Distances to sets are computed in parallel; an unreachable vertex (another
+/// component) gets the column's largest finite value.
+///
+/// Errors: [`CorrespondError::InvalidArgument`] for an empty source set, a source out of
+/// range, or a non-positive area.
+pub fn landmark_coordinates(
+    heat: &HeatGeodesics,
+    sources: &[Vec<u32>],
+    area: f64,
+) -> Result<Mat<f64>, CorrespondError> {
+    if !(area > 0.0 && area.is_finite()) {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "landmark coordinates: area {area}"
+        )));
+    }
+    if let Some(i) = sources.iter().position(Vec::is_empty) {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "landmark {i} has no source vertex"
+        )));
+    }
+    let cols: Vec<Vec<f64>> = sources
+        .par_iter()
+        .map(|s| {
+            heat.distance(s)
+                .map_err(|e| CorrespondError::InvalidArgument(e.to_string()))
+        })
+        .collect::<Result<_, _>>()?;
+    let n = cols.first().map_or(0, Vec::len);
+    let s = area.sqrt();
+    let maxes: Vec<f64> = cols
+        .iter()
+        .map(|c| {
+            c.iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    Ok(Mat::from_fn(n, cols.len(), |v, i| {
+        let d = cols[i][v];
+        // The heat method can give tiny negative values next to the source.
+        (if d.is_finite() { d.max(0.0) } else { maxes[i] }) / s
+    }))
+}
+
+/// Joints at the ends of the skeleton's chains: their landmark is the surface tip beyond them.
+const TIPS: [Joint; 5] = [
+    Joint::Head,
+    Joint::HandLeft,
+    Joint::HandRight,
+    Joint::FootLeft,
+    Joint::FootRight,
+];
+
+/// One landmark source set per joint of [`Joint::ALL`], in that order, chosen to be stable
+/// under pose, joint noise and body shape:
+///
+/// * **tips** (head, hands, feet): the vertex of the joint's segment farthest along its bone
+///   (parent → joint) — top of the head, fingertip, toe tip;
+/// * every other joint: the **ring** where the plane through the joint, normal to the bone
+///   that leaves it along the limb (the incoming bone for elbows, wrists, knees, ankles,
+///   shoulders and the spine joints; the thigh for hips; the pelvis bone for the hip centre),
+///   cuts the surface of the segments meeting at the joint: vertices within `slab` of the
+///   plane and within three times the joint's distance to the surface.
+///
+/// A distance to a ring does not depend on which side of the limb the nearest surface point
+/// happens to lie (it moves with shape and noise); the ring falls back to the nearest vertex
+/// when the slab catches nothing.
+///
+/// Panics if `labels.len() != positions.len()` (a caller bug).
+pub fn skeleton_landmarks(
+    positions: &[[f64; 3]],
+    labels: &[symcorr_attach::Segment],
+    joints: &Skeleton,
+    slab: f64,
+) -> Vec<Vec<u32>> {
+    use symcorr_attach::Segment;
+    assert_eq!(labels.len(), positions.len(), "one label per vertex");
+    if positions.is_empty() {
+        return vec![Vec::new(); Joint::ALL.len()];
+    }
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let unit = |a: [f64; 3]| {
+        let n = dot(a, a).sqrt();
+        if n > 0.0 {
+            [a[0] / n, a[1] / n, a[2] / n]
+        } else {
+            [0.0, 1.0, 0.0]
+        }
+    };
+    let p = |j: Joint| joints.position(j);
+    let nearest = joint_landmarks(positions, joints);
+    // Segments whose bones touch a joint.
+    let touching = |j: Joint| -> Vec<Segment> {
+        Segment::ALL
+            .iter()
+            .copied()
+            .filter(|s| s.bones().iter().any(|&(a, b)| a == j || b == j))
+            .collect()
+    };
+    Joint::ALL
+        .iter()
+        .map(|&j| {
+            let c = p(j);
+            if TIPS.contains(&j) {
+                let parent = j.parent().unwrap_or(Joint::HipCenter);
+                let dir = unit(sub(c, p(parent)));
+                let segs = touching(j);
+                let best = positions
+                    .iter()
+                    .enumerate()
+                    .filter(|(v, _)| segs.contains(&labels[*v]))
+                    .max_by(|a, b| dot(sub(*a.1, c), dir).total_cmp(&dot(sub(*b.1, c), dir)));
+                return vec![best.map_or(nearest[j.index()], |(v, _)| v as u32)];
+            }
+            let axis = match j {
+                Joint::HipCenter => unit(sub(p(Joint::Spine), c)),
+                Joint::HipLeft => unit(sub(p(Joint::KneeLeft), c)),
+                Joint::HipRight => unit(sub(p(Joint::KneeRight), c)),
+                _ => unit(sub(c, p(j.parent().unwrap_or(Joint::HipCenter)))),
+            };
+            let q = positions[nearest[j.index()] as usize];
+            let r0 = dot(sub(q, c), sub(q, c)).sqrt();
+            let radius = 3.0 * r0.max(slab);
+            let segs = touching(j);
+            let ring: Vec<u32> = positions
+                .iter()
+                .enumerate()
+                .filter(|(v, x)| {
+                    let d = sub(**x, c);
+                    segs.contains(&labels[*v])
+                        && dot(d, axis).abs() <= slab
+                        && dot(d, d) <= radius * radius
+                })
+                .map(|(v, _)| v as u32)
+                .collect();
+            if ring.is_empty() {
+                vec![nearest[j.index()]]
+            } else {
+                ring
+            }
+        })
+        .collect()
+}

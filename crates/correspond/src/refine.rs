@@ -1,0 +1,462 @@
+//! Segment-constrained dense matching (DESIGN.md, Algorithm 7): nearest neighbours restricted
+//! to the template point's body segment ([`SegmentPools`]), an initial dense map from any
+//! per-vertex descriptor ([`nearest_in_pools`]), and ZoomOut refinement (Melzi et al. 2019)
+//! whose every point-map recovery is restricted the same way ([`zoomout`]).
+
+use crate::CorrespondError;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+use rayon::prelude::*;
+use symcorr_attach::Segment;
+use symcorr_spectral::EdgeGraph;
+
+/// Which target vertices a template vertex may be matched to.
+///
+/// A template vertex belongs to a *group*: its segment and, on the midline segments (pelvis,
+/// torso, head), its sagittal half. A group's pool is every target vertex within geodesic
+/// distance `band` of the target's region of that segment (so label boundaries that moved
+/// between the two meshes do not cut good matches off), minus the vertices on the other side
+/// of the body: a vertex's side is its segment's side (left/right limb) or, on the midline, its
+/// half; a pool never mixes a left point with a right one. Hence no match of a constrained map
+/// ever crosses from a left segment to a right one, and the two halves of the midline stay
+/// apart — the skeleton filter (§3.2) as a hard constraint on every nearest-neighbour search.
+#[derive(Debug, Clone)]
+pub struct SegmentPools {
+    /// Group index per template vertex.
+    groups: Vec<u32>,
+    /// Target vertices per group.
+    pools: Vec<Vec<u32>>,
+    /// Template vertices per group.
+    members: Vec<Vec<u32>>,
+}
+
+/// `+1` left segment, `-1` right segment, `0` midline.
+pub(crate) fn segment_side(s: Segment) -> i8 {
+    if s.mirror() == s {
+        0
+    } else if s.name().ends_with("_left") {
+        1
+    } else {
+        -1
+    }
+}
+
+fn vertex_side(s: Segment, half: i8) -> i8 {
+    match segment_side(s) {
+        0 => half.signum(),
+        x => x,
+    }
+}
+
+impl SegmentPools {
+    /// Builds the groups of the template and their target pools.
+    ///
+    /// `band` is in the target's length units (e.g. `0.02·√area`); `graph` is the target's
+    /// edge graph (geodesic band). Halves are optional (`None`: midline segments are one group
+    /// each). If the target has no vertex of some template segment, that group's pool falls
+    /// back to every target vertex of a compatible side.
+    ///
+    /// Errors: [`CorrespondError::InvalidArgument`] when tables disagree in length.
+    pub fn new(
+        template: (&[Segment], Option<&[i8]>),
+        target: (&[Segment], Option<&[i8]>),
+        graph: &EdgeGraph,
+        band: f64,
+    ) -> Result<SegmentPools, CorrespondError> {
+        let (tl, th) = template;
+        let (ul, uh) = target;
+        if th.is_some_and(|h| h.len() != tl.len())
+            || uh.is_some_and(|h| h.len() != ul.len())
+            || graph.len() != ul.len()
+        {
+            return Err(CorrespondError::InvalidArgument(format!(
+                "segment pools: {} template labels, {} target labels, graph of {} vertices, or halves of another length",
+                tl.len(),
+                ul.len(),
+                graph.len()
+            )));
+        }
+        let half_of = |h: Option<&[i8]>, v: usize| h.map_or(0, |h| h[v].signum());
+        // Group key: segment index·3 + (half + 1).
+        let key = |s: Segment, h: i8| s.index() * 3 + (h + 1) as usize;
+        let mut group_of_key = [u32::MAX; 51];
+        let mut keys = Vec::new();
+        let mut groups = Vec::with_capacity(tl.len());
+        let mut members: Vec<Vec<u32>> = Vec::new();
+        for (v, &s) in tl.iter().enumerate() {
+            let h = if segment_side(s) == 0 {
+                half_of(th, v)
+            } else {
+                0
+            };
+            let k = key(s, h);
+            if group_of_key[k] == u32::MAX {
+                group_of_key[k] = keys.len() as u32;
+                keys.push((s, h));
+                members.push(Vec::new());
+            }
+            let g = group_of_key[k];
+            groups.push(g);
+            members[g as usize].push(v as u32);
+        }
+        // Target vertices per segment.
+        let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); 17];
+        for (v, s) in ul.iter().enumerate() {
+            by_segment[s.index()].push(v as u32);
+        }
+        let target_side: Vec<i8> = ul
+            .iter()
+            .enumerate()
+            .map(|(v, &s)| vertex_side(s, half_of(uh, v)))
+            .collect();
+        // Geodesic band around each used segment's region (bounded multi-source Dijkstra).
+        let mut used = [false; 17];
+        for &(s, _) in &keys {
+            used[s.index()] = true;
+        }
+        let bands: Vec<Option<Vec<f64>>> = (0..17)
+            .into_par_iter()
+            .map(|i| {
+                (used[i] && !by_segment[i].is_empty())
+                    .then(|| graph.distances_within(&by_segment[i], band).ok())
+                    .flatten()
+            })
+            .collect();
+        let pools = keys
+            .iter()
+            .map(|&(s, h)| {
+                let side = vertex_side(s, h);
+                let ok_side = |q: usize| side * target_side[q] >= 0;
+                match &bands[s.index()] {
+                    Some(d) => (0..ul.len())
+                        .filter(|&q| d[q].is_finite() && ok_side(q))
+                        .map(|q| q as u32)
+                        .collect(),
+                    None => (0..ul.len())
+                        .filter(|&q| ok_side(q))
+                        .map(|q| q as u32)
+                        .collect(),
+                }
+            })
+            .collect();
+        Ok(SegmentPools {
+            groups,
+            pools,
+            members,
+        })
+    }
+
+    /// Number of groups.
+    pub fn len(&self) -> usize {
+        self.pools.len()
+    }
+
+    /// True without groups (an empty template).
+    pub fn is_empty(&self) -> bool {
+        self.pools.is_empty()
+    }
+
+    /// The target vertices template vertex `p` may be matched to.
+    pub fn pool_of(&self, p: u32) -> &[u32] {
+        &self.pools[self.groups[p as usize] as usize]
+    }
+
+    /// Number of template vertices.
+    pub fn num_template(&self) -> usize {
+        self.groups.len()
+    }
+}
+
+/// For every template vertex `p`, the target vertex of `p`'s pool whose feature row is nearest
+/// (Euclidean) to `p`'s, and that squared distance. `template` is `n_template × d`, `target`
+/// is `n_target × d`.
+///
+/// Exact brute force per group: `‖a‖² + ‖b‖² − 2 a·b` by one dense product per block of 256
+/// template rows against the group's pool (faer), blocks in parallel (rayon).
+///
+/// Errors: [`CorrespondError::InvalidArgument`] if the widths differ or the template has a
+/// different number of rows than the pools were built for.
+pub fn nearest_in_pools(
+    template: MatRef<'_, f64>,
+    target: MatRef<'_, f64>,
+    pools: &SegmentPools,
+) -> Result<Vec<(u32, f64)>, CorrespondError> {
+    if template.ncols() != target.ncols() || template.nrows() != pools.num_template() {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "features: template {}×{}, target {}×{}, pools for {} template vertices",
+            template.nrows(),
+            template.ncols(),
+            target.nrows(),
+            target.ncols(),
+            pools.num_template()
+        )));
+    }
+    if let Some(&q) = pools
+        .pools
+        .iter()
+        .flatten()
+        .find(|&&q| q as usize >= target.nrows())
+    {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "pool vertex {q} out of range ({} target rows)",
+            target.nrows()
+        )));
+    }
+    const BLOCK: usize = 256;
+    let d = template.ncols();
+    // Gathered pools, one matrix per group.
+    let gathered: Vec<(Mat<f64>, Vec<f64>)> = pools
+        .pools
+        .par_iter()
+        .map(|pool| {
+            let m = Mat::from_fn(pool.len(), d, |i, j| target[(pool[i] as usize, j)]);
+            let norms = (0..pool.len())
+                .map(|i| (0..d).map(|j| m[(i, j)] * m[(i, j)]).sum())
+                .collect();
+            (m, norms)
+        })
+        .collect();
+    // Work items: (group, block of members).
+    let items: Vec<(usize, &[u32])> = pools
+        .members
+        .iter()
+        .enumerate()
+        .flat_map(|(g, m)| m.chunks(BLOCK).map(move |c| (g, c)))
+        .collect();
+    let results: Vec<Vec<(u32, (u32, f64))>> = items
+        .par_iter()
+        .map(|&(g, block)| {
+            let (db, norms) = &gathered[g];
+            let pool = &pools.pools[g];
+            if pool.is_empty() {
+                return block.iter().map(|&p| (p, (0, f64::INFINITY))).collect();
+            }
+            let q = Mat::from_fn(block.len(), d, |i, j| template[(block[i] as usize, j)]);
+            let mut prod = Mat::<f64>::zeros(block.len(), pool.len());
+            matmul(
+                prod.as_mut(),
+                Accum::Replace,
+                q.as_ref(),
+                db.as_ref().transpose(),
+                1.0,
+                Par::Seq,
+            );
+            block
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| {
+                    let qn: f64 = (0..d).map(|j| q[(i, j)] * q[(i, j)]).sum();
+                    let mut best = (0usize, f64::INFINITY);
+                    for (k, &n) in norms.iter().enumerate() {
+                        let v = n - 2.0 * prod[(i, k)];
+                        if v < best.1 {
+                            best = (k, v);
+                        }
+                    }
+                    (p, (pool[best.0], (best.1 + qn).max(0.0)))
+                })
+                .collect()
+        })
+        .collect();
+    let mut out = vec![(0u32, f64::INFINITY); template.nrows()];
+    for (p, r) in results.into_iter().flatten() {
+        out[p as usize] = r;
+    }
+    Ok(out)
+}
+
+/// A Laplace–Beltrami basis: M-orthonormal eigenvectors (columns, ascending eigenvalue) and the
+/// lumped mass per vertex.
+#[derive(Debug, Clone, Copy)]
+pub struct SpectralBasis<'a> {
+    /// `n × k` eigenvectors, `ΦᵀMΦ = I`.
+    pub vectors: MatRef<'a, f64>,
+    /// Lumped (diagonal) mass per vertex.
+    pub mass: &'a [f64],
+}
+
+/// Options of [`zoomout`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ZoomOutOptions {
+    /// Weight of the anchor features (e.g. landmark coordinates) appended to the spectral
+    /// embedding in every point-map recovery; the embedding is scaled to unit mean squared row
+    /// norm first, so the weight is relative. 0 = plain ZoomOut.
+    pub anchor_weight: f64,
+    /// Basis size of the first functional map.
+    pub k_start: usize,
+    /// Basis size of the last (capped by the bases' sizes).
+    pub k_end: usize,
+    /// Increase of `k` per iteration.
+    pub step: usize,
+}
+
+impl Default for ZoomOutOptions {
+    /// 20 → 60 in steps of 4 (see the crate docs for the measurements).
+    fn default() -> Self {
+        ZoomOutOptions {
+            k_start: 20,
+            k_end: 60,
+            step: 4,
+            anchor_weight: 0.0,
+        }
+    }
+}
+
+/// The result of [`zoomout`].
+#[derive(Debug, Clone)]
+pub struct ZoomOutResult {
+    /// Target vertex per template vertex.
+    pub map: Vec<u32>,
+    /// Squared spectral residual per template vertex at the last step (`‖(ΦC)_p − Ψ_{map(p)}‖²`):
+    /// small when the functional map explains the point's match.
+    pub residual: Vec<f64>,
+    /// The last functional map (`k × k`, target coefficients → template coefficients).
+    pub c: Mat<f64>,
+    /// Basis sizes used, in order.
+    pub ks: Vec<usize>,
+}
+
+/// ZoomOut (Melzi, Ren, Rodolà, Sharma, Wonka, Ovsjanikov 2019) with segment-constrained point
+/// maps.
+///
+/// `map[p]` is the current target vertex of template vertex `p`. Each iteration with basis size
+/// `k` estimates the functional map `C = Φ_kᵀ M Π Ψ_k` (`Φ` template basis, `Ψ` target basis,
+/// `Π` the pull-back of the point map), then recovers the point map: `map(p)` = the target
+/// vertex of `p`'s pool ([`SegmentPools`]) whose row of `Ψ_k` is nearest to row `p` of `Φ_k C`.
+/// `k` grows from `k_start` to `k_end` by `step`.
+///
+/// Errors: [`CorrespondError::InvalidArgument`] for inconsistent sizes, `k_start == 0` or
+/// `step == 0`, or a map entry out of range.
+pub fn zoomout(
+    template: SpectralBasis<'_>,
+    target: SpectralBasis<'_>,
+    map: &[u32],
+    pools: &SegmentPools,
+    anchors: Option<(MatRef<'_, f64>, MatRef<'_, f64>)>,
+    options: &ZoomOutOptions,
+) -> Result<ZoomOutResult, CorrespondError> {
+    let (n, m) = (template.vectors.nrows(), target.vectors.nrows());
+    if let Some((a, b)) = anchors {
+        if a.nrows() != n || b.nrows() != m || a.ncols() != b.ncols() {
+            return Err(CorrespondError::InvalidArgument(format!(
+                "zoomout: anchors {}×{} and {}×{} for {n} and {m} vertices",
+                a.nrows(),
+                a.ncols(),
+                b.nrows(),
+                b.ncols()
+            )));
+        }
+    }
+    if template.mass.len() != n || target.mass.len() != m || map.len() != n {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "zoomout: template basis {n} rows / mass {}, target basis {m} rows / mass {}, map of {}",
+            template.mass.len(),
+            target.mass.len(),
+            map.len()
+        )));
+    }
+    if options.k_start == 0 || options.step == 0 {
+        return Err(CorrespondError::InvalidArgument(
+            "zoomout: k_start and step must be positive".into(),
+        ));
+    }
+    if let Some(&q) = map.iter().find(|&&q| q as usize >= m) {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "zoomout: map entry {q} out of range ({m} target vertices)"
+        )));
+    }
+    let kmax = options
+        .k_end
+        .min(template.vectors.ncols())
+        .min(target.vectors.ncols());
+    let mut ks = Vec::new();
+    let mut k = options.k_start.min(kmax);
+    loop {
+        ks.push(k);
+        if k >= kmax {
+            break;
+        }
+        k = (k + options.step).min(kmax);
+    }
+    // Φᵀ M, computed once for the largest k.
+    let phi_m = Mat::from_fn(n, kmax, |i, j| template.vectors[(i, j)] * template.mass[i]);
+    let mut current = map.to_vec();
+    let mut residual = vec![0.0; n];
+    let mut c = Mat::<f64>::zeros(0, 0);
+    for &k in &ks {
+        // Π Ψ_k: the target basis pulled back through the current map.
+        let pulled = Mat::from_fn(n, k, |i, j| target.vectors[(current[i] as usize, j)]);
+        c = Mat::<f64>::zeros(k, k);
+        matmul(
+            c.as_mut(),
+            Accum::Replace,
+            phi_m.as_ref().subcols(0, k).transpose(),
+            pulled.as_ref(),
+            1.0,
+            Par::rayon(0),
+        );
+        let mut q = Mat::<f64>::zeros(n, k);
+        matmul(
+            q.as_mut(),
+            Accum::Replace,
+            template.vectors.subcols(0, k),
+            c.as_ref(),
+            1.0,
+            Par::rayon(0),
+        );
+        let nn = match anchors {
+            Some((a, b)) if options.anchor_weight > 0.0 => {
+                // Unit mean squared row norm for the embedding, then the weighted anchors.
+                let ms: f64 = (0..m)
+                    .map(|i| (0..k).map(|j| target.vectors[(i, j)].powi(2)).sum::<f64>())
+                    .sum::<f64>()
+                    / m.max(1) as f64;
+                let s = 1.0 / ms.sqrt().max(f64::MIN_POSITIVE);
+                let w = options.anchor_weight;
+                let (ka, d) = (a.ncols(), k + a.ncols());
+                let qa = Mat::from_fn(n, d, |i, j| {
+                    if j < k {
+                        s * q[(i, j)]
+                    } else {
+                        w * a[(i, j - k)]
+                    }
+                });
+                let tb = Mat::from_fn(m, d, |i, j| {
+                    if j < k {
+                        s * target.vectors[(i, j)]
+                    } else {
+                        w * b[(i, j - k)]
+                    }
+                });
+                debug_assert_eq!(ka + k, d);
+                nearest_in_pools(qa.as_ref(), tb.as_ref(), pools)?
+            }
+            _ => nearest_in_pools(q.as_ref(), target.vectors.subcols(0, k), pools)?,
+        };
+        for (p, (t, r)) in nn.into_iter().enumerate() {
+            current[p] = t;
+            residual[p] = r;
+        }
+    }
+    Ok(ZoomOutResult {
+        map: current,
+        residual,
+        c,
+        ks,
+    })
+}
+
+/// Fraction of `num_target` target vertices hit by `map` (1 for a surjective map): how close a
+/// dense map is to one-to-one between equally sampled meshes.
+pub fn coverage(map: &[u32], num_target: usize) -> f64 {
+    if num_target == 0 {
+        return 0.0;
+    }
+    let mut hit = vec![false; num_target];
+    for &q in map {
+        if let Some(h) = hit.get_mut(q as usize) {
+            *h = true;
+        }
+    }
+    hit.iter().filter(|&&h| h).count() as f64 / num_target as f64
+}
