@@ -1,8 +1,14 @@
 #!/usr/bin/env python3
-"""Side-by-side timing: scipy eigsh vs `symcorr spectrum` on the same mesh, in one run.
+"""Side-by-side timing: scipy eigsh vs the Rust eigensolver on the same mesh, in one run.
 
   tools/.venv/bin/python tools/reference/bench_eigsh.py [--mesh fixtures/body/body.off] [--k 100]
-      [--repeats 3] [--symcorr PATH] [--build] [--blas-threads 2]
+      [--repeats 3] [--runner example|symcorr] [--symcorr PATH] [--build] [--blas-threads 2]
+
+Rust side (--runner): `example` (default) runs symcorr-spectral's own timing example
+`target/release/examples/eigen_timing --mesh MESH --k K --repeats 1 --json` (build it with
+`cargo build --release -p symcorr-spectral --example eigen_timing`, or pass --build), which only
+needs the spectral crate; `symcorr` runs the CLI `symcorr spectrum MESH --k K --json` instead.
+Both print the same `timings_s` keys, so the table below is the same ("symcorr" column).
 
 scipy: builds the cotan stiffness L and lumped mass M with numpy (tools/reference/meshutil.py),
 then times scipy.sparse.linalg.eigsh(L, k, M=M, sigma=-1e-8) exactly as issue 2 writes it (ARPACK's
@@ -17,6 +23,8 @@ a message. Eigenvalues are compared: max relative difference over i >= 1 (lambda
 
 BLAS threads default to 2 (the machine's cores). On a machine busy with other work OpenBLAS's two
 spinning threads can make eigsh 5-10x slower; the script prints the load average and warns.
+The Rust run gets RAYON_NUM_THREADS = the same number, so --blas-threads 1 compares one thread
+against one thread.
 """
 
 import os
@@ -98,26 +106,40 @@ def scipy_eigsh_once(s, k):
     return time.perf_counter() - t0, time.process_time() - c0, np.sort(lam)
 
 
-def find_symcorr(path, build):
+RUNNERS = {
+    # runner: (cargo build arguments, default binary, command line after the binary)
+    "example": (["-p", "symcorr-spectral", "--example", "eigen_timing"],
+                os.path.join("target", "release", "examples", "eigen_timing"),
+                lambda mesh, k: ["--mesh", mesh, "--k", str(k), "--repeats", "1", "--json"]),
+    "symcorr": (["-p", "symcorr"], os.path.join("target", "release", "symcorr"),
+                lambda mesh, k: ["spectrum", mesh, "--k", str(k), "--json"]),
+}
+
+
+def find_symcorr(path, build, runner):
+    cargo_args, default_exe, _ = RUNNERS[runner]
     if build:
-        print("building: cargo build --release -p symcorr ...", flush=True)
-        r = subprocess.run(["cargo", "build", "--release", "-p", "symcorr"], cwd=ROOT)
+        cmd = ["cargo", "build", "--release"] + cargo_args
+        print("building: " + " ".join(cmd) + " ...", flush=True)
+        r = subprocess.run(cmd, cwd=ROOT)
         if r.returncode != 0:
-            print(f"symcorr: cargo build failed (exit {r.returncode}); skipping the symcorr column")
+            print(f"rust: cargo build failed (exit {r.returncode}); skipping the symcorr column")
             return None
-    exe = path or os.path.join(ROOT, "target", "release", "symcorr")
+    exe = path or os.path.join(ROOT, default_exe)
     if not (os.path.isfile(exe) and os.access(exe, os.X_OK)):
-        print(f"symcorr: no binary at {exe} (build it with `cargo build --release -p symcorr` or pass --build); "
-              "skipping the symcorr column")
+        print(f"rust: no binary at {exe} (build it with `cargo build --release {' '.join(cargo_args)}` or pass "
+              "--build); skipping the symcorr column")
         return None
     return exe
 
 
-def symcorr_once(exe, mesh, k):
-    """One `symcorr spectrum MESH --k K --json` run -> dict, or an error string."""
+def symcorr_once(exe, mesh, k, runner):
+    """One Rust run (see RUNNERS) -> dict, or an error string."""
     ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    r = subprocess.run([exe, "spectrum", mesh, "--k", str(k), "--json"], capture_output=True, text=True)
+    # Same thread count as scipy's BLAS (fair comparison; rayon, hence faer, reads this).
+    env = dict(os.environ, RAYON_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "2"))
+    r = subprocess.run([exe] + RUNNERS[runner][2](mesh, k), capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t0
     ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
@@ -149,8 +171,10 @@ def main():
     ap.add_argument("--mesh", default=os.path.join(ROOT, "fixtures", "body", "body.off"))
     ap.add_argument("--k", type=int, default=100)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--symcorr", default=None, help="path to the symcorr binary (default target/release/symcorr)")
-    ap.add_argument("--build", action="store_true", help="run `cargo build --release -p symcorr` first")
+    ap.add_argument("--runner", choices=sorted(RUNNERS), default="example",
+                    help="Rust side: spectral's eigen_timing example (default) or the symcorr CLI")
+    ap.add_argument("--symcorr", default=None, help="path to the Rust binary (default: the runner's release binary)")
+    ap.add_argument("--build", action="store_true", help="cargo build --release the runner's binary first")
     ap.add_argument("--blas-threads", default="2", help="OMP/OPENBLAS/MKL_NUM_THREADS for scipy (default 2 = nproc)")
     args = ap.parse_args()
     if not args.mesh.lower().endswith(".off"):
@@ -160,7 +184,7 @@ def main():
     print(f"machine: {info['nproc']} cores, {info['cpu']}; python {info['python']}, numpy {info['numpy']}, "
           f"scipy {info['scipy']}; threads {info['threads']}")
     rel = os.path.relpath(args.mesh, ROOT)
-    exe = find_symcorr(args.symcorr, args.build)
+    exe = find_symcorr(args.symcorr, args.build, args.runner)
     load_before = loadavg()
 
     s = scipy_setup(args.mesh, args.repeats)
@@ -171,7 +195,7 @@ def main():
         scipy_times.append(t)
         scipy_cpu.append(c)
         if exe and y_error is None:
-            r = symcorr_once(exe, args.mesh, args.k)
+            r = symcorr_once(exe, args.mesh, args.k, args.runner)
             if isinstance(r, str):
                 y_error = r
             else:
@@ -182,6 +206,7 @@ def main():
     y = min(y_runs, key=lambda r: r["solve"]) if (y_runs and not y_error) else None
     t_eig = min(scipy_times)
 
+    print(f"rust runner: {args.runner} ({exe}), RAYON_NUM_THREADS = {os.environ.get('OPENBLAS_NUM_THREADS')}")
     print(f"mesh: {rel}, {s['n']} vertices, k = {args.k}, best of {args.repeats}; "
           f"1-min load average {load_before:.2f} before, {load_after:.2f} after"
           + ("  (WARNING: machine busy, timings unreliable)" if max(load_before, load_after) > 2.5 else ""))
@@ -211,6 +236,8 @@ def main():
         print(f"symcorr eigenpair seconds per run ({y['how']}): " + ", ".join(f"{r['solve']:.4f}" for r in y_runs))
         print("symcorr timings_s of the best run: " + ", ".join(f"{key} {v:.4f}" for key, v in y["timings"].items())
               + f"; process wall {y['wall']:.4f} s")
+        print(f"RATIO scipy eigsh / rust eigenpairs = {t_eig / y['solve']:.2f}x (best of {args.repeats} each, "
+              f"load {load_before:.2f} -> {load_after:.2f})")
     else:
         print("(symcorr column skipped)")
 

@@ -134,6 +134,15 @@ struct Operator<'a> {
 impl Operator<'_> {
     /// Removes the components along every `M^½ 1_c` (orthonormal, disjoint supports).
     fn deflate(&self, w: &mut [f64]) {
+        if self.num_components == 1 {
+            // One component (the usual case): a plain dot product and update, which vectorise
+            // (the general loop below accumulates through `dots[c]` and does not).
+            let dot: f64 = w.iter().zip(&self.null_vec).map(|(x, u)| x * u).sum();
+            for (x, u) in w.iter_mut().zip(&self.null_vec) {
+                *x -= dot * u;
+            }
+            return;
+        }
         let mut dots = vec![0.0; self.num_components];
         for ((x, &c), &u) in w.iter().zip(self.component).zip(&self.null_vec) {
             dots[c as usize] += x * u;
@@ -145,19 +154,9 @@ impl Operator<'_> {
 
     /// `W = A X` for a block of columns (one blocked sparse solve), deflated.
     fn apply_block(&self, x: MatRef<'_, f64>, w: &mut Mat<f64>) {
-        let n = self.sqrt_mass.len();
+        self.factor.solve_scaled(x, w.as_mut(), &self.sqrt_mass);
         for c in 0..x.ncols() {
-            for i in 0..n {
-                w[(i, c)] = self.sqrt_mass[i] * x[(i, c)];
-            }
-        }
-        self.factor.solve_in_place(w.as_mut());
-        for c in 0..x.ncols() {
-            let col = as_slice_mut(w, c);
-            for (v, s) in col.iter_mut().zip(&self.sqrt_mass) {
-                *v *= s;
-            }
-            self.deflate(col);
+            self.deflate(as_slice_mut(w, c));
         }
     }
 }
@@ -346,17 +345,13 @@ pub fn eigenpairs(
     let mut restarts = 0usize;
     // R of the last block: A Q_j = Q_j H_j + Q_next R E_lastᵀ.
     let mut last_r = Mat::<f64>::zeros(b, b);
-    let mut tt = [0.0f64; 6];
     loop {
         let mut j = start;
         // Blocks since the last convergence check (see `check_due`).
         let mut next_check = first_check(r, b, start, m);
         let mut verdict = None;
         while j < m {
-            let t0 = Instant::now();
             op.apply_block(q.as_ref().subcols(j, b), &mut w);
-            tt[0] += t0.elapsed().as_secs_f64();
-            let t0 = Instant::now();
             iterations += b;
             let norms_before: Vec<f64> = (0..b).map(|c| col_norm(&w, c)).collect();
             // Two passes of block classical Gram–Schmidt against the whole basis (including
@@ -376,8 +371,6 @@ pub fn eigenpairs(
                     h[(j + d, j + c)] = v;
                 }
             }
-            tt[1] += t0.elapsed().as_secs_f64();
-            let t0 = Instant::now();
             // Orthonormalise the new block internally (two-pass MGS): W = Q_next R.
             let mut rmat = Mat::<f64>::zeros(b, b);
             for c in 0..b {
@@ -416,20 +409,11 @@ pub fn eigenpairs(
             q.as_mut().subcols_mut(j + b, b).copy_from(w.as_ref());
             last_r = rmat;
             j += b;
-            tt[2] += t0.elapsed().as_secs_f64();
             // Early convergence test on the leading j × j block (the Lanczos relation holds
             // at every block boundary), so the run stops as soon as all r pairs are there
             // instead of only when the basis is full.
             if j < m && j >= next_check {
-                let t0 = Instant::now();
                 let v = ritz(h.as_ref().submatrix(0, 0, j, j), &last_r, r, options.tol)?;
-                tt[3] += t0.elapsed().as_secs_f64();
-                if std::env::var_os("SYMCORR_EIGEN_TRACE").is_some() {
-                    eprintln!(
-                        "TRACE check j {j} converged {} worst {:.1e}",
-                        v.converged, v.worst
-                    );
-                }
                 if v.converged >= r {
                     verdict = Some(v);
                     break;
@@ -437,20 +421,11 @@ pub fn eigenpairs(
                 next_check = j + check_interval(v.converged, r, b);
             }
         }
-        let t0 = Instant::now();
         let v = match verdict {
             Some(v) => v,
             None => ritz(h.as_ref(), &last_r, r, options.tol)?,
         };
         let s_dim = j;
-        tt[3] += t0.elapsed().as_secs_f64();
-        if std::env::var_os("SYMCORR_EIGEN_TRACE").is_some() {
-            eprintln!(
-                "TRACE end-of-cycle j {j} converged {} worst {:.1e}",
-                v.converged, v.worst
-            );
-        }
-        let t0 = Instant::now();
         if v.converged >= r || m == dim {
             // Ritz vectors Y = Q_s S[:, wanted].
             let mut y = Mat::<f64>::zeros(n, r);
@@ -459,15 +434,9 @@ pub fn eigenpairs(
                 q.as_ref().subcols(0, s_dim),
                 v.vectors.as_ref().subcols(0, r),
             );
-            tt[4] += t0.elapsed().as_secs_f64();
-            let t0 = Instant::now();
             let mut out = finish(
                 laplacian, &op, y, values, vectors, n_const, iterations, restarts,
             )?;
-            tt[5] += t0.elapsed().as_secs_f64();
-            if std::env::var_os("SYMCORR_EIGEN_TRACE").is_some() {
-                eprintln!("TRACE solve {:.3} orth {:.3} inner {:.3} ritz {:.3} restart/Y {:.3} finish {:.3}", tt[0], tt[1], tt[2], tt[3], tt[4], tt[5]);
-            }
             out.factorization_s = factorization_s;
             out.lanczos_s = clock.elapsed().as_secs_f64();
             return Ok(out);
@@ -501,7 +470,6 @@ pub fn eigenpairs(
             h[(c, c)] = v.theta[c];
         }
         start = l;
-        tt[4] += t0.elapsed().as_secs_f64();
     }
 }
 
