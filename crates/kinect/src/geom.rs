@@ -1,36 +1,7 @@
-//! Small 3-vector helpers (crate-private).
+//! 3-vector helpers: the arithmetic is symcorr-mesh's (one owner); only the normalisation
+//! with this crate's tolerance lives here.
 
-pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-pub(crate) fn lerp(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    add(a, scale(sub(b, a), t))
-}
+pub(crate) use symcorr_mesh::geometry::{add, cross, dot, lerp, norm, scale, sub};
 
 /// Unit vector, or `None` for a (near-)zero vector.
 pub(crate) fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {

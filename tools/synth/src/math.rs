@@ -9,28 +9,11 @@ pub type M3 = [[f64; 3]; 3];
 /// The identity matrix.
 pub const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-pub(crate) fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-pub(crate) fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn scale(a: V3, s: f64) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-pub(crate) fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-pub(crate) fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
-}
+// Vector arithmetic has one owner in the workspace: symcorr-mesh.
+#[cfg_attr(not(test), allow(unused_imports))]
+pub(crate) use symcorr_mesh::geometry::dist;
+pub(crate) use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
+
 pub(crate) fn normalize(a: V3) -> V3 {
     let n = norm(a);
     if n > 0.0 {
@@ -39,11 +22,6 @@ pub(crate) fn normalize(a: V3) -> V3 {
         a
     }
 }
-#[cfg_attr(not(test), allow(dead_code))]
-pub(crate) fn dist(a: V3, b: V3) -> f64 {
-    norm(sub(a, b))
-}
-
 /// Matrix product `a · b`.
 pub fn mul(a: &M3, b: &M3) -> M3 {
     let mut m = [[0.0; 3]; 3];
