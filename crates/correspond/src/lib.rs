@@ -66,11 +66,15 @@ pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
 pub use refine::{
-    coverage, nearest_in_pools, zoomout, SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult,
+    coverage, nearest_in_pools, refine_dense, zoomout, RefineOptions, RefineSide, RefinedMatches,
+    SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult,
 };
 pub use sample::farthest_point_sample;
 pub use selection::{assign_confidence, base_profile, select, Match};
 pub use symmetry::refine_symmetry_plane;
+
+/// The linear-algebra crate of this API ([`SpectralBasis`], [`RefineSide`] take faer matrices).
+pub use faer;
 
 use std::time::Instant;
 use symcorr_attach::Segment;

@@ -48,8 +48,9 @@ pub mod output;
 mod pipeline;
 
 pub use pipeline::{
-    midline_halves, Correspondence, Mode, Pipeline, PipelineOptions, PrepareOptions, PreparedMesh,
-    DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES,
+    midline_halves, symmetric_midline_halves, Correspondence, Method, Mode, Pipeline,
+    PipelineOptions, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
+    DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES,
 };
 
 /// Everything that can go wrong in the pipeline, by stage.

@@ -28,7 +28,8 @@ joints/NAME.json, optional mirror.txt (line i: mirror vertex of vertex i), pairs
 Examples:
   symcorr bench fixtures/synth
   symcorr bench fixtures/synth --mode dense --json summary.json --out-dir results/
-  symcorr bench fixtures/synth --no-skeleton-filter --json ablation.json"
+  symcorr bench fixtures/synth --no-skeleton-filter --json ablation.json
+  symcorr bench fixtures/synth --mode dense --method refined"
 )]
 pub struct BenchArgs {
     /// Dataset folder.
@@ -78,6 +79,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "seconds": p.seconds,
                 "match_seconds": p.match_seconds,
                 "skeleton_filter_fallbacks": p.correspondence.filter.fallbacks,
+                "coverage": p.correspondence.coverage,
             })
         })
         .collect();
@@ -85,6 +87,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
     json!({
         "dataset": dataset.display().to_string(),
         "mode": match o.mode { symcorr::Mode::Dense => "dense".to_string(), symcorr::Mode::Sparse { samples } => format!("sparse:{samples}") },
+        "method": match o.method { symcorr::Method::Paper => "paper", symcorr::Method::Refined => "refined" },
         "skeleton_filter": o.matching.skeleton_filter,
         "candidates": {"nearest": o.matching.candidates.nearest, "threshold": o.matching.candidates.threshold},
         "eigenpairs": o.prepare.eigenpairs,
@@ -191,7 +194,9 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
     .map_err(|e| CliError(e.to_string()))?;
     bar.finish();
     print!("{}", table(&report, true));
-    let label = if pipeline.options.matching.skeleton_filter {
+    let label = if pipeline.options.method == symcorr::Method::Refined {
+        "refined (landmarks + ZoomOut)"
+    } else if pipeline.options.matching.skeleton_filter {
         "with skeleton filter"
     } else {
         "no skeleton filter"

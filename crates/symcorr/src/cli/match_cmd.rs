@@ -17,7 +17,8 @@ use symcorr_correspond::CandidateOptions;
 #[command(after_help = "Examples:
   symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json
   symcorr match a.ply b.ply --template-joints a.json --target-joints b.txt --out corr.json --dense --ply-out colours/
-  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out ablation.json --no-skeleton-filter")]
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out ablation.json --no-skeleton-filter
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json --dense --method refined")]
 pub struct MatchArgs {
     /// Template mesh (OBJ, OFF, PLY, glTF/GLB).
     pub template: PathBuf,
@@ -55,9 +56,23 @@ pub struct MatchArgs {
     pub json: bool,
 }
 
+/// `--method`: the paper's pipeline or the refined one.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MethodArg {
+    /// si-HKS candidates, skeleton filter, eq. 8 selection (the paper).
+    #[default]
+    Paper,
+    /// Skeleton-landmark initial map + segment-constrained ZoomOut (dense by nature).
+    Refined,
+}
+
 /// Method options shared by `match` and `bench`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MethodArgs {
+    /// Matching method: `paper` (the paper's pipeline) or `refined` (landmark coordinates and
+    /// segment-constrained ZoomOut, beyond the paper).
+    #[arg(long, value_enum, default_value_t = MethodArg::Paper)]
+    pub method: MethodArg,
     /// Template points in sparse mode (farthest-point sample).
     #[arg(long, default_value_t = symcorr::DEFAULT_SAMPLES)]
     pub samples: usize,
@@ -118,6 +133,10 @@ impl MethodArgs {
             ..PipelineOptions::default()
         };
         o.matching.skeleton_filter = !self.no_skeleton_filter;
+        o.method = match self.method {
+            MethodArg::Paper => symcorr::Method::Paper,
+            MethodArg::Refined => symcorr::Method::Refined,
+        };
         o.matching.candidates = CandidateOptions {
             nearest: Some(self.candidates),
             threshold: self.threshold,
