@@ -58,8 +58,15 @@ fn glb_writer_is_valid_gltf2_and_round_trips_with_colours() {
     assert_eq!(pos["min"], json!([0.0, 0.0, 0.0]));
     assert_eq!(pos["max"], json!([1.0, 1.0, 1.5]));
     let col = &doc["accessors"][prim["attributes"]["COLOR_0"].as_u64().unwrap() as usize];
-    assert_eq!(col["componentType"], 5121);
-    assert_eq!(col["normalized"], true);
+    // COLOR_0 is linear (glTF 2.0): sRGB 255 → 1.0, sRGB 10 → 0.003035 (IEC 61966-2-1).
+    assert_eq!(col["componentType"], 5126);
+    let view = &doc["bufferViews"][col["bufferView"].as_u64().unwrap() as usize];
+    let off = view["byteOffset"].as_u64().unwrap() as usize;
+    let f = |i: usize| f32::from_le_bytes(bin[off + 4 * i..off + 4 * i + 4].try_into().unwrap());
+    assert_eq!(f(0), 1.0);
+    assert_eq!(f(1), 0.0);
+    assert!((f(9) - 0.003_035).abs() < 1e-6, "{}", f(9));
+    assert!((f(10) - 0.006_995).abs() < 1e-6, "{}", f(10));
 
     let back = io::read_from_bytes(&bytes, Format::Glb).unwrap();
     assert_eq!(back.mesh, m);
@@ -284,7 +291,8 @@ fn index_types_u16_u32_and_float_colours() {
         assert_eq!(m.mesh.triangles, vec![[0, 1, 2]]);
         assert_eq!(
             m.colors.unwrap(),
-            vec![[255, 0, 0], [0, 255, 0], [0, 0, 128]]
+            // Linear 0.5 is sRGB 0.7354 → 188.
+            vec![[255, 0, 0], [0, 255, 0], [0, 0, 188]]
         );
     }
 }

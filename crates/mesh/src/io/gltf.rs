@@ -11,9 +11,12 @@
 //! (`COLOR_0`, float or normalized integer, RGB or RGBA) are kept when every primitive has them.
 //!
 //! Writing produces one mesh with one primitive: `POSITION` (f32, with min/max), `NORMAL`
-//! (area-weighted, f32), optional `COLOR_0` (normalized u8 RGB, stride 4), u32 indices, and a
-//! plain double-sided material. Colour bytes are stored as given (no sRGB → linear conversion),
-//! so they read back exactly. Positions are f32 in glTF: a write → read round trip is exact only
+//! (area-weighted, f32), optional `COLOR_0` (f32 RGB), u32 indices, and a plain double-sided
+//! material. Colours: symcorr's per-vertex colours are sRGB bytes (as PLY stores them and
+//! viewers show them), while glTF's `COLOR_0` is **linear** (glTF 2.0 §3.7.2.1), so the writer
+//! converts sRGB → linear and the reader linear → sRGB (IEC 61966-2-1 transfer function). The
+//! linear values are stored as f32, not as normalised bytes, so that a write → read round trip
+//! gives the same bytes back (8-bit linear would merge dark shades). Positions are f32 in glTF: a write → read round trip is exact only
 //! for coordinates representable in f32.
 
 use std::borrow::Cow;
@@ -330,7 +333,7 @@ fn add_mesh(
                 }
                 out.colors.extend(
                     c.chunks_exact(dims)
-                        .map(|c| [0, 1, 2].map(|k| (c[k].clamp(0.0, 1.0) * 255.0).round() as u8)),
+                        .map(|c| [0, 1, 2].map(|k| linear_to_srgb8(c[k] as f64))),
                 );
                 out.all_colored = true;
             }
@@ -555,6 +558,27 @@ fn pad4(v: &mut Vec<u8>, byte: u8) {
 }
 
 /// Builds the glTF JSON and its binary buffer (`uri`: `None` for GLB, a data URI for `.gltf`).
+/// sRGB byte → linear intensity in [0, 1] (IEC 61966-2-1).
+fn srgb8_to_linear(c: u8) -> f64 {
+    let s = c as f64 / 255.0;
+    if s <= 0.04045 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear intensity → sRGB byte (clamped to [0, 1]; NaN reads as 0).
+fn linear_to_srgb8(l: f64) -> u8 {
+    let l = if l.is_nan() { 0.0 } else { l.clamp(0.0, 1.0) };
+    let s = if l <= 0.0031308 {
+        12.92 * l
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
 fn build(mesh: &TriMesh, colors: Option<&[[u8; 3]]>, embed: bool) -> (serde_json::Value, Vec<u8>) {
     let nv = mesh.num_vertices();
     let mut bin: Vec<u8> = Vec::with_capacity(nv * 28 + mesh.num_triangles() * 12);
@@ -580,7 +604,9 @@ fn build(mesh: &TriMesh, colors: Option<&[[u8; 3]]>, embed: bool) -> (serde_json
     let col_off = bin.len();
     if let Some(c) = colors {
         for c in c {
-            bin.extend_from_slice(&[c[0], c[1], c[2], 0]);
+            for k in c {
+                bin.extend_from_slice(&(srgb8_to_linear(*k) as f32).to_le_bytes());
+            }
         }
     }
     let col_len = bin.len() - col_off;
@@ -607,12 +633,10 @@ fn build(mesh: &TriMesh, colors: Option<&[[u8; 3]]>, embed: bool) -> (serde_json
     if colors.is_some() {
         views.push(
             json!({"buffer": 0, "byteOffset": col_off, "byteLength": col_len,
-                          "byteStride": 4, "target": 34962}),
+                          "target": 34962}),
         );
-        accessors.push(
-            json!({"bufferView": 3, "componentType": 5121, "normalized": true,
-                              "count": nv, "type": "VEC3"}),
-        );
+        accessors
+            .push(json!({"bufferView": 3, "componentType": 5126, "count": nv, "type": "VEC3"}));
         attributes["COLOR_0"] = json!(3);
     }
     let mut buffer = json!({"byteLength": bin.len()});
@@ -680,4 +704,27 @@ pub(crate) fn write_gltf(mesh: &TriMesh, colors: Option<&[[u8; 3]]>) -> Result<V
     let mut s = doc.to_string().into_bytes();
     s.push(b'\n');
     Ok(s)
+}
+
+#[cfg(test)]
+mod colour_tests {
+    use super::{linear_to_srgb8, srgb8_to_linear};
+
+    /// Every sRGB byte survives the trip through a linear f32, and the transfer function is
+    /// monotonic with the standard's fixed points (0, 1, the 0.04045 knee).
+    #[test]
+    fn srgb_bytes_round_trip_through_linear_f32() {
+        let mut last = -1.0;
+        for c in 0..=255u8 {
+            let l = srgb8_to_linear(c);
+            assert!(l > last);
+            last = l;
+            assert_eq!(linear_to_srgb8(l as f32 as f64), c);
+        }
+        assert_eq!(srgb8_to_linear(0), 0.0);
+        assert_eq!(srgb8_to_linear(255), 1.0);
+        assert!((srgb8_to_linear(10) - 10.0 / 255.0 / 12.92).abs() < 1e-15);
+        assert_eq!(linear_to_srgb8(f64::NAN), 0);
+        assert_eq!(linear_to_srgb8(2.0), 255);
+    }
 }
