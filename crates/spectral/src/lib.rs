@@ -3,9 +3,12 @@
 //! * [`Laplacian`]: cotan stiffness `L` (positive semi-definite convention, `L·1 = 0`) and lumped
 //!   barycentric mass `M`; [`SystemFactor`] factors `L + a·M + diag(h)` once (faer sparse
 //!   Cholesky) and solves many right-hand sides.
-//! * [`eigenpairs`]: the k smallest pairs of `L φ = λ M φ` by shift-invert Lanczos (full
-//!   re-orthogonalisation, per-component deflation of the constant, thick restart, Rayleigh–Ritz
-//!   polish); agrees with scipy's `eigsh(L, k, M=M, sigma=-1e-8)` to ~1e-14 relative.
+//! * [`eigenpairs`]: the k smallest pairs of `L φ = λ M φ` by shift-invert block Lanczos (own
+//!   blocked triangular solves on faer's Cholesky factor, full re-orthogonalisation by fused
+//!   block Gram–Schmidt, per-component deflation of the constant, early convergence tests, thick
+//!   restart, Rayleigh quotients with the exact `L`); agrees with scipy's
+//!   `eigsh(L, k, M=M, sigma=-1e-8)` to ~1e-13 relative. See the `eigen` module docs (source)
+//!   for the method and the measurements behind each choice.
 //! * Descriptors: [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010), [`wks`] (Aubry et al. 2011).
 //! * [`gaussian_curvature`] (paper eq. 4), geodesics by [`dijkstra`] / [`EdgeGraph`] (paper
 //!   eq. 5–6) and the heat method ([`HeatGeodesics`]), and the paper's [`base_vertex_set`] (§3.3).
@@ -34,7 +37,10 @@
 //! * Eigenvectors are M-orthonormal; the constant pair of each connected component is returned
 //!   exactly (λ = 0, `1/√area_c` on the component); signs make the largest-magnitude entry
 //!   positive. Default shift `ε = 1e-8·n/area` (scale-invariant), tolerance 1e-10 on the
-//!   shift-inverted residual, basis `max(2k+20, k+40)` columns capped by a 1 GiB budget.
+//!   shift-inverted residual, block size 8, basis `max(2k+20, k+40)` columns capped by a 1 GiB
+//!   budget. Convergence is tested every 2–4 blocks (not only when the basis is full); the
+//!   eigenvalues are per-vector Rayleigh quotients (no dense Rayleigh–Ritz rotation: same values
+//!   to ~1e-13, ~1.4 s less at 100k vertices).
 //! * Gaussian curvature at boundary vertices uses `π − Σα` (geodesic-curvature convention).
 //! * Heat method: `t = h²` by default (h the mean edge length), Neumann boundary conditions in
 //!   both solves, Poisson solved with one pinned vertex per component (no regularisation), then
