@@ -333,7 +333,7 @@ fn add_mesh(
                 }
                 out.colors.extend(
                     c.chunks_exact(dims)
-                        .map(|c| [0, 1, 2].map(|k| linear_to_srgb8(c[k] as f64))),
+                        .map(|c| [0, 1, 2].map(|k| linear_to_srgb8(c[k]))),
                 );
                 out.all_colored = true;
             }
