@@ -50,6 +50,16 @@ pub(crate) fn mirror_check(
         (J::KneeRight, J::AnkleRight, J::FootRight),
     ] {
         let (k, a, f) = (p[knee.index()], p[ankle.index()], p[foot.index()]);
+        // The torso's facing direction made perpendicular to this shin: with a flexed hip or a
+        // bent knee the foot turns with the shin (kneeling: the toes point down, not forward),
+        // so the foot is compared with the facing direction carried into the shin's frame.
+        let (facing, left) = match unit(sub(k, a)) {
+            Some(s) => match unit(sub(facing, scale(s, dot(facing, s)))) {
+                Some(f) if dot(facing, s).abs() < 0.95 => (f, unit(cross(s, f)).unwrap_or(left)),
+                _ => (facing, left),
+            },
+            None => (facing, left),
+        };
         if usable[ankle.index()] && usable[foot.index()] {
             if let Some(d) = unit(sub(f, a)) {
                 sk += dot(d, facing);
@@ -110,7 +120,11 @@ enum Kind {
 fn kind(j: Joint) -> Kind {
     use Joint as J;
     match j {
-        J::HipCenter | J::Spine | J::ShoulderCenter => Kind::Torso,
+        J::Spine | J::ShoulderCenter => Kind::Torso,
+        // The hip centre's cross-section runs into the tops of the thighs; with a flexed or
+        // abducted leg its centre moved the joint 5 cm sideways (and with it the left/right
+        // boundary of the pelvis): depth only, like the hips.
+        J::HipCenter => Kind::Junction,
         J::ShoulderLeft | J::ShoulderRight | J::HipLeft | J::HipRight => Kind::Junction,
         _ => Kind::Limb,
     }

@@ -35,15 +35,47 @@ fn exact_skeleton_labels_the_capsule_body() {
     for m in &a.diagnostics.joint_moves {
         assert!(m.distance() < 0.02, "{:?} moved {}", m.joint, m.distance());
     }
-    // Weights: rows sum to one, and the label is the segment with the largest weight.
+    // Weights: rows sum to one. Without joint planes the label is the segment with the largest
+    // weight; joint planes only move labels between segments that share a joint (two sweeps:
+    // at most two hops, e.g. thigh → hip → pelvis), and never change the weights.
+    let plain = attach(
+        &mesh,
+        &sk,
+        &AttachOptions {
+            joint_planes: false,
+            ..AttachOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(plain.weights, a.weights);
+    let shares_joint = |x: Segment, y: Segment| {
+        x.bones().iter().any(|&(p, q)| {
+            y.bones()
+                .iter()
+                .any(|&(r, s)| p == r || p == s || q == r || q == s)
+        })
+    };
+    let mut moved = 0;
     for v in 0..mesh.num_vertices() {
         let row = a.weights.row(v);
         assert!(!row.is_empty());
         let s: f64 = row.iter().map(|r| r.1).sum();
         assert!((s - 1.0).abs() < 1e-9);
-        let sw = a.weights.segment_weights(v);
-        assert!(sw.iter().all(|&w| w <= sw[a.labels[v].index()]));
+        let sw = plain.weights.segment_weights(v);
+        assert!(sw.iter().all(|&w| w <= sw[plain.labels[v].index()]));
+        let (x, y) = (plain.labels[v], a.labels[v]);
+        if x != y {
+            moved += 1;
+            assert!(
+                shares_joint(x, y)
+                    || Segment::ALL
+                        .iter()
+                        .any(|&z| shares_joint(x, z) && shares_joint(z, y)),
+                "vertex {v}: {x:?} -> {y:?}"
+            );
+        }
     }
+    assert!(moved > 0, "joint planes changed nothing");
 }
 
 #[test]

@@ -104,23 +104,23 @@ fn run(set: &str) -> (f64, f64) {
 }
 
 // Issue 5 asks for ≥ 95 % (exact joints) and ≥ 90 % (noisy joints) area agreement and zero
-// mirrored area. Plain Baran–Popović bone heat on the Kinect bones does NOT reach that against
-// these reference labels (they follow the rig's skinning conventions: the pelvis band reaches
-// above the Kinect spine joint, the hip segments take the buttocks, the clavicles are small).
-// Measured (12 bodies each): exact mean 0.818 / worst 0.796, noisy mean 0.801 /
-// worst 0.768; mirrored area ≤ 0.0007 (exact) and ≤ 0.0083 (noisy). The assertions below guard
-// those measured levels against regressions; the gap to the acceptance numbers is open work.
+// mirrored area. Against these reference labels (the MakeHuman rig's skinning conventions: small
+// front-only clavicles, a pelvis band above the Kinect spine joint, buttocks in the hips) bone heat
+// + joint planes + midline guard (crate docs) reach, on the 12 committed bodies each: exact mean
+// 0.857 / worst 0.830, mirrored ≤ 0.0004; noisy mean 0.814 / worst 0.776, mirrored ≤ 0.0034
+// (before joint planes: 0.818 / 0.796 and 0.801 / 0.768). The assertions guard those measured
+// levels; the 40-body acceptance tests live in tools/synth/tests/attach_labels.rs.
 
 #[test]
 fn exact_joints_regression_level_agreement_and_almost_no_mirror() {
     let (worst, mirror) = run("bodies");
-    assert!(worst >= 0.79, "worst agreement {worst}");
+    assert!(worst >= 0.82, "worst agreement {worst}");
     assert!(mirror <= 0.001, "mirrored area {mirror}");
 }
 
 #[test]
 fn noisy_joints_regression_level_agreement_and_little_mirror() {
     let (worst, mirror) = run("bodies_noisy");
-    assert!(worst >= 0.76, "worst agreement {worst}");
-    assert!(mirror <= 0.01, "mirrored area {mirror}");
+    assert!(worst >= 0.77, "worst agreement {worst}");
+    assert!(mirror <= 0.005, "mirrored area {mirror}");
 }

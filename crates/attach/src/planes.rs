@@ -1,0 +1,126 @@
+//! Segment boundaries by joint planes (the rigid-skinning convention).
+//!
+//! Bone heat decides *which limb* a vertex belongs to (it is visibility-aware and smooth), but
+//! its argmax puts the boundary between two neighbouring segments wherever the heat from their
+//! bones balances, which drifts far from the joint where one bone is short (the Kinect pelvis and
+//! hip bones are 10 cm long; bone heat gives most of the pelvis to the torso and thighs). Here
+//! every pair of segments that share a skeleton joint `J` is separated by the plane through `J`
+//! whose normal bisects the two bone directions (`d_A` pointing into `J`, `d_B` out of it):
+//! a vertex labelled `A` or `B` goes to `B` iff `(x − J)·unit(d̂_A + d̂_B) > 0`. For two bones
+//! leaving the same joint (siblings: pelvis/hips at the hip centre, head/clavicles at the shoulder
+//! centre) this is the plane bisecting the angle between them — between the left and right
+//! siblings it is the sagittal plane through the midline joint.
+
+use crate::vec3::{dot, sub, unit};
+use crate::{Joint, Segment};
+
+/// One boundary: segments `a` and `b` meet at `joint`; `normal` points into `b`'s side.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct JointPlane {
+    pub a: Segment,
+    pub b: Segment,
+    pub joint: Joint,
+    pub normal: [f64; 3],
+}
+
+/// Unit direction of segment `s`'s bone at joint `j`, pointing away from `j` (the bone of the
+/// segment that touches `j`).
+fn away_from(s: Segment, j: Joint, p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[f64; 3]> {
+    let &(u, v) = s.bones().iter().find(|b| b.0 == j || b.1 == j)?;
+    if !(usable[u.index()] && usable[v.index()]) {
+        return None;
+    }
+    let other = if u == j { v } else { u };
+    unit(sub(p[other.index()], p[j.index()]))
+}
+
+/// The planes between every two segments that share a joint (skipping bones that were dropped
+/// or are degenerate).
+pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<JointPlane> {
+    let mut out = Vec::new();
+    for (i, &a) in Segment::ALL.iter().enumerate() {
+        for &b in &Segment::ALL[i + 1..] {
+            let shared = a.bones().iter().find_map(|&(u, v)| {
+                b.bones()
+                    .iter()
+                    .find_map(|&(r, s)| [u, v].into_iter().find(|&x| x == r || x == s))
+            });
+            let Some(j) = shared else { continue };
+            let (Some(da), Some(db)) = (away_from(a, j, p, usable), away_from(b, j, p, usable))
+            else {
+                continue;
+            };
+            // d_A into the joint is −da; the bisector of (−da, db) is db − da.
+            if let Some(normal) = unit(sub(db, da)) {
+                out.push(JointPlane {
+                    a,
+                    b,
+                    joint: j,
+                    normal,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Re-decides every label between the two segments of each joint plane (two sweeps, so that a
+/// vertex moved from a thigh to a hip can then move on to the pelvis).
+pub(crate) fn apply(
+    positions: &[[f64; 3]],
+    p: &[[f64; 3]; 20],
+    planes: &[JointPlane],
+    labels: &mut [Segment],
+) {
+    for _ in 0..2 {
+        for pl in planes {
+            let o = p[pl.joint.index()];
+            for (x, l) in positions.iter().zip(labels.iter_mut()) {
+                if *l == pl.a || *l == pl.b {
+                    *l = if dot(sub(*x, o), pl.normal) > 0.0 {
+                        pl.b
+                    } else {
+                        pl.a
+                    };
+                }
+            }
+        }
+    }
+}
+
+/// The midline guard: a vertex labelled with one of two left/right twins that meet at a midline
+/// joint (hips at the hip centre, clavicles at the shoulder centre) but lying within `band` of
+/// the plane between them is relabelled with the midline segment at that joint (pelvis; head or
+/// torso by their joint plane). Near the midline the side is decided by centimetres of joint
+/// error; a midline label there is a disagreement, a twin label would be a left/right swap.
+pub(crate) fn midline_guard(
+    positions: &[[f64; 3]],
+    p: &[[f64; 3]; 20],
+    planes: &[JointPlane],
+    band: f64,
+    labels: &mut [Segment],
+) -> usize {
+    use Segment as S;
+    let find = |a: Segment, b: Segment| planes.iter().find(|pl| pl.a == a && pl.b == b);
+    let mut changed = 0;
+    for (l, r) in [
+        (S::HipLeft, S::HipRight),
+        (S::ClavicleLeft, S::ClavicleRight),
+    ] {
+        let Some(lr) = find(l, r) else { continue };
+        let o = p[lr.joint.index()];
+        let head_torso = find(S::Torso, S::Head);
+        for (x, lab) in positions.iter().zip(labels.iter_mut()) {
+            if (*lab != l && *lab != r) || dot(sub(*x, o), lr.normal).abs() >= band {
+                continue;
+            }
+            *lab = match (l, head_torso) {
+                (S::HipLeft, _) => S::Pelvis,
+                (_, Some(ht)) if dot(sub(*x, p[ht.joint.index()]), ht.normal) > 0.0 => S::Head,
+                _ => S::Torso,
+            };
+            changed += 1;
+        }
+    }
+    changed
+}
