@@ -6,6 +6,7 @@
 #   bodies20_noisy/  the same meshes, joints with sigma = 3 cm and 10 % on the surface
 #   bodies20_scans/  the same templates, each target a single-view virtual-Kinect scan
 #   bodies50k/       4 poses x 2 shapes, Loop-subdivided once (53,514 vertices)
+#   bodies20_fine/   13,380-vertex templates, targets one Loop level finer (another triangulation)
 # Shapes and noise are those of the committed fixtures (tools/synth/src/fixtures.rs).
 # Usage: bash tools/bench/make_datasets.sh   then e.g.
 #   cargo run --release -- bench target/bench-data/bodies20 --mode dense --json dense.json
@@ -33,3 +34,7 @@ echo "$out/bodies20_scans: $(wc -l < "$out/bodies20_scans/pairs.txt") scan pairs
 "$synth" dataset --out "$out/bodies50k" --shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" \
   --poses rest,t-pose,walk-30,random-3 --subdivide 1
 echo "$out/bodies50k: $(wc -l < "$out/bodies50k/pairs.txt") pairs of $(wc -l < "$out/bodies50k/mirror.txt")-vertex meshes"
+# Different triangulations (issue 7, peer comparison): each target is its body subdivided once
+# (53,514 vertices) while the template keeps 13,380; truth/NAME_fine.txt = body vertex ids.
+"$synth" dataset --out "$out/bodies20_fine" "${common[@]}" --finer-targets 1
+echo "$out/bodies20_fine: $(wc -l < "$out/bodies20_fine/pairs.txt") pairs, targets one Loop level finer"

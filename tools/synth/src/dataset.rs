@@ -66,6 +66,11 @@ pub struct DatasetSpec {
     /// input's (`symcorr_mesh::subdivide`), so all meshes still share one vertex order; the
     /// mirror map and the reference labels are extended (see [`subdivided_tables`]).
     pub subdivide: u32,
+    /// Make every pair's target a *finer* mesh: the target body Loop-subdivided this many more
+    /// times, written as `meshes/NAME_fine` with `truth/NAME_fine.txt` (vertex `v < n` is body
+    /// vertex `v`, the new edge vertices have none). Template and target then have different
+    /// triangulations, so a method cannot profit from a shared one. 0: off.
+    pub finer_targets: u32,
 }
 
 /// The mirror map and reference labels of a mesh after `levels` Loop subdivisions of
@@ -250,6 +255,11 @@ pub struct DatasetSummary {
 
 /// Generates and writes a dataset into `out` (created if needed; existing files overwritten).
 pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<DatasetSummary> {
+    if spec.scans.is_some() && spec.finer_targets > 0 {
+        return Err(SynthError::Invalid(
+            "targets are either scans or finer meshes, not both".into(),
+        ));
+    }
     if spec.shapes.is_empty() || spec.poses.is_empty() {
         return Err(SynthError::Invalid(
             "dataset needs at least one shape and one pose".into(),
@@ -359,6 +369,32 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
                     .collect();
                 write_text(&out.join("truth").join(format!("{scan_name}.txt")), &truth)?;
             }
+            if spec.finer_targets > 0 {
+                let n = posed.mesh.num_vertices();
+                let mut fine = posed.mesh.clone();
+                for _ in 0..spec.finer_targets {
+                    fine = symcorr_mesh::subdivide::loop_subdivide(&fine)?.mesh;
+                }
+                let fine_name = format!("{name}_fine");
+                symcorr_mesh::io::write(
+                    out.join("meshes")
+                        .join(format!("{fine_name}.{}", spec.format.ext())),
+                    &fine,
+                    None,
+                )?;
+                write_joints(&out.join("joints").join(format!("{fine_name}.json")), &skel)?;
+                mkdir(&out.join("truth"))?;
+                let truth: String = (0..fine.num_vertices())
+                    .map(|v| {
+                        if v < n {
+                            format!("{v}\n")
+                        } else {
+                            "-1\n".into()
+                        }
+                    })
+                    .collect();
+                write_text(&out.join("truth").join(format!("{fine_name}.txt")), &truth)?;
+            }
             manifest_bodies.push(json!({
                 "name": name,
                 "shape": sname,
@@ -373,10 +409,15 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
     let mirror_text: String = mirror.iter().map(|m| format!("{m}\n")).collect();
     write_text(&out.join("mirror.txt"), &mirror_text)?;
     let mut pairs = default_pairs(&shape_names, &pose_names);
-    if spec.scans.is_some() {
-        for (_, b) in pairs.iter_mut() {
-            b.push_str("_scan");
-        }
+    let suffix = if spec.scans.is_some() {
+        "_scan"
+    } else if spec.finer_targets > 0 {
+        "_fine"
+    } else {
+        ""
+    };
+    for (_, b) in pairs.iter_mut() {
+        b.push_str(suffix);
     }
     let pairs_text: String = pairs.iter().map(|(a, b)| format!("{a} {b}\n")).collect();
     write_text(&out.join("pairs.txt"), &pairs_text)?;

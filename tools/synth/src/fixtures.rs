@@ -52,6 +52,7 @@ pub fn write_fixtures(model: &Model, out: &Path) -> Result<()> {
         share_meshes_with: None,
         scans: None,
         subdivide: 0,
+        finer_targets: 0,
     };
     write_dataset(model, &spec, &out.join("bodies"))?;
     let noisy = DatasetSpec {

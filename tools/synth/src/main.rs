@@ -99,6 +99,10 @@ enum Cmd {
         /// mirror map and labels are extended, the vertex order stays shared).
         #[arg(long, default_value_t = 0)]
         subdivide: u32,
+        /// Make each pair's target this many Loop subdivisions finer than its template
+        /// (meshes/NAME_fine, truth/NAME_fine.txt): a different triangulation per pair.
+        #[arg(long, default_value_t = 0)]
+        finer_targets: u32,
     },
     /// Pose one body and write its mesh, joints and labels.
     Pose {
@@ -242,6 +246,7 @@ fn run(cli: Cli) -> Result<()> {
             scan_realism,
             scan_seed,
             subdivide,
+            finer_targets,
         } => {
             let scans = if scans {
                 let realism = match scan_realism.as_str() {
@@ -284,6 +289,7 @@ fn run(cli: Cli) -> Result<()> {
                 share_meshes_with: None,
                 scans,
                 subdivide,
+                finer_targets,
             };
             let s = write_dataset(&model, &spec, &out)?;
             eprintln!(

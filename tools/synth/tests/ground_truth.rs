@@ -379,6 +379,7 @@ fn scan_dataset_truth_names_the_vertex_seen() {
             realism: Realism::default(),
         }),
         subdivide: 0,
+        finer_targets: 0,
     };
     write_dataset(model(), &spec, dir.path()).unwrap();
     let pairs = std::fs::read_to_string(dir.path().join("pairs.txt")).unwrap();
@@ -446,4 +447,47 @@ fn subdivided_mirror_map_is_a_symmetry() {
         worst = worst.max(d([-p[0], p[1], p[2]], sub.positions[w as usize]));
     }
     assert!(worst < 0.01, "worst reflection error {worst} m");
+}
+
+/// Finer targets (`DatasetSpec::finer_targets`): the target is the body subdivided once more;
+/// its first `n` vertices are the body's (moved only by Loop's smoothing mask) and the truth
+/// file says so.
+#[test]
+fn finer_targets_keep_the_body_vertices_first() {
+    use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat};
+    let dir = tempfile::tempdir().unwrap();
+    let spec = DatasetSpec {
+        shapes: vec![("s".into(), Shape::default())],
+        poses: vec!["rest".into(), "walk-10".into()],
+        format: MeshFormat::Ply,
+        noise: None,
+        command: "test".into(),
+        share_meshes_with: None,
+        scans: None,
+        subdivide: 0,
+        finer_targets: 1,
+    };
+    write_dataset(model(), &spec, dir.path()).unwrap();
+    let pairs = std::fs::read_to_string(dir.path().join("pairs.txt")).unwrap();
+    assert_eq!(pairs.trim(), "s_rest s_walk-10_fine");
+    let read = |n: &str| {
+        symcorr_mesh::io::read(dir.path().join(format!("meshes/{n}.ply")))
+            .unwrap()
+            .mesh
+    };
+    let (body, fine) = (read("s_walk-10"), read("s_walk-10_fine"));
+    let n = body.num_vertices();
+    assert_eq!(fine.num_vertices(), n + body.edges().len());
+    let truth: Vec<i64> = std::fs::read_to_string(dir.path().join("truth/s_walk-10_fine.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    assert_eq!(truth.len(), fine.num_vertices());
+    assert!(truth[..n].iter().enumerate().all(|(v, &t)| t == v as i64));
+    assert!(truth[n..].iter().all(|&t| t == -1));
+    let worst = (0..n)
+        .map(|v| d(body.positions[v], fine.positions[v]))
+        .fold(0.0, f64::max);
+    assert!(worst < 0.01, "Loop's vertex mask moved a vertex {worst} m");
 }
