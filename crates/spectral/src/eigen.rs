@@ -177,8 +177,9 @@ impl Operator<'_> {
     }
 
     /// `W = A X` for a block of columns (one blocked sparse solve), deflated.
-    fn apply_block(&self, x: MatRef<'_, f64>, w: &mut Mat<f64>) {
-        self.factor.solve_scaled(x, w.as_mut(), &self.sqrt_mass);
+    fn apply_block(&self, x: MatRef<'_, f64>, w: &mut Mat<f64>, scratch: &mut Vec<f64>) {
+        self.factor
+            .solve_scaled(x, w.as_mut(), &self.sqrt_mass, scratch);
         for c in 0..x.ncols() {
             self.deflate(as_slice_mut(w, c));
         }
@@ -369,13 +370,15 @@ pub fn eigenpairs(
     let mut restarts = 0usize;
     // R of the last block: A Q_j = Q_j H_j + Q_next R E_lastᵀ.
     let mut last_r = Mat::<f64>::zeros(b, b);
+    let mut scratch = Vec::new();
+    let mut kept = Mat::<f64>::zeros(0, 0);
     loop {
         let mut j = start;
         // Basis size at which the next convergence test is due.
         let mut next_check = first_check(r, b, start);
         let mut verdict = None;
         while j < m {
-            op.apply_block(q.as_ref().subcols(j, b), &mut w);
+            op.apply_block(q.as_ref().subcols(j, b), &mut w, &mut scratch);
             iterations += b;
             let norms_before: Vec<f64> = (0..b).map(|c| col_norm(&w, c)).collect();
             // Two passes of block classical Gram–Schmidt against the whole basis (including
@@ -480,7 +483,10 @@ pub fn eigenpairs(
         let l0 = r + (m - r) / 2;
         let steps = ((m - l0 + b / 2) / b).clamp(1, (m - r - 1) / b);
         let l = m - steps * b;
-        let mut kept = Mat::<f64>::zeros(n, l);
+        // (Reused across restarts: l is the same every time.)
+        if kept.ncols() != l {
+            kept = Mat::<f64>::zeros(n, l);
+        }
         ortho::tall_times_small(
             kept.as_mut(),
             q.as_ref().subcols(0, m),

@@ -164,12 +164,32 @@ impl ShiftedFactor {
     ///
     /// Columns are split into one group per rayon thread; each group is solved in interleaved
     /// chunks of 8, 4, 2 or 1 columns.
-    pub(super) fn solve_scaled(&self, x: MatRef<'_, f64>, out: MatMut<'_, f64>, scale: &[f64]) {
+    ///
+    /// `scratch` is grown to `n · ncols` values and reused across calls (a fresh multi-MB buffer
+    /// per solve costs page faults on every call).
+    pub(super) fn solve_scaled(
+        &self,
+        x: MatRef<'_, f64>,
+        out: MatMut<'_, f64>,
+        scale: &[f64],
+        scratch: &mut Vec<f64>,
+    ) {
         let tasks = rayon::current_num_threads().clamp(1, x.ncols().max(1));
-        self.solve_split(x, out, scale, tasks);
+        if scratch.len() < self.n * x.ncols() {
+            scratch.resize(self.n * x.ncols(), 0.0);
+        }
+        self.solve_split(x, out, scale, tasks, scratch);
     }
 
-    fn solve_split(&self, x: MatRef<'_, f64>, out: MatMut<'_, f64>, scale: &[f64], tasks: usize) {
+    fn solve_split(
+        &self,
+        x: MatRef<'_, f64>,
+        out: MatMut<'_, f64>,
+        scale: &[f64],
+        tasks: usize,
+        scratch: &mut [f64],
+    ) {
+        let n = self.n;
         if tasks <= 1 || x.ncols() < 2 {
             let mut c0 = 0;
             let mut out = out;
@@ -182,11 +202,12 @@ impl ShiftedFactor {
                 };
                 let xs = x.subcols(c0, w);
                 let os = out.as_mut().subcols_mut(c0, w);
+                let buf = &mut scratch[..n * w];
                 match w {
-                    8 => self.solve_chunk::<8>(xs, os, scale),
-                    4 => self.solve_chunk::<4>(xs, os, scale),
-                    2 => self.solve_chunk::<2>(xs, os, scale),
-                    _ => self.solve_chunk::<1>(xs, os, scale),
+                    8 => self.solve_chunk::<8>(xs, os, scale, buf),
+                    4 => self.solve_chunk::<4>(xs, os, scale, buf),
+                    2 => self.solve_chunk::<2>(xs, os, scale, buf),
+                    _ => self.solve_chunk::<1>(xs, os, scale, buf),
                 }
                 c0 += w;
             }
@@ -196,9 +217,10 @@ impl ShiftedFactor {
         let split = x.ncols() * left / tasks;
         let (x0, x1) = x.split_at_col(split);
         let (o0, o1) = out.split_at_col_mut(split);
+        let (s0, s1) = scratch.split_at_mut(n * split);
         rayon::join(
-            || self.solve_split(x0, o0, scale, left),
-            || self.solve_split(x1, o1, scale, tasks - left),
+            || self.solve_split(x0, o0, scale, left, s0),
+            || self.solve_split(x1, o1, scale, tasks - left, s1),
         );
     }
 
@@ -208,9 +230,8 @@ impl ShiftedFactor {
         x: MatRef<'_, f64>,
         mut out: MatMut<'_, f64>,
         scale: &[f64],
+        buf: &mut [f64],
     ) {
-        let n = self.n;
-        let mut buf = vec![0.0f64; n * W];
         // Gather: permute and scale.
         for (i, &v) in self.perm.iter().enumerate() {
             let s = scale[v];
@@ -218,7 +239,7 @@ impl ShiftedFactor {
                 buf[i * W + c] = s * x[(v, c)];
             }
         }
-        pulp::Arch::new().dispatch(|| sweep::<W>(self, &mut buf));
+        pulp::Arch::new().dispatch(|| sweep::<W>(self, buf));
         // Scatter: undo the permutation and scale.
         for (i, &v) in self.perm.iter().enumerate() {
             let s = scale[v];
@@ -288,10 +309,11 @@ mod tests {
             SupernodalThreshold::FORCE_SUPERNODAL,
         ] {
             let f = ShiftedFactor::with_threshold(k.as_ref(), threshold).unwrap();
+            let mut scratch = Vec::new();
             for ncols in [1usize, 3, 8, 15] {
                 let x = Mat::from_fn(n, ncols, |i, c| ((i * 7 + c * 13) % 23) as f64 - 11.0);
                 let mut out = Mat::zeros(n, ncols);
-                f.solve_scaled(x.as_ref(), out.as_mut(), &scale);
+                f.solve_scaled(x.as_ref(), out.as_mut(), &scale, &mut scratch);
                 let sx = Mat::from_fn(n, ncols, |i, c| scale[i] * x[(i, c)]);
                 let y = reference.solve_many(sx.as_ref());
                 let want = Mat::from_fn(n, ncols, |i, c| scale[i] * y[(i, c)]);
