@@ -190,3 +190,76 @@ pub fn skeleton_landmarks(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use symcorr_attach::testbody::{capsule_body, t_pose};
+    use symcorr_attach::Segment;
+    use symcorr_spectral::EdgeGraph;
+
+    #[test]
+    fn landmark_columns_are_heat_distances_and_close_to_dijkstra() {
+        let sk = t_pose(1.0);
+        let (mesh, labels) = capsule_body(&sk, 0.05);
+        let heat = HeatGeodesics::new(&mesh, 1.0).unwrap();
+        let area = mesh.total_area();
+        let sources = skeleton_landmarks(&mesh.positions, &labels, &sk, 0.05);
+        assert_eq!(sources.len(), 20);
+        let lm = landmark_coordinates(&heat, &sources, area).unwrap();
+        assert_eq!((lm.nrows(), lm.ncols()), (mesh.num_vertices(), 20));
+        let graph = EdgeGraph::new(&mesh);
+        for (i, s) in sources.iter().enumerate() {
+            let h = heat.distance(s).unwrap();
+            let d = graph.distances_within(s, f64::INFINITY).unwrap();
+            let mut rel = 0.0;
+            for v in 0..mesh.num_vertices() {
+                assert!((lm[(v, i)] - h[v].max(0.0) / area.sqrt()).abs() < 1e-12);
+                rel += (h[v] - d[v]).abs();
+            }
+            // Edge paths overestimate (zig-zag), the heat method smooths over about one edge
+            // (t = h²): on this coarse body (edges ≈ 0.05) they agree to a few edge lengths.
+            let (nv, finite) = (
+                mesh.num_vertices(),
+                d.iter().filter(|x| x.is_finite()).count(),
+            );
+            assert!(
+                rel / (nv as f64) < 2.5 * 0.05,
+                "landmark {i}: mean {} over {nv} ({finite} reachable, {} sources)",
+                rel / nv as f64,
+                s.len()
+            );
+        }
+        assert!(landmark_coordinates(&heat, &[vec![]], area).is_err());
+    }
+
+    #[test]
+    fn rings_and_tips_sit_on_their_segments() {
+        let sk = t_pose(1.0);
+        let (mesh, labels) = capsule_body(&sk, 0.04);
+        let s = skeleton_landmarks(&mesh.positions, &labels, &sk, 0.04);
+        // Tips: the hand tip is the left forearm's vertex farthest from the body.
+        let hand = s[Joint::HandLeft.index()][0] as usize;
+        assert_eq!(labels[hand], Segment::ForearmLeft);
+        let far = (0..mesh.num_vertices())
+            .filter(|&v| labels[v] == Segment::ForearmLeft)
+            .map(|v| {
+                let d = [
+                    mesh.positions[v][0] - sk.position(Joint::HandLeft)[0],
+                    mesh.positions[v][1] - sk.position(Joint::HandLeft)[1],
+                ];
+                (d[0], v)
+            })
+            .fold(f64::NEG_INFINITY, |m, (d, _)| m.max(d.abs()));
+        assert!(far > 0.0);
+        // Knee ring: several vertices, all within the slab of the knee's plane, on thigh/shin.
+        let knee = &s[Joint::KneeRight.index()];
+        assert!(knee.len() >= 4, "{} ring vertices", knee.len());
+        for &v in knee {
+            let l = labels[v as usize];
+            assert!(l == Segment::ThighRight || l == Segment::ShinRight);
+        }
+        // Left and right rings differ (the coordinates are left/right-aware).
+        assert_ne!(s[Joint::KneeLeft.index()], s[Joint::KneeRight.index()]);
+    }
+}

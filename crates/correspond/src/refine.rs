@@ -642,3 +642,189 @@ pub fn refine_dense(
         timings,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use symcorr_spectral::testmesh::deformed_sphere;
+    use symcorr_spectral::{eigenpairs, EigenOptions, Laplacian};
+    use Segment::*;
+
+    fn lcg(seed: &mut u64) -> u64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *seed >> 33
+    }
+
+    /// `perm[old] = new` applied to a mesh's vertex ids.
+    fn permuted(mesh: &symcorr_mesh::TriMesh, perm: &[u32]) -> symcorr_mesh::TriMesh {
+        let mut pos = vec![[0.0; 3]; perm.len()];
+        for (o, &n) in perm.iter().enumerate() {
+            let p = mesh.positions[o];
+            // Rotate by 90° about z as well: the map must not depend on the embedding.
+            pos[n as usize] = [-p[1], p[0], p[2]];
+        }
+        let tris = mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| perm[v as usize]))
+            .collect();
+        symcorr_mesh::TriMesh::new(pos, tris).unwrap()
+    }
+
+    #[test]
+    fn zoomout_recovers_a_permutation_from_a_corrupted_map() {
+        let a = deformed_sphere(8);
+        let n = a.num_vertices();
+        let mut seed = 3u64;
+        let mut perm: Vec<u32> = (0..n as u32).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, lcg(&mut seed) as usize % (i + 1));
+        }
+        let b = permuted(&a, &perm);
+        let (la, lb) = (Laplacian::new(&a).unwrap(), Laplacian::new(&b).unwrap());
+        let ea = eigenpairs(&la, 40, &EigenOptions::default()).unwrap();
+        let eb = eigenpairs(&lb, 40, &EigenOptions::default()).unwrap();
+        // 30 % of the true map replaced by random target vertices.
+        let init: Vec<u32> = (0..n)
+            .map(|p| {
+                if lcg(&mut seed) % 10 < 3 {
+                    (lcg(&mut seed) % n as u64) as u32
+                } else {
+                    perm[p]
+                }
+            })
+            .collect();
+        let labels = vec![Torso; n];
+        let pools =
+            SegmentPools::new((&labels, None), (&labels, None), &EdgeGraph::new(&b), 0.0).unwrap();
+        let z = zoomout(
+            SpectralBasis {
+                vectors: ea.vectors.as_ref(),
+                mass: &la.mass,
+            },
+            SpectralBasis {
+                vectors: eb.vectors.as_ref(),
+                mass: &lb.mass,
+            },
+            &init,
+            &pools,
+            None,
+            &ZoomOutOptions {
+                k_start: 6,
+                k_end: 40,
+                step: 2,
+                anchor_weight: 0.0,
+            },
+        )
+        .unwrap();
+        let right = |m: &[u32]| (0..n).filter(|&p| m[p] == perm[p]).count() as f64 / n as f64;
+        assert!(right(&init) < 0.75);
+        assert!(right(&z.map) > 0.97, "recovered {}", right(&z.map));
+        assert_eq!(z.ks.first(), Some(&6));
+        assert_eq!(z.ks.last(), Some(&40));
+        assert!(coverage(&z.map, n) > 0.95);
+    }
+
+    /// A strip of 2·w vertices: the first half left, the second right, with a midline column.
+    fn strip(w: usize) -> (symcorr_mesh::TriMesh, Vec<Segment>, Vec<i8>) {
+        let mut pos = Vec::new();
+        for y in 0..2 {
+            for x in 0..w {
+                pos.push([x as f64, y as f64, 0.0]);
+            }
+        }
+        let mut tris = Vec::new();
+        for x in 0..w - 1 {
+            let (a, b, c, d) = (x as u32, x as u32 + 1, (w + x) as u32, (w + x + 1) as u32);
+            tris.push([a, b, d]);
+            tris.push([a, d, c]);
+        }
+        let mesh = symcorr_mesh::TriMesh::new(pos, tris).unwrap();
+        let mid = w / 2;
+        let labels: Vec<Segment> = (0..2 * w)
+            .map(|v| match (v % w).cmp(&mid) {
+                std::cmp::Ordering::Less => ThighLeft,
+                std::cmp::Ordering::Equal => Pelvis,
+                std::cmp::Ordering::Greater => ThighRight,
+            })
+            .collect();
+        // Midline vertices on the left half (y = 0) and right half (y = 1).
+        let halves: Vec<i8> = (0..2 * w)
+            .map(|v| {
+                if v % w == mid {
+                    1 - 2 * (v / w) as i8
+                } else {
+                    0
+                }
+            })
+            .collect();
+        (mesh, labels, halves)
+    }
+
+    #[test]
+    fn pools_never_cross_sides_even_when_features_prefer_it() {
+        let (mesh, labels, halves) = strip(11);
+        let g = EdgeGraph::new(&mesh);
+        // Huge band: every vertex is geodesically near every segment, so only sides separate.
+        let pools =
+            SegmentPools::new((&labels, Some(&halves)), (&labels, Some(&halves)), &g, 1e9).unwrap();
+        let side = |v: usize| vertex_side(labels[v], halves[v]);
+        for p in 0..labels.len() {
+            for &q in pools.pool_of(p as u32) {
+                assert!(side(p) * side(q as usize) >= 0, "{p} may match {q}");
+            }
+        }
+        // Features that are the mirror image: each vertex's best feature match is its mirror.
+        let n = labels.len();
+        let f = Mat::from_fn(n, 1, |v, _| ((v % 11) as f64 - 5.0).abs());
+        let g2 = Mat::from_fn(n, 1, |v, _| ((v % 11) as f64 - 5.0).abs() + 0.01);
+        let nn = nearest_in_pools(f.as_ref(), g2.as_ref(), &pools).unwrap();
+        for (p, (q, d)) in nn.iter().enumerate() {
+            assert!(side(p) * side(*q as usize) >= 0);
+            assert!((d - 1e-4).abs() < 1e-9, "exact squared distance: {d}");
+        }
+        // A zero band keeps each segment to itself.
+        let tight =
+            SegmentPools::new((&labels, Some(&halves)), (&labels, Some(&halves)), &g, 0.0).unwrap();
+        for p in 0..n {
+            assert!(tight
+                .pool_of(p as u32)
+                .iter()
+                .all(|&q| labels[q as usize] == labels[p]));
+        }
+    }
+
+    #[test]
+    fn nearest_in_pools_equals_brute_force() {
+        let (mesh, labels, halves) = strip(9);
+        let g = EdgeGraph::new(&mesh);
+        let pools =
+            SegmentPools::new((&labels, Some(&halves)), (&labels, Some(&halves)), &g, 1.5).unwrap();
+        let mut seed = 11u64;
+        let n = labels.len();
+        let mut r = || (lcg(&mut seed) % 1000) as f64 / 1000.0;
+        let a = Mat::from_fn(n, 4, |_, _| r());
+        let b = Mat::from_fn(n, 4, |_, _| r());
+        let nn = nearest_in_pools(a.as_ref(), b.as_ref(), &pools).unwrap();
+        for p in 0..n {
+            let d = |q: u32| {
+                (0..4)
+                    .map(|j| (a[(p, j)] - b[(q as usize, j)]).powi(2))
+                    .sum::<f64>()
+            };
+            let best = pools
+                .pool_of(p as u32)
+                .iter()
+                .copied()
+                .min_by(|&x, &y| d(x).total_cmp(&d(y)))
+                .unwrap();
+            assert_eq!(nn[p].0, best);
+            assert!((nn[p].1 - d(best)).abs() < 1e-12);
+        }
+        // Wrong widths are errors.
+        let c = Mat::<f64>::zeros(n, 3);
+        assert!(nearest_in_pools(a.as_ref(), c.as_ref(), &pools).is_err());
+    }
+}

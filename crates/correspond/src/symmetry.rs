@@ -15,12 +15,12 @@
 ///
 /// ```
 /// use symcorr_correspond::refine_symmetry_plane;
-/// // A box of points symmetric about x = 0.3; start from a tilted plane through the origin.
+/// // A box of points symmetric about x = 0.3; start from a slightly tilted, shifted plane.
 /// let mut pts = Vec::new();
 /// for i in 0..10 { for j in 0..10 { for s in [-1.0, 1.0] {
 ///     pts.push([0.3 + s * (0.1 + 0.02 * i as f64), 0.05 * j as f64, 0.01 * (i * j) as f64]);
 /// }}}
-/// let (o, n) = refine_symmetry_plane(&pts, [0.0; 3], [1.0, 0.2, 0.0], 10);
+/// let (o, n) = refine_symmetry_plane(&pts, [0.28, 0.0, 0.0], [1.0, 0.05, 0.0], 10);
 /// assert!((o[0] - 0.3).abs() < 1e-6 && n[0] > 0.999);
 /// ```
 pub fn refine_symmetry_plane(
@@ -116,4 +116,42 @@ pub fn refine_symmetry_plane(
         }
     }
     (o, n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recovers_a_tilted_plane_from_a_far_start() {
+        // A bumpy, asymmetric-along-the-plane cloud symmetric about the plane through (0.1, 0,
+        // 0) with normal (cos 20°, sin 20°, 0).
+        let (c, s) = (20f64.to_radians().cos(), 20f64.to_radians().sin());
+        let mut pts = Vec::new();
+        for i in 0..12 {
+            for j in 0..12 {
+                let u = 0.05 + 0.03 * i as f64; // distance from the plane
+                let v = 0.04 * j as f64;
+                let w = 0.02 * (i * i) as f64 + 0.1 * (j as f64).sin();
+                for sign in [-1.0, 1.0] {
+                    let a = sign * u;
+                    // plane frame: normal (c, s, 0), in-plane (−s, c, 0) and z.
+                    pts.push([0.1 + a * c - v * s, a * s + v * c, w]);
+                }
+            }
+        }
+        // Start 8° off and shifted (joint-built planes are off by about that much).
+        let t = 12f64.to_radians();
+        let (o, n) = refine_symmetry_plane(&pts, [0.0, 0.1, 0.0], [t.cos(), t.sin(), 0.0], 30);
+        let dot = n[0] * c + n[1] * s;
+        assert!(dot > 0.9999, "normal {n:?}");
+        let off = (o[0] - 0.1) * c + o[1] * s;
+        assert!(off.abs() < 1e-6, "origin off the plane by {off}");
+    }
+
+    #[test]
+    fn too_few_points_leave_the_plane() {
+        let (o, n) = refine_symmetry_plane(&[[0.0; 3]; 3], [1.0, 2.0, 3.0], [0.0, 2.0, 0.0], 5);
+        assert_eq!((o, n), ([1.0, 2.0, 3.0], [0.0, 2.0, 0.0]));
+    }
 }
