@@ -47,7 +47,7 @@ fn sweep_project(q: MatRef<'_, f64>, w: MatRef<'_, f64>, mut ct: MatMut<'_, f64>
 fn sweep_update_project(
     q: MatRef<'_, f64>,
     mut w: MatMut<'_, f64>,
-    c1t: MatRef<'_, f64>,
+    c1: MatRef<'_, f64>,
     mut c2t: MatMut<'_, f64>,
 ) {
     let n = q.nrows();
@@ -56,7 +56,7 @@ fn sweep_update_project(
         let rr = CHUNK.min(n - r0);
         let qc = q.subrows(r0, rr);
         let mut wc = w.as_mut().subrows_mut(r0, rr);
-        matmul(wc.as_mut(), Accum::Add, qc, c1t.transpose(), -1.0, Par::Seq);
+        matmul(wc.as_mut(), Accum::Add, qc, c1, -1.0, Par::Seq);
         matmul(
             c2t.as_mut(),
             Accum::Add,
@@ -70,7 +70,7 @@ fn sweep_update_project(
 }
 
 /// Sweep 3 on one row part: `W −= Q C₂`.
-fn sweep_update(q: MatRef<'_, f64>, mut w: MatMut<'_, f64>, c2t: MatRef<'_, f64>) {
+fn sweep_update(q: MatRef<'_, f64>, mut w: MatMut<'_, f64>, c2: MatRef<'_, f64>) {
     let n = q.nrows();
     let mut r0 = 0;
     while r0 < n {
@@ -79,7 +79,7 @@ fn sweep_update(q: MatRef<'_, f64>, mut w: MatMut<'_, f64>, c2t: MatRef<'_, f64>
             w.as_mut().subrows_mut(r0, rr),
             Accum::Add,
             q.subrows(r0, rr),
-            c2t.transpose(),
+            c2,
             -1.0,
             Par::Seq,
         );
@@ -127,9 +127,12 @@ pub(super) fn cgs2(q: MatRef<'_, f64>, mut w: MatMut<'_, f64>) -> Mat<f64> {
         sweep_project(q, w.as_ref(), ct.as_mut());
         ct
     });
+    // The updates take C column-major (j × b): with the transposed view of Cᵀ instead, the
+    // whole k = 100 body solve used ~7 % more CPU.
+    let c1 = c1t.transpose().to_owned();
     let c2t = split_rows(q, w.as_mut(), parts, &|q, w| {
         let mut ct = Mat::zeros(b, j);
-        sweep_update_project(q, w, c1t.as_ref(), ct.as_mut());
+        sweep_update_project(q, w, c1.as_ref(), ct.as_mut());
         ct
     });
     // The second correction is `Q C₂`; it changes W by ‖C₂‖ (Q orthonormal). When that is
@@ -140,8 +143,9 @@ pub(super) fn cgs2(q: MatRef<'_, f64>, mut w: MatMut<'_, f64>) -> Mat<f64> {
         c2t.as_ref().row(c).norm_l2() > SECOND_PASS_TOL * wn
     });
     if second {
+        let c2 = c2t.transpose().to_owned();
         split_rows(q, w.as_mut(), parts, &|q, w| {
-            sweep_update(q, w, c2t.as_ref());
+            sweep_update(q, w, c2.as_ref());
             Mat::zeros(0, 0)
         });
     }
