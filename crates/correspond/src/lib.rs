@@ -28,6 +28,51 @@
 //! assert_eq!(out.matches[1].target, 1);
 //! ```
 //!
+//! # Beyond the paper: the refined dense method (DESIGN.md, Algorithm 7)
+//!
+//! [`refine_dense`] matches every template vertex in three steps:
+//!
+//! 1. **Skeleton landmark coordinates.** Per mesh, one landmark source set per joint
+//!    ([`skeleton_landmarks`]): the *ring* where the plane through the joint, normal to its
+//!    bone, cuts the surface of the segments meeting there (elbows, knees, shoulders, spine …)
+//!    and the surface *tip* beyond each end joint (top of the head, fingertips, toes); plus the
+//!    vertex nearest each refined joint ([`joint_landmarks`]) — 40 columns. Every vertex's heat-
+//!    method geodesic distance to each of them over √area ([`landmark_coordinates`]; one
+//!    prefactored system, solves in parallel) gives coordinates that correspond by joint name,
+//!    survive isometries and tell left from right.
+//! 2. **Initial map** ([`nearest_in_pools`]): nearest neighbour in landmark ⊕ si-HKS space
+//!    (si-HKS columns scaled to unit standard deviation over both meshes, weight
+//!    [`RefineOptions::descriptor_weight`]), restricted to the point's [`SegmentPools`] pool:
+//!    the target region of the point's segment grown by a geodesic band
+//!    ([`RefineOptions::band`], so label boundaries that moved between meshes do not cut good
+//!    matches off), never on the other side of the body (a left limb never meets a right one;
+//!    midline segments are split by sagittal halves).
+//! 3. **Segment-constrained ZoomOut** ([`zoomout`], Melzi et al. 2019): functional map
+//!    `C = Φ_kᵀ M Π Ψ_k` from the current map, then the point map recovered by nearest
+//!    neighbour of rows of `Φ_k C` among rows of `Ψ_k` within the same pools; `k` 20 → 60 by 4.
+//!    The anchor option (appending landmark features to every recovery) is off by default.
+//!
+//! Confidence = `1/(1 + r/r̃)` from the final spectral residual `r`; [`coverage`] reports
+//! the fraction of target vertices hit. Midline halves for this method come from the joints'
+//! planes refined by the surface's own symmetry ([`refine_symmetry_plane`]), because a noisy
+//! shoulder line or a turned head tilts the joint plane by many degrees.
+//!
+//! Measured choices (generated bodies, 16 pairs of 13,380 vertices; developer harness
+//! `examples/refine_eval.rs`, whose landmark/plane options mirror the pipeline's):
+//! * si-HKS weight: landmarks alone 0.0276 → weight 1: 0.0094 on the two walk pairs
+//!   (0.1: 0.0169, 3 and 10: 0.0093); all 16 pairs: weight 1 0.0245, 3 0.0242, si-HKS alone
+//!   (weight 1000) 0.0242 but with 10× more initial-map flips (0.45 % vs 0.23 %).
+//! * Landmarks: nearest-vertex points only 0.0245 (exact joints); rings + tips + points 0.0227.
+//!   On the two hardest cross-shape pairs: points 0.053, rings + tips 0.044, all three 0.040.
+//! * Symmetry-refined halves, σ = 3 cm joints: flips 1.01 % → 0.06 % (mean 0.0308 → 0.0282);
+//!   with the joint planes the head flipped wholesale under shoulder noise.
+//! * Eigenpairs: 100 instead of 60 (ZoomOut to 100) on the walk pairs: 0.0358 vs 0.0392 with
+//!   landmarks alone, at twice the eigensolve time — kept 60.
+//! * Anchors in ZoomOut (weights 0.3/1/3): no gain (0.056/0.056/0.065 vs 0.051 on the hardest
+//!   pair); off.
+//! * Permuting the target's vertex ids changes nothing (tested in the symcorr crate on a
+//!   permuted capsule body).
+//!
 //! # Decisions the design leaves open
 //! * **Candidate rule.** Both rules of §3.1 are offered ([`CandidateOptions`]): the `N` nearest
 //!   and/or a threshold. The threshold is *relative* (`d ≤ t·d₁(p)`, `d₁` the nearest

@@ -53,8 +53,9 @@ impl SegmentPools {
     ///
     /// `band` is in the target's length units (e.g. `0.02·√area`); `graph` is the target's
     /// edge graph (geodesic band). Halves are optional (`None`: midline segments are one group
-    /// each). If the target has no vertex of some template segment, that group's pool falls
-    /// back to every target vertex of a compatible side.
+    /// each). A pool is never empty: if the target has no vertex of some template segment
+    /// (or none on the compatible side within the band), the pool falls back to every target
+    /// vertex of a compatible side, and failing that to every target vertex.
     ///
     /// Errors: [`CorrespondError::InvalidArgument`] when tables disagree in length.
     pub fn new(
@@ -127,15 +128,25 @@ impl SegmentPools {
             .map(|&(s, h)| {
                 let side = vertex_side(s, h);
                 let ok_side = |q: usize| side * target_side[q] >= 0;
-                match &bands[s.index()] {
+                let banded: Vec<u32> = match &bands[s.index()] {
                     Some(d) => (0..ul.len())
                         .filter(|&q| d[q].is_finite() && ok_side(q))
                         .map(|q| q as u32)
                         .collect(),
-                    None => (0..ul.len())
-                        .filter(|&q| ok_side(q))
-                        .map(|q| q as u32)
-                        .collect(),
+                    None => Vec::new(),
+                };
+                // Never an empty pool: the side-compatible vertices, else every vertex.
+                if !banded.is_empty() {
+                    return banded;
+                }
+                let sided: Vec<u32> = (0..ul.len())
+                    .filter(|&q| ok_side(q))
+                    .map(|q| q as u32)
+                    .collect();
+                if sided.is_empty() {
+                    (0..ul.len() as u32).collect()
+                } else {
+                    sided
                 }
             })
             .collect();
@@ -785,6 +796,14 @@ mod tests {
             assert!(side(p) * side(*q as usize) >= 0);
             assert!((d - 1e-4).abs() < 1e-9, "exact squared distance: {d}");
         }
+        // A segment the target lacks: the pool falls back to the compatible side, not empty.
+        let mut no_shin = labels.clone();
+        no_shin[0] = ShinLeft;
+        let fb = SegmentPools::new((&no_shin, Some(&halves)), (&labels, Some(&halves)), &g, 0.0)
+            .unwrap();
+        let pool = fb.pool_of(0);
+        assert!(!pool.is_empty());
+        assert!(pool.iter().all(|&q| side(q as usize) >= 0));
         // A zero band keeps each segment to itself.
         let tight =
             SegmentPools::new((&labels, Some(&halves)), (&labels, Some(&halves)), &g, 0.0).unwrap();
