@@ -8,7 +8,10 @@ Usage:
 DATASET is a folder in DESIGN.md's benchmark layout: meshes/NAME.{off,ply,obj} with one vertex
 order across the folder (ground truth is the identity), joints/NAME.json (used by symcorr only),
 optional mirror.txt (line i: the vertex mirror-symmetric to vertex i), pairs.txt
-(`template target` per line).
+(`template target` per line), and optionally truth/NAME.txt for targets in another vertex order
+(single-view scans, finer triangulations; symcorr's dataset extension): per target vertex its
+common-order id or -1. Such pairs are scored on the template points the target sees, with errors
+divided by sqrt(template area), exactly as `symcorr bench` does.
 
 For every pair the peer computes a dense template → target map with pyFM's standard pipeline
 (WKS descriptors → functional map by descriptor preservation + Laplacian commutativity +
@@ -202,21 +205,55 @@ class TargetGeodesics:
         return np.array([self.rows[int(x)][int(y)] for x, y in zip(a, b)], dtype=float)
 
 
-def score(geo, template_ids, target_ids, mirror):
-    """Per-match normalised errors and flip flags (None where the flip is not counted)."""
-    qstar = np.asarray(template_ids)  # identity ground truth
+def read_truth(dataset, name):
+    """truth/NAME.txt (a target not in the common vertex order: a scan or a finer mesh): the
+    common-order id per vertex, -1 for none; None when the file does not exist."""
+    p = dataset / "truth" / f"{name}.txt"
+    if not p.exists():
+        return None
+    return np.loadtxt(p, dtype=np.int64).reshape(-1)
+
+
+def common_to_target(truth, n_common):
+    """First target vertex per common id (-1 where none), as symcorr's bench does."""
+    out = np.full(n_common, -1, dtype=np.int64)
+    for v in range(len(truth) - 1, -1, -1):  # reversed, so the first vertex wins
+        c = truth[v]
+        if 0 <= c < n_common:
+            out[c] = v
+    return out
+
+
+def score(geo, template_ids, target_ids, mirror, to_target=None, sqrt_area=None):
+    """Per-match normalised errors and flip flags (NaN where the flip is not counted).
+
+    Without `to_target` the ground truth is the identity. With it (a target with a truth file),
+    the truth of template vertex p is target vertex to_target[p]; matches of template points
+    the target does not see are dropped, flips are counted only where the mirror image is seen,
+    and errors are divided by `sqrt_area` (the template's), as symcorr's bench does."""
+    p = np.asarray(template_ids)
     q = np.asarray(target_ids)
+    norm = geo.sqrt_area if sqrt_area is None else sqrt_area
+    if to_target is None:
+        qstar = p
+        mq = mirror[p] if mirror is not None else None
+    else:
+        seen = to_target[p] >= 0
+        p, q = p[seen], q[seen]
+        qstar = to_target[p]
+        mq = to_target[mirror[p]] if mirror is not None else None
     sources = set(qstar.tolist())
-    if mirror is not None:
-        sources |= set(mirror[qstar].tolist())
+    if mq is not None:
+        sources |= set(int(x) for x in mq if x >= 0)
     geo.ensure(sources)
-    err = geo.dist(qstar, q) / geo.sqrt_area
+    err = geo.dist(qstar, q) / norm
     flips = None
-    if mirror is not None:
-        mq = mirror[qstar]
-        d_sym = geo.dist(qstar, mq) / geo.sqrt_area
-        d_mirror = geo.dist(mq, q) / geo.sqrt_area
-        counted = d_sym > 0.1
+    if mq is not None:
+        ok = mq >= 0
+        mq_safe = np.where(ok, mq, qstar)
+        d_sym = geo.dist(qstar, mq_safe) / norm
+        d_mirror = geo.dist(mq_safe, q) / norm
+        counted = ok & (d_sym > 0.1)
         flips = np.where(counted, (d_mirror < err).astype(float), np.nan)
     return err, flips
 
@@ -435,11 +472,15 @@ def main():
 
     names = sorted({n for p in pairs for n in p})
     meshes = {n: read_mesh(find_mesh(dataset, n)) for n in names}
-    nverts = {len(v) for v, _ in meshes.values()}
+    truths = {n: t for n in names if (t := read_truth(dataset, n)) is not None}
+    nverts = {len(meshes[n][0]) for n in names if n not in truths}
     if len(nverts) != 1:
         sys.exit(f"{dataset}: meshes have different vertex counts {sorted(nverts)}; ground truth "
-                 "is the identity, so they must share one vertex order")
+                 "is the identity, so they must share one vertex order (or have truth/NAME.txt)")
     n = nverts.pop()
+    for name, t in truths.items():
+        if len(t) != len(meshes[name][0]):
+            sys.exit(f"{dataset}/truth/{name}.txt: {len(t)} lines for {len(meshes[name][0])} vertices")
     mirror = read_mirror(dataset, n)
     rng = np.random.default_rng(args.seed)
     sample = np.arange(n) if args.eval_samples <= 0 or args.eval_samples >= n else \
@@ -513,7 +554,9 @@ def main():
         by_target.setdefault(b, []).append(a)
     for b, templates in by_target.items():
         geo = TargetGeodesics(*meshes[b])
+        to_target = common_to_target(truths[b], n) if b in truths else None
         for a in templates:
+            tpl_sqrt_area = TargetGeodesics(*meshes[a]).sqrt_area if to_target is not None else None
             sym = load_symcorr_pairs(sym_dir, a, b) if sym_summary is not None else None
             if sym_summary is not None and sym is None:
                 missing_sym.append(f"{a}__{b}")
@@ -532,7 +575,7 @@ def main():
                 else:
                     keep = ids
                     tgt_ids = peer_maps[(t, a, b)][ids]
-                e, f = score(geo, keep, tgt_ids, mirror)
+                e, f = score(geo, keep, tgt_ids, mirror, to_target, tpl_sqrt_area)
                 errs[t].append(e)
                 flips[t].append(f)
                 row[t] = {"mean_error": float(e.mean()) if len(e) else None,
