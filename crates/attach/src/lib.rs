@@ -83,7 +83,10 @@
 //!   by the geodesically nearer thigh/upper arm (mirrored area up from 0.0074 to 0.012 — one leg
 //!   forward pulls the buttock cleft towards it), by the nearer hip+thigh bone chain (no change),
 //!   and the sagittal plane from the whole torso frame instead of the two twin bones (worse:
-//!   0.0104). Per-segment reach scaling (below) only moved 0.820 → 0.826.
+//!   0.0104); moving the hip centre sideways halfway to the hips' midpoint (noisy mirrored
+//!   0.0053 → 0.0064). Per-segment reach scaling (below) moved bone heat alone 0.820 → 0.826;
+//!   with joint planes the boundaries between neighbouring segments no longer depend on it
+//!   (clavicle reach 0.7: 0.8557 → 0.8557).
 //! * The hip centre is refined in depth only (like the hips): its cross-section runs into the
 //!   tops of the thighs, and with a flexed leg the circle-fit centre moved it 5 cm sideways,
 //!   which moved the pelvis's left/right boundary with it.
@@ -296,7 +299,7 @@ pub struct Diagnostics {
     pub nearest_bone_vertices: usize,
     /// Skeleton height used for relative thresholds (mesh units).
     pub skeleton_height: f64,
-    /// Wall-clock seconds per stage: `align`, `mirror`, `refine`, `heat`.
+    /// Wall-clock seconds per stage: `align`, `mirror`, `refine`, `heat`, `labels` (argmax, joint planes, midline guard).
     pub timings_s: Vec<(&'static str, f64)>,
 }
 

@@ -124,3 +124,65 @@ pub(crate) fn midline_guard(
     }
     changed
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testbody::t_pose;
+
+    fn plane(planes: &[JointPlane], a: Segment, b: Segment) -> JointPlane {
+        *planes.iter().find(|p| p.a == a && p.b == b).unwrap()
+    }
+
+    #[test]
+    fn planes_bisect_the_bones_at_their_shared_joint() {
+        let sk = t_pose(1.0);
+        let planes = joint_planes(&sk.positions, &[true; 20]);
+        // 20 pairs of segments share a joint (3 at the hip centre, 6 at the shoulder centre,
+        // 1 at the spine, and 5 along each side).
+        assert_eq!(planes.len(), 20);
+        // Pelvis → torso: both bones point up (y), so the plane is horizontal at the spine.
+        let pt = plane(&planes, Segment::Pelvis, Segment::Torso);
+        assert_eq!(pt.joint, Joint::Spine);
+        assert!((pt.normal[1] - 1.0).abs() < 1e-9, "{:?}", pt.normal);
+        // Left/right twins: the sagittal plane, normal towards the right (−x in t_pose).
+        let lr = plane(&planes, Segment::HipLeft, Segment::HipRight);
+        assert_eq!(lr.joint, Joint::HipCenter);
+        assert!(lr.normal[0] < -0.99, "{:?}", lr.normal);
+        // Every normal is a unit vector.
+        for p in &planes {
+            assert!((dot(p.normal, p.normal) - 1.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn labels_follow_the_side_of_the_plane_and_the_guard_takes_the_midline() {
+        let sk = t_pose(1.0);
+        let p = sk.positions;
+        let planes = joint_planes(&p, &[true; 20]);
+        let spine = p[Joint::Spine.index()];
+        let hc = p[Joint::HipCenter.index()];
+        // Just above the spine joint but labelled pelvis → torso; just below labelled torso → pelvis.
+        let xs = [
+            [0.1, spine[1] + 0.01, 0.0],
+            [0.1, spine[1] - 0.01, 0.0],
+            // Right of the midline (−x) but labelled hip_left, 1 cm and 10 cm away.
+            [hc[0] - 0.01, hc[1] - 0.05, 0.1],
+            [hc[0] - 0.10, hc[1] - 0.02, 0.0],
+        ];
+        let mut labels = [
+            Segment::Pelvis,
+            Segment::Torso,
+            Segment::HipLeft,
+            Segment::HipLeft,
+        ];
+        apply(&xs, &p, &planes, &mut labels);
+        assert_eq!(labels[0], Segment::Torso);
+        assert_eq!(labels[1], Segment::Pelvis);
+        assert_eq!(labels[3], Segment::HipRight);
+        let changed = midline_guard(&xs, &p, &planes, 0.03, &mut labels);
+        assert_eq!(changed, 1);
+        assert_eq!(labels[2], Segment::Pelvis);
+        assert_eq!(labels[3], Segment::HipRight);
+    }
+}
