@@ -49,7 +49,7 @@
 //!    midline segments are split by sagittal halves).
 //! 3. **Segment-constrained ZoomOut** ([`zoomout`], Melzi et al. 2019): functional map
 //!    `C = Φ_kᵀ M Π Ψ_k` from the current map, then the point map recovered by nearest
-//!    neighbour of rows of `Φ_k C` among rows of `Ψ_k` within the same pools; `k` 20 → 60 by 4.
+//!    neighbour of rows of `Φ_k C` among rows of `Ψ_k` within the same pools; `k` 20 → 60 by 8.
 //!    The anchor option (appending landmark features to every recovery) is off by default.
 //!
 //! Confidence = `1/(1 + r/r̃)` from the final spectral residual `r`; [`coverage`] reports
@@ -68,6 +68,8 @@
 //!   with the joint planes the head flipped wholesale under shoulder noise.
 //! * Eigenpairs: 100 instead of 60 (ZoomOut to 100) on the walk pairs: 0.0358 vs 0.0392 with
 //!   landmarks alone, at twice the eigensolve time — kept 60.
+//! * ZoomOut step (20 → 60, all 16 pairs): 4 → 0.0227, 8 → 0.0229 in half the steps, 20 →
+//!   0.0255; default 8.
 //! * Anchors in ZoomOut (weights 0.3/1/3): no gain (0.056/0.056/0.065 vs 0.051 on the hardest
 //!   pair); off.
 //! * Permuting the target's vertex ids changes nothing (tested in the symcorr crate on a

@@ -302,12 +302,12 @@ pub struct ZoomOutOptions {
 }
 
 impl Default for ZoomOutOptions {
-    /// 20 → 60 in steps of 4 (see the crate docs for the measurements).
+    /// 20 → 60 in steps of 8 (see the crate docs for the measurements).
     fn default() -> Self {
         ZoomOutOptions {
             k_start: 20,
             k_end: 60,
-            step: 4,
+            step: 8,
             anchor_weight: 0.0,
         }
     }
@@ -506,7 +506,7 @@ pub struct RefineOptions {
 
 impl Default for RefineOptions {
     /// Measured on the generated bodies (see the crate docs): weight 1, band 0.02, ZoomOut
-    /// 20 → 60 by 4.
+    /// 20 → 60 by 8.
     fn default() -> Self {
         RefineOptions {
             descriptor_weight: 1.0,

@@ -56,6 +56,10 @@ pub struct PrepareOptions {
     /// skeleton landmark coordinates, symmetry-refined halves). [`Pipeline::prepare`] sets it
     /// for [`Method::Refined`].
     pub refine_data: bool,
+    /// Compute the paper's base vertex set and its profile (§3.3). [`Pipeline::prepare`] turns
+    /// it off for [`Method::Refined`], which does not use them (then `base_set` and `profile`
+    /// are empty and the paper's method refuses the mesh).
+    pub paper_data: bool,
 }
 
 /// Default eigenpair count: 60. On the generated bodies 100 changed the mean error by < 0.003
@@ -85,6 +89,7 @@ impl Default for PrepareOptions {
             attach: AttachOptions::default(),
             midline_margin: DEFAULT_MIDLINE_MARGIN,
             refine_data: false,
+            paper_data: true,
         }
     }
 }
@@ -482,11 +487,16 @@ fn spectral_stages(
     lap("si_hks", &mut timings);
     let curvature = gaussian_curvature(mesh);
     lap("curvature", &mut timings);
-    let base_set = base_vertex_set(mesh, &curvature, options.base_radius)?;
-    lap("base_set", &mut timings);
-    let rows = EdgeGraph::new(mesh).distances_many(&base_set)?;
-    let profile = base_profile(&rows, mesh.total_area());
-    lap("base_profile", &mut timings);
+    let (base_set, profile) = if options.paper_data {
+        let base_set = base_vertex_set(mesh, &curvature, options.base_radius)?;
+        lap("base_set", &mut timings);
+        let rows = EdgeGraph::new(mesh).distances_many(&base_set)?;
+        let profile = base_profile(&rows, mesh.total_area());
+        lap("base_profile", &mut timings);
+        (base_set, profile)
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let refine = if options.refine_data {
         let heat = HeatGeodesics::with_laplacian(mesh, &laplacian, 1.0)?;
         lap("heat_factor", &mut timings);
@@ -594,9 +604,10 @@ impl Pipeline {
         mesh: TriMesh,
         skeleton: &Skeleton,
     ) -> Result<PreparedMesh, PipelineError> {
-        if self.options.method == Method::Refined && !self.options.prepare.refine_data {
+        if self.options.method == Method::Refined {
             let mut o = self.options.prepare.clone();
             o.refine_data = true;
+            o.paper_data = false;
             return PreparedMesh::new(mesh, skeleton, &o);
         }
         PreparedMesh::new(mesh, skeleton, &self.options.prepare)
@@ -847,8 +858,17 @@ mod tests {
             method: Method::Refined,
             ..PipelineOptions::default()
         });
-        let a = refined.prepare(mesh.clone(), &sk).unwrap();
-        let b = refined.prepare(target_mesh.clone(), &tsk).unwrap();
+        // Both methods' data, so that the paper's method can run on the same meshes.
+        let both = PrepareOptions {
+            refine_data: true,
+            ..PrepareOptions::default()
+        };
+        let a = PreparedMesh::new(mesh.clone(), &sk, &both).unwrap();
+        let b = PreparedMesh::new(target_mesh.clone(), &tsk, &both).unwrap();
+        // The refined pipeline's own preparation skips the paper's base set.
+        let lean = refined.prepare(mesh.clone(), &sk).unwrap();
+        assert!(lean.refine.is_some() && lean.profile.is_empty());
+        assert!(paper_rejects(&lean));
         assert!(a.refine.is_some() && b.refine.is_some());
         let graph = EvalGraph::new(&target_mesh);
         let corr = refined.run(&a, &b).unwrap();
@@ -878,6 +898,10 @@ mod tests {
         assert!(e.mean_error() < 0.03, "mean error {}", e.mean_error());
         assert!(e.mean_error() < ep.mean_error());
         assert!(corr.coverage.unwrap() > 0.3);
+    }
+
+    fn paper_rejects(m: &PreparedMesh) -> bool {
+        Pipeline::default().run(m, m).is_err()
     }
 
     /// Mirror map of a mesh symmetric under x ↦ −x: nearest vertex of the reflected position.
