@@ -381,8 +381,9 @@ pub fn eigenpairs(
             op.apply_block(q.as_ref().subcols(j, b), &mut w, &mut scratch);
             iterations += b;
             let norms_before: Vec<f64> = (0..b).map(|c| col_norm(&w, c)).collect();
-            // Two passes of block classical Gram–Schmidt against the whole basis (including
-            // the current block, whose coefficients are the diagonal block of H).
+            // Block classical Gram–Schmidt against the whole basis, second pass when it matters
+            // (ortho::cgs2); the basis includes the current block, whose coefficients are the
+            // diagonal block of H.
             let coef = ortho::cgs2(q.as_ref().subcols(0, j + b), w.as_mut());
             for c in 0..b {
                 op.deflate(as_slice_mut(&mut w, c));
