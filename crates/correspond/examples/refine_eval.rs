@@ -201,6 +201,7 @@ fn main() {
         k_end: env("KE", 60),
         step: env("STEP", 4),
         anchor_weight: env("WA", 0.0),
+        max_points: env("MAXP", DEFAULT_ZOOMOUT_POINTS),
     };
     let band: f64 = env("BAND", 0.02);
     let wh: f64 = env("WH", 0.0);

@@ -192,6 +192,17 @@ pub fn nearest_in_pools(
     target: MatRef<'_, f64>,
     pools: &SegmentPools,
 ) -> Result<Vec<(u32, f64)>, CorrespondError> {
+    nearest_in_pools_for(template, target, pools, None)
+}
+
+/// [`nearest_in_pools`] for the template vertices `subset` only (all when `None`); entries of
+/// other vertices are `(0, ∞)`.
+fn nearest_in_pools_for(
+    template: MatRef<'_, f64>,
+    target: MatRef<'_, f64>,
+    pools: &SegmentPools,
+    subset: Option<&[Vec<u32>]>,
+) -> Result<Vec<(u32, f64)>, CorrespondError> {
     if template.ncols() != target.ncols() || template.nrows() != pools.num_template() {
         return Err(CorrespondError::InvalidArgument(format!(
             "features: template {}×{}, target {}×{}, pools for {} template vertices",
@@ -228,8 +239,8 @@ pub fn nearest_in_pools(
         })
         .collect();
     // Work items: (group, block of members).
-    let items: Vec<(usize, &[u32])> = pools
-        .members
+    let members = subset.unwrap_or(&pools.members);
+    let items: Vec<(usize, &[u32])> = members
         .iter()
         .enumerate()
         .flat_map(|(g, m)| m.chunks(BLOCK).map(move |c| (g, c)))
@@ -286,6 +297,9 @@ pub struct SpectralBasis<'a> {
     pub mass: &'a [f64],
 }
 
+/// Default [`ZoomOutOptions::max_points`]: 16,000 (a 13.4k body runs every iteration in full).
+pub const DEFAULT_ZOOMOUT_POINTS: usize = 16_000;
+
 /// Options of [`zoomout`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ZoomOutOptions {
@@ -299,6 +313,10 @@ pub struct ZoomOutOptions {
     pub k_end: usize,
     /// Increase of `k` per iteration.
     pub step: usize,
+    /// Template vertices used by every iteration but the last (an even stride sample when the
+    /// template has more); the last iteration maps every vertex. Bounds the cost on large
+    /// meshes (the nearest-neighbour search is quadratic in a segment's size).
+    pub max_points: usize,
 }
 
 impl Default for ZoomOutOptions {
@@ -309,6 +327,7 @@ impl Default for ZoomOutOptions {
             k_end: 60,
             step: 8,
             anchor_weight: 0.0,
+            max_points: DEFAULT_ZOOMOUT_POINTS,
         }
     }
 }
@@ -389,12 +408,63 @@ pub fn zoomout(
         }
         k = (k + options.step).min(kmax);
     }
-    // Φᵀ M, computed once for the largest k.
-    let phi_m = Mat::from_fn(n, kmax, |i, j| template.vectors[(i, j)] * template.mass[i]);
+    // Intermediate iterations on an even stride sample of at most `max_points` vertices, its
+    // masses rescaled to the total (a quadrature of ∫ φ ψ∘T).
+    let stride = n.div_ceil(options.max_points.max(1)).max(1);
+    let in_sample = |p: usize| p % stride == 0;
+    let sample_members: Option<Vec<Vec<u32>>> = (stride > 1).then(|| {
+        pools
+            .members
+            .iter()
+            .map(|m| {
+                m.iter()
+                    .copied()
+                    .filter(|&p| in_sample(p as usize))
+                    .collect()
+            })
+            .collect()
+    });
+    let mass_scale = if stride > 1 {
+        let total: f64 = template.mass.iter().sum();
+        let sampled: f64 = (0..n)
+            .filter(|&p| in_sample(p))
+            .map(|p| template.mass[p])
+            .sum();
+        if sampled > 0.0 {
+            total / sampled
+        } else {
+            1.0
+        }
+    } else {
+        1.0
+    };
+    // Φᵀ M (sampled rows only, rescaled, for the intermediate iterations), for the largest k.
+    let phi_m_sampled = Mat::from_fn(n, kmax, |i, j| {
+        if in_sample(i) {
+            template.vectors[(i, j)] * template.mass[i] * mass_scale
+        } else {
+            0.0
+        }
+    });
+    let phi_m_full = (stride > 1)
+        .then(|| Mat::from_fn(n, kmax, |i, j| template.vectors[(i, j)] * template.mass[i]));
     let mut current = map.to_vec();
     let mut residual = vec![0.0; n];
     let mut c = Mat::<f64>::zeros(0, 0);
-    for &k in &ks {
+    let last = ks.len().saturating_sub(1);
+    for (step, &k) in ks.iter().enumerate() {
+        // All vertices in the last iteration; the sample before (when there is one).
+        let subset = if step == last {
+            None
+        } else {
+            sample_members.as_deref()
+        };
+        // The functional map uses the sample's rows in every iteration but the first after a
+        // full one — i.e. the rows whose map entries were just updated.
+        let phi_m = match (&phi_m_full, step) {
+            (Some(full), 0) => full,
+            _ => &phi_m_sampled,
+        };
         // Π Ψ_k: the target basis pulled back through the current map.
         let pulled = Mat::from_fn(n, k, |i, j| target.vectors[(current[i] as usize, j)]);
         c = Mat::<f64>::zeros(k, k);
@@ -440,13 +510,15 @@ pub fn zoomout(
                     }
                 });
                 debug_assert_eq!(ka + k, d);
-                nearest_in_pools(qa.as_ref(), tb.as_ref(), pools)?
+                nearest_in_pools_for(qa.as_ref(), tb.as_ref(), pools, subset)?
             }
-            _ => nearest_in_pools(q.as_ref(), target.vectors.subcols(0, k), pools)?,
+            _ => nearest_in_pools_for(q.as_ref(), target.vectors.subcols(0, k), pools, subset)?,
         };
         for (p, (t, r)) in nn.into_iter().enumerate() {
-            current[p] = t;
-            residual[p] = r;
+            if subset.is_none() || in_sample(p) {
+                current[p] = t;
+                residual[p] = r;
+            }
         }
     }
     Ok(ZoomOutResult {
@@ -727,6 +799,8 @@ mod tests {
                 k_end: 40,
                 step: 2,
                 anchor_weight: 0.0,
+                // Intermediate iterations on every 2nd vertex, the last on all.
+                max_points: 400,
             },
         )
         .unwrap();
