@@ -108,7 +108,8 @@ fn demo_writes_files_that_parse() {
     assert!(checked > 100, "{checked} single matches");
     let svg = std::fs::read_to_string(out.join("curve.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-    assert_eq!(svg.matches("<polyline").count(), 2);
+    // symcorr refined, the paper's pipeline, and its ablation.
+    assert_eq!(svg.matches("<polyline").count(), 3);
 }
 
 /// A fixture pair (same body shape, exact joints) matches under the pipeline issue's
@@ -130,7 +131,7 @@ fn fixture_pair_matches_under_thresholds() {
             .arg(joints(b))
             .arg("--out")
             .arg(&out)
-            .args(["--samples", "300"]);
+            .args(["--samples", "300", "--method", "paper"]);
         if !filter {
             cmd.arg("--no-skeleton-filter");
         } else {
@@ -287,6 +288,21 @@ fn usage_errors_exit_2_and_help_has_examples() {
         let s = String::from_utf8_lossy(&o.stdout);
         assert!(s.contains("Examples:"), "{sub}: {s}");
     }
+    // The ablation switch belongs to the paper's pipeline; with the default (refined) method
+    // it is refused instead of silently ignored.
+    let o = bin()
+        .args(["match", "a.off", "b.off", "--template-joints", "a.json"])
+        .args([
+            "--target-joints",
+            "b.json",
+            "--out",
+            "x.json",
+            "--no-skeleton-filter",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--method paper"));
     // A bench dataset that is not one.
     let dir = tempfile::tempdir().unwrap();
     let o = bin().arg("bench").arg(dir.path()).output().unwrap();

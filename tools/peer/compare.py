@@ -348,13 +348,13 @@ def peer_cache_key(tpl, tgt, args):
 # --------------------------------------------------------------------------------------------
 
 
-def run_symcorr(binary, dataset, pairs_file, mode, out_dir):
+def run_symcorr(binary, dataset, pairs_file, mode, out_dir, method="refined"):
     """Run `symcorr bench`; returns (summary dict or None, message)."""
     if binary is None or not Path(binary).is_file():
         return None, f"symcorr binary not found at {binary} (build: cargo build --release -p symcorr)"
     js = out_dir / "bench.json"
     cmd = [str(binary), "bench", str(dataset), "--pairs", str(pairs_file), "--mode", mode,
-           "--json", str(js), "--out-dir", str(out_dir)]
+           "--method", method, "--json", str(js), "--out-dir", str(out_dir)]
     print("running:", " ".join(cmd), flush=True)
     t0 = time.perf_counter()
     try:
@@ -443,6 +443,8 @@ def main():
     ap.add_argument("--limit", type=int, default=0, help="only the first N pairs (0 = all)")
     ap.add_argument("--json", type=Path, help="also write the table and per-pair rows here")
     ap.add_argument("--keep", type=Path, help="keep symcorr's bench output in this folder")
+    ap.add_argument("--symcorr-method", choices=["refined", "paper"], default="refined",
+                    help="symcorr bench --method (default: refined, symcorr's default)")
     ap.add_argument("--no-symcorr", action="store_true", help="run the peer only")
     ap.add_argument("--peer-cache", type=Path,
                     help="reuse peer maps (and their measured seconds) for identical meshes and "
@@ -501,7 +503,8 @@ def main():
         tmp_pairs = sym_dir / "pairs.txt"
         tmp_pairs.write_text("".join(f"{a} {b}\n" for a, b in pairs))
         sym_load = os.getloadavg()[0]
-        sym_summary, sym_msg = run_symcorr(args.symcorr, dataset, tmp_pairs, args.mode, sym_dir)
+        sym_summary, sym_msg = run_symcorr(args.symcorr, dataset, tmp_pairs, args.mode, sym_dir,
+                                           args.symcorr_method)
     if sym_summary is None:
         print(f"NOTE: {sym_msg} — the table has the peer only.", flush=True)
     else:
@@ -588,7 +591,7 @@ def main():
         s = summarise(errs[t], flips[t])
         if t == "symcorr":
             secs = sym_summary.get("seconds_per_pair")
-            label = f"symcorr ({args.mode}, scored here)"
+            label = f"symcorr {args.symcorr_method} ({args.mode}, scored here)"
         else:
             secs = float(np.mean(peer_secs[t]))
             label = t

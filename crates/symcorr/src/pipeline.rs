@@ -537,7 +537,7 @@ impl Default for PipelineOptions {
             prepare: PrepareOptions::default(),
             matching: MatchOptions::default(),
             mode: Mode::DEFAULT_SPARSE,
-            method: Method::Paper,
+            method: Method::Refined,
             refine: RefineOptions::default(),
         }
     }
@@ -697,6 +697,7 @@ mod tests {
         let mirror = mirror_map(&mesh);
         let pipeline = Pipeline::new(PipelineOptions {
             mode: Mode::Sparse { samples: 200 },
+            method: Method::Paper,
             ..PipelineOptions::default()
         });
         let p = pipeline.prepare(mesh.clone(), &sk).unwrap();
@@ -901,7 +902,12 @@ mod tests {
     }
 
     fn paper_rejects(m: &PreparedMesh) -> bool {
-        Pipeline::default().run(m, m).is_err()
+        Pipeline::new(PipelineOptions {
+            method: Method::Paper,
+            ..PipelineOptions::default()
+        })
+        .run(m, m)
+        .is_err()
     }
 
     /// Mirror map of a mesh symmetric under x ↦ −x: nearest vertex of the reflected position.

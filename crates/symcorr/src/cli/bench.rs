@@ -26,10 +26,10 @@ joints/NAME.json, optional mirror.txt (line i: mirror vertex of vertex i), pairs
 (`template target` per line).
 
 Examples:
-  symcorr bench fixtures/synth
-  symcorr bench fixtures/synth --mode dense --json summary.json --out-dir results/
-  symcorr bench fixtures/synth --no-skeleton-filter --json ablation.json
-  symcorr bench fixtures/synth --mode dense --method refined"
+  symcorr bench fixtures/synth/bodies
+  symcorr bench fixtures/synth/bodies --mode dense --json summary.json --out-dir results/
+  symcorr bench fixtures/synth/bodies --method paper --json paper.json
+  symcorr bench fixtures/synth/bodies --method paper --no-skeleton-filter --json ablation.json"
 )]
 pub struct BenchArgs {
     /// Dataset folder.

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr::dataset::{evaluate_pair, read_mesh, read_skeleton, BenchReport, Dataset, PairResult};
 use symcorr::output::{atomic_write, correspondence_json, curve_svg, pair_timings};
-use symcorr::{Mode, Pipeline, PipelineOptions};
+use symcorr::{Method, Mode, Pipeline, PipelineOptions};
 use symcorr_correspond::{cumulative_curve, table1_row, EvalGraph};
 
 /// Arguments of `symcorr demo`.
@@ -76,15 +76,19 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         },
         ..PipelineOptions::default()
     };
-    let pipeline = Pipeline::new(options.clone());
+    // Both methods run on the same prepared meshes: keep the data of each.
+    let prepare = symcorr::PrepareOptions {
+        refine_data: true,
+        paper_data: true,
+        ..options.prepare.clone()
+    };
     let start = Instant::now();
     let spin = Spinner::new("preparing meshes");
     let load = |name: &str| -> Result<(symcorr::PreparedMesh, f64), CliError> {
         let t = Instant::now();
         let mesh = read_mesh(&ds.meshes[name]).map_err(|e| CliError(e.to_string()))?;
         let sk = read_skeleton(&ds.joints[name], None).map_err(|e| CliError(e.to_string()))?;
-        let p = pipeline
-            .prepare(mesh, &sk)
+        let p = symcorr::PreparedMesh::new(mesh, &sk, &prepare)
             .map_err(|e| CliError::with(ds.meshes[name].display(), e))?;
         Ok((p, t.elapsed().as_secs_f64()))
     };
@@ -92,13 +96,22 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     let ((a, ta), (b, tb)) = (a?, b?);
     let graph = EvalGraph::new(&b.mesh);
     let mut results = Vec::new();
-    for filter in [true, false] {
-        spin.set(if filter {
-            "matching"
-        } else {
-            "matching (ablation)"
-        });
+    // symcorr's method first (its output is written), then the paper's pipeline with and
+    // without its skeleton filter (the ablation).
+    let variants = [
+        (Method::Refined, true, "refined", "symcorr refined"),
+        (Method::Paper, true, "paper", "paper, skeleton filter"),
+        (
+            Method::Paper,
+            false,
+            "paper, no filter",
+            "paper, no filter (ablation)",
+        ),
+    ];
+    for (method, filter, tag, _) in variants {
+        spin.set(&format!("matching ({tag})"));
         let mut o = options.clone();
+        o.method = method;
         o.matching.skeleton_filter = filter;
         let t = Instant::now();
         let corr = Pipeline::new(o)
@@ -109,11 +122,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         let row = table1_row(&evaluation.errors, &conf);
         results.push(PairResult {
             template: a_name.clone(),
-            target: if filter {
-                b_name.clone()
-            } else {
-                format!("{b_name} (no filter)")
-            },
+            target: format!("{b_name} ({tag})"),
             correspondence: corr,
             evaluation,
             table1_row: row,
@@ -140,7 +149,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     files.extend(write_coloured(&args.out, &a, &b, &main.correspondence)?);
     let curves: Vec<(String, Vec<(f64, f64)>)> = results
         .iter()
-        .zip(["with skeleton filter", "without (ablation)"])
+        .zip(variants.iter().map(|v| v.3))
         .map(|(r, l)| {
             (
                 l.to_string(),
@@ -176,7 +185,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         "Table 1 row (best 10 %…100 % by confidence): {}",
         row.join(" ")
     );
-    println!("seconds per pair include preparing both meshes (Laplacian, eigenpairs, si-HKS, base set, attachment)");
+    println!("seconds per pair include preparing both meshes once for both methods (Laplacian, eigenpairs, si-HKS, base set, landmarks, attachment); the files are symcorr refined's");
     for f in files {
         println!("wrote {}", f.display());
     }

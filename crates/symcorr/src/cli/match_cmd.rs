@@ -17,7 +17,7 @@ use symcorr_correspond::CandidateOptions;
 #[command(after_help = "Examples:
   symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json
   symcorr match a.ply b.ply --template-joints a.json --target-joints b.txt --out corr.json --dense --ply-out colours/
-  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out ablation.json --no-skeleton-filter
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out ablation.json --method paper --no-skeleton-filter
   symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json --dense --method refined")]
 pub struct MatchArgs {
     /// Template mesh (OBJ, OFF, PLY, glTF/GLB).
@@ -60,18 +60,19 @@ pub struct MatchArgs {
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum MethodArg {
     /// si-HKS candidates, skeleton filter, eq. 8 selection (the paper).
-    #[default]
     Paper,
-    /// Skeleton-landmark initial map + segment-constrained ZoomOut (dense by nature).
+    /// Skeleton-landmark initial map + segment-constrained ZoomOut (the default: more accurate
+    /// and faster than the paper's pipeline, see the README).
+    #[default]
     Refined,
 }
 
 /// Method options shared by `match` and `bench`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MethodArgs {
-    /// Matching method: `paper` (the paper's pipeline) or `refined` (landmark coordinates and
-    /// segment-constrained ZoomOut, beyond the paper).
-    #[arg(long, value_enum, default_value_t = MethodArg::Paper)]
+    /// Matching method: `refined` (landmark coordinates and segment-constrained ZoomOut,
+    /// beyond the paper; default) or `paper` (the paper's pipeline, Table 1).
+    #[arg(long, value_enum, default_value_t = MethodArg::Refined)]
     pub method: MethodArg,
     /// Template points in sparse mode (farthest-point sample).
     #[arg(long, default_value_t = symcorr::DEFAULT_SAMPLES)]
@@ -107,6 +108,13 @@ impl MethodArgs {
     pub fn pipeline(&self, dense: bool) -> Result<Pipeline, CliError> {
         if !dense && self.samples == 0 {
             return Err(CliError("--samples must be at least 1".into()));
+        }
+        if self.no_skeleton_filter && self.method == MethodArg::Refined {
+            // The refined method's segment pools are its skeleton constraint; silently ignoring
+            // the ablation switch would report a method that was not run.
+            return Err(CliError(
+                "--no-skeleton-filter is the paper pipeline's ablation: add --method paper".into(),
+            ));
         }
         if self.candidates == 0 {
             return Err(CliError("--candidates must be at least 1".into()));
