@@ -11,6 +11,13 @@
 //! * [`Pipeline::run`] — one pair: template points (farthest-point sample or every vertex),
 //!   si-HKS candidates, the skeleton filter, eq. 8 selection (symcorr-correspond).
 //!
+//! Two methods share these halves ([`Method`]): [`Method::Refined`], the default (skeleton
+//! landmark coordinates + si-HKS initial map within segment pools, then segment-constrained
+//! ZoomOut; DESIGN.md Algorithm 7, symcorr-correspond's `refine_dense`), and [`Method::Paper`],
+//! the paper's pipeline above. Every mesh first goes through the default repair
+//! (`symcorr_mesh::repair`); the stages work on the repaired mesh and every output speaks the
+//! input file's vertex ids ([`PreparedMesh::input_id`]).
+//!
 //! [`dataset`] runs a benchmark folder in DESIGN.md's layout and [`output`] writes the
 //! `symcorr.correspondence/1` JSON, coloured meshes and the error-curve plot.
 //!
@@ -39,9 +46,10 @@
 //!   `wall_seconds` for the whole run (meshes prepared once each).
 //! * The demo reads its fixtures at run time from `$SYMCORR_FIXTURES`, else the repository's
 //!   `fixtures/synth/bodies` (path fixed at compile time), or `--fixtures DIR`.
-//! * The pipeline is ready for a refinement stage after selection (DESIGN.md, Algorithm 7):
-//!   [`Correspondence`] holds plain matches, and everything a refinement needs per mesh
-//!   (labels, refined joints, descriptors) is in [`PreparedMesh`].
+//! * **Default method**: refined, because it measured better than the paper's pipeline on
+//!   every generated dataset except single-view scans (README, Measured); `--method paper`
+//!   reproduces the paper, and its ablation `--no-skeleton-filter` is refused with the refined
+//!   method rather than ignored.
 
 pub mod dataset;
 pub mod output;
