@@ -63,11 +63,8 @@ pub fn correspondence_json(
         .collect();
     // One label per input vertex; `null` for a vertex the repair removed.
     let labels = |p: &PreparedMesh| -> Vec<Value> {
-        let mut out = vec![Value::Null; p.input_mesh().num_vertices()];
-        for (v, s) in p.labels().iter().enumerate() {
-            out[p.input_id(v as u32) as usize] = json!(s.index());
-        }
-        out
+        let l: Vec<Value> = p.labels().iter().map(|s| json!(s.index())).collect();
+        p.to_input(&l, Value::Null)
     };
     let timings: serde_json::Map<String, Value> = timings
         .iter()
@@ -196,11 +193,7 @@ fn d2(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// Per-vertex colours of `p`'s repaired mesh spread onto the input mesh's vertices (grey for a
 /// vertex the repair removed), so that a coloured output has the input file's vertex ids.
 pub fn input_colours(p: &PreparedMesh, colours: &[[u8; 3]]) -> Vec<[u8; 3]> {
-    let mut out = vec![[128u8, 128, 128]; p.input_mesh().num_vertices()];
-    for (v, c) in colours.iter().enumerate() {
-        out[p.input_id(v as u32) as usize] = *c;
-    }
-    out
+    p.to_input(colours, [128u8, 128, 128])
 }
 
 /// Segment colours (symcorr-attach's palette) per vertex.

@@ -222,6 +222,17 @@ impl PreparedMesh {
         self.input.as_ref().unwrap_or(&self.mesh)
     }
 
+    /// Per-vertex `values` of [`PreparedMesh::mesh`] carried onto the input mesh's vertices,
+    /// `fill` where the repair removed a vertex: what every output written in the input file's
+    /// ids needs.
+    pub fn to_input<T: Clone>(&self, values: &[T], fill: T) -> Vec<T> {
+        let mut out = vec![fill; self.input_mesh().num_vertices()];
+        for (v, x) in values.iter().enumerate() {
+            out[self.input_id(v as u32) as usize] = x.clone();
+        }
+        out
+    }
+
     /// `input → prepared` id map: `None` for input vertices the repair removed. A split vertex
     /// maps to its first copy.
     pub fn prepared_ids(&self) -> Vec<Option<u32>> {
@@ -531,6 +542,20 @@ pub struct PipelineOptions {
     pub refine: RefineOptions,
 }
 
+impl PipelineOptions {
+    /// Refuses combinations that would silently run something else than asked: the skeleton
+    /// filter switch (`matching.skeleton_filter = false`, the paper's ablation) has no meaning
+    /// for [`Method::Refined`], whose segment pools are its skeleton constraint.
+    pub fn check(&self) -> Result<(), PipelineError> {
+        if self.method == Method::Refined && !self.matching.skeleton_filter {
+            return Err(PipelineError::InvalidOption(
+                "switching the skeleton filter off is the paper pipeline's ablation; the refined method always keeps matches on their segment".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for PipelineOptions {
     fn default() -> Self {
         PipelineOptions {
@@ -627,6 +652,7 @@ impl Pipeline {
         template: &PreparedMesh,
         target: &PreparedMesh,
     ) -> Result<Correspondence, PipelineError> {
+        self.options.check()?;
         let t = Instant::now();
         let points = self.points(template);
         let mut timings = vec![("sampling".to_string(), t.elapsed().as_secs_f64())];
@@ -908,6 +934,19 @@ mod tests {
         })
         .run(m, m)
         .is_err()
+    }
+
+    /// The ablation switch belongs to the paper's method; with the refined method it is an
+    /// error, not a silently different run.
+    #[test]
+    fn refined_method_refuses_the_filter_ablation() {
+        let mut o = PipelineOptions::default();
+        assert_eq!(o.method, Method::Refined);
+        assert!(o.check().is_ok());
+        o.matching.skeleton_filter = false;
+        assert!(matches!(o.check(), Err(PipelineError::InvalidOption(_))));
+        o.method = Method::Paper;
+        assert!(o.check().is_ok());
     }
 
     /// Mirror map of a mesh symmetric under x ↦ −x: nearest vertex of the reflected position.

@@ -109,13 +109,6 @@ impl MethodArgs {
         if !dense && self.samples == 0 {
             return Err(CliError("--samples must be at least 1".into()));
         }
-        if self.no_skeleton_filter && self.method == MethodArg::Refined {
-            // The refined method's segment pools are its skeleton constraint; silently ignoring
-            // the ablation switch would report a method that was not run.
-            return Err(CliError(
-                "--no-skeleton-filter is the paper pipeline's ablation: add --method paper".into(),
-            ));
-        }
         if self.candidates == 0 {
             return Err(CliError("--candidates must be at least 1".into()));
         }
@@ -159,6 +152,12 @@ impl MethodArgs {
         }
         if let Some(f) = self.si_hks_frequencies {
             o.prepare.si_hks.frequencies = f;
+        }
+        // The library's rule, checked before any file is read; the message names the flags.
+        if o.check().is_err() {
+            return Err(CliError(
+                "--no-skeleton-filter is the paper pipeline's ablation: add --method paper".into(),
+            ));
         }
         Ok(Pipeline::new(o))
     }
