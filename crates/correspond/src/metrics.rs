@@ -331,21 +331,7 @@ mod tests {
 
     /// A flat `w × h` grid of unit squares (two triangles each) in the z = 0 plane.
     fn grid(w: usize, h: usize) -> TriMesh {
-        let mut p = Vec::new();
-        for j in 0..=h {
-            for i in 0..=w {
-                p.push([i as f64, j as f64, 0.0]);
-            }
-        }
-        let id = |i: usize, j: usize| (j * (w + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..h {
-            for i in 0..w {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        TriMesh::new(p, t).unwrap()
+        symcorr_mesh::testmesh::grid(w, h, [1.0, 1.0])
     }
 
     #[test]

@@ -69,6 +69,8 @@ mod error;
 pub mod geometry;
 pub mod io;
 pub mod subdivide;
+#[doc(hidden)]
+pub mod testmesh;
 mod validate;
 
 pub use error::MeshError;

@@ -144,72 +144,11 @@ pub fn loop_subdivide(mesh: &TriMesh) -> Result<Subdivided, MeshError> {
 mod tests {
     use super::*;
     use crate::geometry::norm;
+    use crate::testmesh::icosahedron;
 
-    fn icosahedron() -> TriMesh {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let raw = [
-            [-1.0, t, 0.0],
-            [1.0, t, 0.0],
-            [-1.0, -t, 0.0],
-            [1.0, -t, 0.0],
-            [0.0, -1.0, t],
-            [0.0, 1.0, t],
-            [0.0, -1.0, -t],
-            [0.0, 1.0, -t],
-            [t, 0.0, -1.0],
-            [t, 0.0, 1.0],
-            [-t, 0.0, -1.0],
-            [-t, 0.0, 1.0],
-        ];
-        let positions = raw
-            .iter()
-            .map(|v: &[f64; 3]| {
-                let l = norm(*v);
-                [v[0] / l, v[1] / l, v[2] / l]
-            })
-            .collect();
-        let triangles = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        TriMesh::new(positions, triangles).unwrap()
-    }
-
-    /// A triangulated n×n grid in the plane z = 0 (with boundary).
+    /// A triangulated n×n grid in the plane z = 0 (with boundary), cells 1 × 0.7.
     fn grid(n: usize) -> TriMesh {
-        let mut positions = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                positions.push([i as f64, j as f64 * 0.7, 0.0]);
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut triangles = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        TriMesh::new(positions, triangles).unwrap()
+        crate::testmesh::grid(n, n, [1.0, 0.7])
     }
 
     #[test]

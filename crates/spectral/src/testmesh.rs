@@ -1,58 +1,12 @@
 //! Synthetic test meshes built from first principles, shared by this crate's tests, benches and
 //! examples (not part of the public API: hidden from the docs, may change without notice).
 //!
-//! The generators only use the mesh crate's `TriMesh::new`; nothing here depends on the spectral
-//! code under test.
+//! The generators only use the mesh crate (`TriMesh::new`, the icosahedron of its `testmesh`);
+//! nothing here depends on the spectral code under test.
 
 use std::collections::HashMap;
+use symcorr_mesh::testmesh::{normalize, ICO_FACES, ICO_VERTICES};
 use symcorr_mesh::TriMesh;
-
-const PHI: f64 = 1.618_033_988_749_895; // (1 + √5) / 2
-
-/// The 12 vertices of a regular icosahedron (not normalised).
-const ICO_VERTICES: [[f64; 3]; 12] = [
-    [-1.0, PHI, 0.0],
-    [1.0, PHI, 0.0],
-    [-1.0, -PHI, 0.0],
-    [1.0, -PHI, 0.0],
-    [0.0, -1.0, PHI],
-    [0.0, 1.0, PHI],
-    [0.0, -1.0, -PHI],
-    [0.0, 1.0, -PHI],
-    [PHI, 0.0, -1.0],
-    [PHI, 0.0, 1.0],
-    [-PHI, 0.0, -1.0],
-    [-PHI, 0.0, 1.0],
-];
-
-/// The 20 outward-oriented faces of the icosahedron.
-const ICO_FACES: [[u32; 3]; 20] = [
-    [0, 11, 5],
-    [0, 5, 1],
-    [0, 1, 7],
-    [0, 7, 10],
-    [0, 10, 11],
-    [1, 5, 9],
-    [5, 11, 4],
-    [11, 10, 2],
-    [10, 7, 6],
-    [7, 1, 8],
-    [3, 9, 4],
-    [3, 4, 2],
-    [3, 2, 6],
-    [3, 6, 8],
-    [3, 8, 9],
-    [4, 9, 5],
-    [2, 4, 11],
-    [6, 2, 10],
-    [8, 6, 7],
-    [9, 8, 1],
-];
-
-fn normalize(p: [f64; 3]) -> [f64; 3] {
-    let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-    [p[0] / l, p[1] / l, p[2] / l]
-}
 
 fn build(pos: Vec<[f64; 3]>, tris: Vec<[u32; 3]>) -> TriMesh {
     // Invariant: every generator here emits finite positions and in-range, non-repeated
