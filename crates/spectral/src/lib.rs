@@ -12,6 +12,8 @@
 //! * Descriptors: [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010), [`wks`] (Aubry et al. 2011).
 //! * [`gaussian_curvature`] (paper eq. 4), geodesics by [`dijkstra`] / [`EdgeGraph`] (paper
 //!   eq. 5–6) and the heat method ([`HeatGeodesics`]), and the paper's [`base_vertex_set`] (§3.3).
+//! * [`cache`]: eigenpairs on disk (`*.symcorr-eigs`, versioned, keyed by a SHA-256 of the mesh
+//!   and the solver settings, checksummed), [`cache::eigenpairs_cached`] around [`eigenpairs`].
 //!
 //! ```
 //! use symcorr_mesh::TriMesh;
@@ -50,7 +52,12 @@
 //! * WKS defaults (Aubry et al. 2011): 100 energies, σ = 6× their spacing, constant pairs excluded.
 //! * Base vertex set radius is in units of `√(total area)`; geodesics there are Dijkstra.
 //! * Source indices out of range are errors, not panics (so [`dijkstra`] returns a `Result`).
+//! * Eigenpair cache: a file is used only when its key (mesh bits, `k`, every [`EigenOptions`]
+//!   field, the Laplacian constants, [`cache::SOLVER_REVISION`]) and the lumped mass match bit
+//!   for bit; anything else (stale, corrupted, another format version) is recomputed and the
+//!   file rewritten. Timings stored in a file are those of the original solve.
 
+pub mod cache;
 mod curvature;
 mod descriptors;
 mod eigen;
