@@ -101,6 +101,7 @@
 //! * **Metric geodesics**: edge-path Dijkstra stopped when the ground-truth vertex is settled
 //!   (see [`metrics`](crate::evaluate)).
 
+mod articulated;
 mod candidates;
 mod filter;
 mod landmarks;
@@ -110,6 +111,10 @@ mod sample;
 mod selection;
 mod symmetry;
 
+pub use articulated::{
+    articulated_match, bone_transforms, outward_normals, skin, ArticulatedMatches,
+    ArticulatedOptions, ArticulatedSide, BoneTransform, Mat3,
+};
 pub use candidates::{candidates, Candidate, CandidateOptions, Descriptors};
 pub use filter::{skeleton_filter, FilterStats};
 pub use landmarks::{joint_landmarks, landmark_coordinates, skeleton_landmarks};

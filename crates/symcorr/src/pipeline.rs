@@ -5,15 +5,38 @@ use crate::PipelineError;
 use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Attachment, Joint, Segment, Skeleton};
 use symcorr_correspond::{
-    base_profile, farthest_point_sample, landmark_coordinates, match_points, refine_dense,
-    refine_symmetry_plane, skeleton_landmarks, Descriptors, FilterStats, Match, MatchOptions,
-    RefineOptions, RefineSide, Side, SpectralBasis,
+    articulated_match, base_profile, coverage, farthest_point_sample, landmark_coordinates,
+    match_points, outward_normals, refine_dense, refine_symmetry_plane, skeleton_landmarks,
+    ArticulatedMatches, ArticulatedOptions, ArticulatedSide, Descriptors, FilterStats, Match,
+    MatchOptions, RefineOptions, RefineSide, Side, SpectralBasis,
 };
 use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
 use symcorr_spectral::{
     base_vertex_set, eigenpairs, gaussian_curvature, si_hks, EdgeGraph, EigenOptions,
     HeatGeodesics, Laplacian, SiHksParams,
 };
+
+/// Boundary length over √area above which a mesh counts as a partial view
+/// ([`PreparedMesh::is_partial`]). Measured: 0 on the generated bodies, 25–34 on their
+/// virtual-Kinect scans (58 views); a full-body scan with holes at the soles and the crown
+/// stays far below 5.
+pub const PARTIAL_BOUNDARY_RATIO: f64 = 5.0;
+
+fn boundary_length(mesh: &TriMesh) -> f64 {
+    mesh.boundary_loops()
+        .iter()
+        .map(|l| {
+            (0..l.len())
+                .map(|i| {
+                    symcorr_mesh::geometry::dist(
+                        mesh.positions[l[i] as usize],
+                        mesh.positions[l[(i + 1) % l.len()] as usize],
+                    )
+                })
+                .sum::<f64>()
+        })
+        .sum()
+}
 
 /// Sparse (a farthest-point sample of template points) or dense (every template vertex).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,6 +148,9 @@ pub struct PreparedMesh {
     pub halves: Vec<i8>,
     /// What the refined method needs (with [`PrepareOptions::refine_data`]).
     pub refine: Option<RefineData>,
+    /// Total length of the mesh's boundary edges (0 for a closed surface): a single-view scan
+    /// has a long one ([`PreparedMesh::is_partial`]).
+    pub boundary_length: f64,
     /// Seconds per stage (`laplacian`, `eigenpairs`, `si_hks`, `curvature`, `base_set`,
     /// `base_profile`, `attachment`). Attachment runs in parallel with the spectral stages.
     pub timings: Vec<(String, f64)>,
@@ -184,7 +210,9 @@ impl PreparedMesh {
             Some(r) => Some(RefineData::new(&mesh, &attachment, r, &mut timings)?),
             None => None,
         };
+        let boundary_length = boundary_length(&mesh);
         Ok(PreparedMesh {
+            boundary_length,
             halves,
             refine,
             area,
@@ -199,6 +227,14 @@ impl PreparedMesh {
             attachment,
             timings,
         })
+    }
+
+    /// True when the mesh is a partial view of a body (a single-view scan): its boundary is
+    /// longer than [`PARTIAL_BOUNDARY_RATIO`]·√area. A closed body has no boundary; a full-body
+    /// scan with a few holes (soles, crown) stays well below; the silhouette of one view alone
+    /// is several body heights long.
+    pub fn is_partial(&self) -> bool {
+        self.boundary_length > PARTIAL_BOUNDARY_RATIO * self.area.sqrt()
     }
 
     /// Segment label per vertex.
@@ -540,6 +576,24 @@ pub struct PipelineOptions {
     pub method: Method,
     /// Options of the refined method.
     pub refine: RefineOptions,
+    /// When the refined method treats the target as a partial view (articulated alignment
+    /// instead of spectral refinement).
+    pub partial: PartialTarget,
+    /// Options of the refined method on partial targets.
+    pub articulated: ArticulatedOptions,
+}
+
+/// How [`Pipeline::run`]'s refined method treats the target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PartialTarget {
+    /// Partial when [`PreparedMesh::is_partial`] says so.
+    #[default]
+    Auto,
+    /// Always a partial view: skeleton-driven articulated alignment
+    /// (symcorr-correspond's `articulated_match`).
+    Yes,
+    /// Always a whole surface: landmarks, si-HKS and ZoomOut (`refine_dense`).
+    No,
 }
 
 impl PipelineOptions {
@@ -564,6 +618,8 @@ impl Default for PipelineOptions {
             mode: Mode::DEFAULT_SPARSE,
             method: Method::Refined,
             refine: RefineOptions::default(),
+            partial: PartialTarget::Auto,
+            articulated: ArticulatedOptions::default(),
         }
     }
 }
@@ -596,6 +652,59 @@ pub struct Correspondence {
     pub timings: Vec<(String, f64)>,
     /// Refined method: fraction of target vertices hit by the dense map (`None` for the paper's).
     pub coverage: Option<f64>,
+    /// Partial targets (refined method): per match, whether the target shows the template
+    /// point at all (`false`: no counterpart; the match is then only the nearest guess and has
+    /// confidence 0). `None` when the target is a whole surface.
+    pub has_counterpart: Option<Vec<bool>>,
+}
+
+/// The refined method on a partial target: skeleton-driven articulated alignment of the
+/// template onto the target (symcorr-correspond's `articulated_match`).
+fn articulated(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    options: &ArticulatedOptions,
+) -> Result<ArticulatedMatches, PipelineError> {
+    let graph = match &target.refine {
+        Some(r) => std::borrow::Cow::Borrowed(&r.graph),
+        None => std::borrow::Cow::Owned(EdgeGraph::new(&target.mesh)),
+    };
+    let normals = |m: &PreparedMesh| {
+        outward_normals(
+            &m.mesh.positions,
+            m.mesh.vertex_normals(),
+            &m.attachment.labels,
+            &m.attachment.joints,
+        )
+    };
+    let (tn, qn) = (normals(template), normals(target));
+    let halves = |m: &'_ PreparedMesh| -> Vec<i8> {
+        m.refine
+            .as_ref()
+            .map_or(m.halves.clone(), |r| r.halves.clone())
+    };
+    let (th, qh) = (halves(template), target.halves.clone());
+    fn side<'a>(
+        m: &'a PreparedMesh,
+        normals: &'a [[f64; 3]],
+        halves: &'a [i8],
+    ) -> ArticulatedSide<'a> {
+        ArticulatedSide {
+            positions: &m.mesh.positions,
+            normals,
+            labels: &m.attachment.labels,
+            halves: Some(halves),
+            joints: &m.attachment.joints,
+            area: m.area,
+        }
+    }
+    Ok(articulated_match(
+        &side(template, &tn, &th),
+        &template.attachment.weights,
+        &side(target, &qn, &qh),
+        &graph,
+        options,
+    )?)
 }
 
 /// The paper's pipeline, configured once and run on many pairs.
@@ -656,6 +765,38 @@ impl Pipeline {
         let t = Instant::now();
         let points = self.points(template);
         let mut timings = vec![("sampling".to_string(), t.elapsed().as_secs_f64())];
+        let partial = match self.options.partial {
+            PartialTarget::Auto => target.is_partial(),
+            PartialTarget::Yes => true,
+            PartialTarget::No => false,
+        };
+        if self.options.method == Method::Refined && partial {
+            let out = articulated(template, target, &self.options.articulated)?;
+            timings.extend(out.timings.iter().map(|(n, s)| (n.to_string(), *s)));
+            fn pick<T: Copy>(mode: Mode, points: &[u32], v: Vec<T>) -> Vec<T> {
+                match mode {
+                    Mode::Dense => v,
+                    Mode::Sparse { .. } => points.iter().map(|&p| v[p as usize]).collect(),
+                }
+            }
+            let coverage = coverage(
+                &out.matches
+                    .iter()
+                    .zip(&out.has_counterpart)
+                    .filter(|(_, &h)| h)
+                    .map(|(m, _)| m.target)
+                    .collect::<Vec<_>>(),
+                target.num_vertices(),
+            );
+            return Ok(Correspondence {
+                matches: pick(self.options.mode, &points, out.matches),
+                filter: FilterStats::default(),
+                mean_candidates: 1.0,
+                timings,
+                coverage: Some(coverage),
+                has_counterpart: Some(pick(self.options.mode, &points, out.has_counterpart)),
+            });
+        }
         if self.options.method == Method::Refined {
             fn side(m: &PreparedMesh) -> Result<RefineSide<'_>, PipelineError> {
                 let r = m.refine.as_ref().ok_or_else(|| {
@@ -688,6 +829,7 @@ impl Pipeline {
                 mean_candidates: 1.0,
                 timings,
                 coverage: Some(out.coverage),
+                has_counterpart: None,
             });
         }
         let out = match_points(
@@ -703,6 +845,7 @@ impl Pipeline {
             mean_candidates: out.mean_candidates,
             timings,
             coverage: None,
+            has_counterpart: None,
         })
     }
 }

@@ -1,0 +1,651 @@
+//! Skeleton-driven articulated alignment for partial targets (single-view scans; DESIGN.md,
+//! Algorithm 7, "partial, noisy single-view scans").
+//!
+//! Intrinsic descriptors (si-HKS, Laplace–Beltrami bases, geodesic landmark coordinates) change
+//! wholesale when half of the surface is missing: a single-view scan has a long boundary, holes
+//! at every occlusion, and geodesics that run around them. The skeleton does not: both meshes
+//! come with their joints in their own frames. [`articulated_match`] therefore works
+//! *extrinsically*:
+//!
+//! 1. **Pose the template** onto the target's skeleton by linear blend skinning with the
+//!    template's bone-heat weights (symcorr-attach): each bone gets a rigid transform from the
+//!    two skeletons ([`bone_transforms`]: the pelvis and the chest get full frames from the hips
+//!    and shoulders, every other bone the smallest rotation taking its direction in the
+//!    template onto the target's, composed down the kinematic chain).
+//! 2. **Articulated ICP**: every template vertex is matched to the nearest target vertex of its
+//!    segment pool ([`SegmentPools`]: never the other side of the body) in position + normal
+//!    space; pairs too far apart or facing away are rejected (the template's back side has no
+//!    counterpart on a front view); each bone's transform is re-fitted by weighted Kabsch
+//!    (Arun et al. 1987) to its vertices' pairs plus its two joints as anchors, then the
+//!    template is re-skinned. Distance gates shrink over the iterations.
+//! 3. **Map**: each template vertex takes the nearest target vertex of its pool; it *has a
+//!    counterpart* when that vertex is within the final gate and faces the same way.
+//!
+//! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
+
+use crate::{CorrespondError, SegmentPools};
+use faer::Mat;
+use rayon::prelude::*;
+use symcorr_attach::{BoneWeights, Joint, Segment, Skeleton, BONES};
+use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
+
+/// A 3×3 matrix, row-major.
+pub type Mat3 = [[f64; 3]; 3];
+
+const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// A rigid transform `x ↦ R·x + t` of one bone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoneTransform {
+    /// Rotation `R` (row-major).
+    pub rotation: Mat3,
+    /// Translation `t`.
+    pub translation: [f64; 3],
+}
+
+impl BoneTransform {
+    /// The identity.
+    pub const IDENTITY: BoneTransform = BoneTransform {
+        rotation: IDENTITY,
+        translation: [0.0; 3],
+    };
+
+    /// `R·x + t`.
+    pub fn apply(&self, x: [f64; 3]) -> [f64; 3] {
+        add(mat_vec(&self.rotation, x), self.translation)
+    }
+
+    /// `R·n` (a direction).
+    pub fn rotate(&self, n: [f64; 3]) -> [f64; 3] {
+        mat_vec(&self.rotation, n)
+    }
+}
+
+fn mat_vec(m: &Mat3, v: [f64; 3]) -> [f64; 3] {
+    [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
+}
+
+fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    out
+}
+
+fn transpose(a: &Mat3) -> Mat3 {
+    let mut out = [[0.0; 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = a[j][i];
+        }
+    }
+    out
+}
+
+fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
+    let n = norm(v);
+    (n > 1e-12 && n.is_finite()).then(|| scale(v, 1.0 / n))
+}
+
+/// The orthonormal frame (as the columns of a matrix) with first axis along `x` and second
+/// axis in the plane of `x` and `y`; `None` when they are (nearly) parallel.
+fn frame(x: [f64; 3], y: [f64; 3]) -> Option<Mat3> {
+    let e1 = unit(x)?;
+    let e2 = unit(sub(y, scale(e1, dot(e1, y))))?;
+    if norm(sub(y, scale(e1, dot(e1, y)))) < 1e-3 * norm(y) {
+        return None;
+    }
+    let e3 = cross(e1, e2);
+    Some([
+        [e1[0], e2[0], e3[0]],
+        [e1[1], e2[1], e3[1]],
+        [e1[2], e2[2], e3[2]],
+    ])
+}
+
+/// The smallest rotation taking unit vector `a` onto unit vector `b` (Rodrigues); the identity
+/// when either is zero, a half turn about an axis normal to `a` when they are opposite.
+fn swing(a: [f64; 3], b: [f64; 3]) -> Mat3 {
+    let (Some(a), Some(b)) = (unit(a), unit(b)) else {
+        return IDENTITY;
+    };
+    let c = dot(a, b);
+    let v = cross(a, b);
+    if c < -1.0 + 1e-9 {
+        // Opposite: rotate by π about any axis normal to a.
+        let helper = if a[0].abs() < 0.9 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let Some(k) = unit(cross(a, helper)) else {
+            return IDENTITY;
+        };
+        // R = 2kkᵀ − I.
+        let mut r = [[0.0; 3]; 3];
+        for (i, row) in r.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = 2.0 * k[i] * k[j] - if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        return r;
+    }
+    // R = I + [v]× + [v]×² / (1 + c).
+    let vx = [[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]];
+    let vx2 = mat_mul(&vx, &vx);
+    let mut r = IDENTITY;
+    for i in 0..3 {
+        for j in 0..3 {
+            r[i][j] += vx[i][j] + vx2[i][j] / (1.0 + c);
+        }
+    }
+    r
+}
+
+/// One rigid transform per bone of [`BONES`] that carries the `from` skeleton's bones onto the
+/// `to` skeleton's.
+///
+/// The pelvis bones (hip centre → spine and → each hip) share the rotation between the two
+/// pelvis frames (hip line, then spine direction); the chest bones (spine → shoulder centre)
+/// the rotation between the chest frames (shoulder line, then spine). Every other bone takes
+/// the smallest rotation carrying its parent-rotated direction onto the target's direction,
+/// composed with its parent bone's rotation (twist about a limb is not observable from the
+/// joints; the ICP of [`articulated_match`] fits it). Each translation puts the bone's midpoint
+/// on the target bone's midpoint, splitting a length difference between both ends.
+///
+/// ```
+/// use symcorr_attach::Skeleton;
+/// use symcorr_correspond::bone_transforms;
+/// let s = symcorr_attach::testbody::t_pose(1.0);
+/// let t = bone_transforms(&s, &s);
+/// let x = [0.1, 0.2, 0.3];
+/// for b in t {
+///     let y = b.apply(x);
+///     assert!((0..3).all(|i| (y[i] - x[i]).abs() < 1e-12));
+/// }
+/// ```
+pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> [BoneTransform; 19] {
+    let pf = |j: Joint| from.position(j);
+    let pt = |j: Joint| to.position(j);
+    let frame_rotation = |x: (Joint, Joint), y: (Joint, Joint)| -> Option<Mat3> {
+        let f = frame(sub(pf(x.1), pf(x.0)), sub(pf(y.1), pf(y.0)))?;
+        let t = frame(sub(pt(x.1), pt(x.0)), sub(pt(y.1), pt(y.0)))?;
+        Some(mat_mul(&t, &transpose(&f)))
+    };
+    use Joint as J;
+    let pelvis = frame_rotation((J::HipRight, J::HipLeft), (J::HipCenter, J::Spine))
+        .unwrap_or_else(|| {
+            swing(
+                sub(pf(J::Spine), pf(J::HipCenter)),
+                sub(pt(J::Spine), pt(J::HipCenter)),
+            )
+        });
+    let chest = frame_rotation(
+        (J::ShoulderRight, J::ShoulderLeft),
+        (J::Spine, J::ShoulderCenter),
+    )
+    .unwrap_or(pelvis);
+    let mut rotations: [Mat3; 19] = [IDENTITY; 19];
+    for (b, &(p, c)) in BONES.iter().enumerate() {
+        rotations[b] = match (p, c) {
+            (J::HipCenter, _) => pelvis,
+            (J::Spine, J::ShoulderCenter) => chest,
+            (J::ShoulderCenter, _) => {
+                let d = mat_vec(&chest, sub(pf(c), pf(p)));
+                mat_mul(&swing(d, sub(pt(c), pt(p))), &chest)
+            }
+            _ => {
+                // Parent bone: the one ending at p (BONES lists parents first).
+                let parent = BONES.iter().position(|&(_, pc)| pc == p).unwrap_or(0);
+                let r = rotations[parent];
+                let d = mat_vec(&r, sub(pf(c), pf(p)));
+                mat_mul(&swing(d, sub(pt(c), pt(p))), &r)
+            }
+        };
+    }
+    let mut out = [BoneTransform::IDENTITY; 19];
+    for (b, &(p, c)) in BONES.iter().enumerate() {
+        let r = rotations[b];
+        let mid_from = scale(add(pf(p), pf(c)), 0.5);
+        let mid_to = scale(add(pt(p), pt(c)), 0.5);
+        out[b] = BoneTransform {
+            rotation: r,
+            translation: sub(mid_to, mat_vec(&r, mid_from)),
+        };
+    }
+    out
+}
+
+/// Linear blend skinning: `x'_v = Σ_b w_vb (R_b x_v + t_b)`, normals `n'_v ∝ Σ_b w_vb R_b n_v`.
+///
+/// `weights` has one row per vertex (bone indexes into [`BONES`]), `transforms` one entry per
+/// bone. Returns the posed positions and unit normals.
+pub fn skin(
+    positions: &[[f64; 3]],
+    normals: &[[f64; 3]],
+    weights: &BoneWeights,
+    transforms: &[BoneTransform; 19],
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    positions
+        .par_iter()
+        .zip(normals.par_iter())
+        .enumerate()
+        .map(|(v, (&x, &n))| {
+            let (mut px, mut pn) = ([0.0; 3], [0.0; 3]);
+            for &(b, w) in weights.row(v) {
+                px = add(px, scale(transforms[b].apply(x), w));
+                pn = add(pn, scale(transforms[b].rotate(n), w));
+            }
+            (px, unit(pn).unwrap_or(n))
+        })
+        .unzip()
+}
+
+/// Weighted Kabsch: the rotation and translation minimising `Σ w_i |R a_i + t − b_i|²`;
+/// `None` with fewer than three points of positive weight or a degenerate cross-covariance.
+fn kabsch(pairs: &[([f64; 3], [f64; 3], f64)]) -> Option<BoneTransform> {
+    let wsum: f64 = pairs.iter().map(|p| p.2).sum();
+    if pairs.iter().filter(|p| p.2 > 0.0).count() < 3 || wsum <= 0.0 {
+        return None;
+    }
+    let mut ca = [0.0; 3];
+    let mut cb = [0.0; 3];
+    for &(a, b, w) in pairs {
+        ca = add(ca, scale(a, w / wsum));
+        cb = add(cb, scale(b, w / wsum));
+    }
+    // H = Σ w (a − ā)(b − b̄)ᵀ.
+    let mut h = Mat::<f64>::zeros(3, 3);
+    for &(a, b, w) in pairs {
+        let (da, db) = (sub(a, ca), sub(b, cb));
+        for i in 0..3 {
+            for j in 0..3 {
+                h[(i, j)] += w * da[i] * db[j];
+            }
+        }
+    }
+    let svd = h.svd().ok()?;
+    let (u, s, v) = (svd.U(), svd.S(), svd.V());
+    if !(s[0] > 0.0) || s[1] < 1e-9 * s[0] {
+        return None;
+    }
+    // R = V diag(1, 1, det(V Uᵀ)) Uᵀ.
+    let mut r = [[0.0; 3]; 3];
+    let vu = |i: usize, j: usize, k: usize| v[(i, k)] * u[(j, k)];
+    let det = {
+        let mut m = [[0.0; 3]; 3];
+        for (i, row) in m.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = (0..3).map(|k| vu(i, j, k)).sum();
+            }
+        }
+        dot(m[0], cross(m[1], m[2]))
+    };
+    let d = [1.0, 1.0, det.signum()];
+    for (i, row) in r.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = (0..3).map(|k| d[k] * vu(i, j, k)).sum();
+        }
+    }
+    if r.iter().flatten().any(|x| !x.is_finite()) {
+        return None;
+    }
+    Some(BoneTransform {
+        rotation: r,
+        translation: sub(cb, mat_vec(&r, ca)),
+    })
+}
+
+/// `normals` (one per vertex), all negated when most of them point *into* the body: towards
+/// the bone of the vertex's segment rather than away from it. A scan's triangles may be wound
+/// either way; the skeleton says which side is out. One global decision, never per vertex
+/// (noisy normals near a bone would otherwise flip individually).
+pub fn outward_normals(
+    positions: &[[f64; 3]],
+    normals: Vec<[f64; 3]>,
+    labels: &[Segment],
+    joints: &Skeleton,
+) -> Vec<[f64; 3]> {
+    let mut balance = 0.0;
+    for ((&x, n), s) in positions.iter().zip(&normals).zip(labels) {
+        let Some(&(a, b)) = s.bones().first() else {
+            continue;
+        };
+        let (a, b) = (joints.position(a), joints.position(b));
+        let ab = sub(b, a);
+        let len2 = dot(ab, ab);
+        let t = if len2 > 0.0 {
+            (dot(sub(x, a), ab) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let out = sub(x, add(a, scale(ab, t)));
+        balance += dot(*n, out).signum();
+    }
+    if balance < 0.0 {
+        normals.into_iter().map(|n| scale(n, -1.0)).collect()
+    } else {
+        normals
+    }
+}
+
+/// What [`articulated_match`] needs about one mesh.
+#[derive(Debug, Clone, Copy)]
+pub struct ArticulatedSide<'a> {
+    /// Vertex positions.
+    pub positions: &'a [[f64; 3]],
+    /// Unit vertex normals, pointing out of the body (for a scan: towards the camera).
+    pub normals: &'a [[f64; 3]],
+    /// Segment label per vertex.
+    pub labels: &'a [Segment],
+    /// Sagittal half per vertex of the midline segments (see [`SegmentPools`]).
+    pub halves: Option<&'a [i8]>,
+    /// The skeleton (refined joints) in this mesh's frame.
+    pub joints: &'a Skeleton,
+    /// Total surface area.
+    pub area: f64,
+}
+
+/// Options of [`articulated_match`]; lengths in units of the template's √area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArticulatedOptions {
+    /// ICP iterations.
+    pub iterations: usize,
+    /// Pair-rejection distance of the first iteration.
+    pub gate_start: f64,
+    /// Pair-rejection distance of the last iteration and of the final counterpart test.
+    pub gate_end: f64,
+    /// Weight of the normal difference next to the position in the nearest-neighbour search
+    /// (`|x − y|² + (β·|n_x − n_y|)²`, β in √area).
+    pub normal_weight: f64,
+    /// Minimum cosine between a pair's normals.
+    pub min_normal_cosine: f64,
+    /// Weight of each joint anchor in a bone's fit, relative to the bone's total vertex weight.
+    pub joint_anchor: f64,
+    /// Geodesic band of the target pools (see [`SegmentPools::new`]), in the target's √area.
+    pub band: f64,
+}
+
+impl Default for ArticulatedOptions {
+    fn default() -> Self {
+        ArticulatedOptions {
+            iterations: 8,
+            gate_start: 0.10,
+            gate_end: 0.03,
+            normal_weight: 0.03,
+            min_normal_cosine: 0.3,
+            joint_anchor: 0.1,
+            band: 0.02,
+        }
+    }
+}
+
+/// The result of [`articulated_match`].
+#[derive(Debug, Clone)]
+pub struct ArticulatedMatches {
+    /// One match per template vertex, in vertex order; `confidence` is `1/(1 + d/gate)` with
+    /// `d` the final distance, and 0 for points without a counterpart.
+    pub matches: Vec<crate::Match>,
+    /// Per template vertex: does the target show it (within the final gate, same facing)?
+    pub has_counterpart: Vec<bool>,
+    /// The template posed onto the target (the final skinning).
+    pub posed: Vec<[f64; 3]>,
+    /// The final bone transforms (template frame → target frame).
+    pub transforms: [BoneTransform; 19],
+    /// Seconds per stage: `segment_pools`, `articulated_icp`, `map`.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+/// Matches every template vertex onto a (possibly partial) target by skeleton-driven
+/// articulated alignment (see the module docs). `weights` are the template's bone weights;
+/// `graph` is the target's edge graph (pool bands).
+///
+/// Errors: [`CorrespondError::InvalidArgument`] when the tables of a side disagree in length
+/// or a mesh is empty.
+pub fn articulated_match(
+    template: &ArticulatedSide<'_>,
+    weights: &BoneWeights,
+    target: &ArticulatedSide<'_>,
+    graph: &symcorr_spectral::EdgeGraph,
+    options: &ArticulatedOptions,
+) -> Result<ArticulatedMatches, CorrespondError> {
+    use std::time::Instant;
+    let (n, m) = (template.positions.len(), target.positions.len());
+    for (name, s, len) in [("template", template, n), ("target", target, m)] {
+        if len == 0 || s.normals.len() != len || s.labels.len() != len {
+            return Err(CorrespondError::InvalidArgument(format!(
+                "{name}: {len} positions, {} normals, {} labels",
+                s.normals.len(),
+                s.labels.len()
+            )));
+        }
+    }
+    if weights.len() != n {
+        return Err(CorrespondError::InvalidArgument(format!(
+            "template: {n} vertices but {} weight rows",
+            weights.len()
+        )));
+    }
+    let unit_len = template.area.sqrt();
+    let mut timings = Vec::new();
+    let t = Instant::now();
+    let pools = SegmentPools::new(
+        (template.labels, template.halves),
+        (target.labels, target.halves),
+        graph,
+        options.band * target.area.sqrt(),
+    )?;
+    timings.push(("segment_pools", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let beta = options.normal_weight * unit_len;
+    let target_features = Mat::from_fn(m, 6, |i, j| {
+        if j < 3 {
+            target.positions[i][j]
+        } else {
+            beta * target.normals[i][j - 3]
+        }
+    });
+    let nearest = |posed: &[[f64; 3]], pn: &[[f64; 3]]| {
+        let f = Mat::from_fn(n, 6, |i, j| {
+            if j < 3 {
+                posed[i][j]
+            } else {
+                beta * pn[i][j - 3]
+            }
+        });
+        crate::nearest_in_pools(f.as_ref(), target_features.as_ref(), &pools)
+    };
+    let mut transforms = bone_transforms(template.joints, target.joints);
+    let (mut posed, mut posed_normals) =
+        skin(template.positions, template.normals, weights, &transforms);
+    let iterations = options.iterations.max(1);
+    for it in 0..iterations {
+        let frac = if iterations > 1 {
+            it as f64 / (iterations - 1) as f64
+        } else {
+            1.0
+        };
+        let gate =
+            unit_len * (options.gate_start * (options.gate_end / options.gate_start).powf(frac));
+        let near = nearest(&posed, &posed_normals)?;
+        // Pairs per bone: (rest position, target position, weight).
+        let mut per_bone: Vec<Vec<([f64; 3], [f64; 3], f64)>> = vec![Vec::new(); 19];
+        for (v, &(q, _)) in near.iter().enumerate() {
+            let y = target.positions[q as usize];
+            if norm(sub(posed[v], y)) > gate
+                || dot(posed_normals[v], target.normals[q as usize]) < options.min_normal_cosine
+            {
+                continue;
+            }
+            for &(b, w) in weights.row(v) {
+                if w > 0.1 {
+                    per_bone[b].push((template.positions[v], y, w));
+                }
+            }
+        }
+        transforms
+            .par_iter_mut()
+            .zip(per_bone.into_par_iter())
+            .enumerate()
+            .for_each(|(b, (tr, mut pairs))| {
+                if pairs.len() < 20 {
+                    return;
+                }
+                let wsum: f64 = pairs.iter().map(|p| p.2).sum();
+                let (p, c) = BONES[b];
+                // The skeleton anchors the fit: both joints, carried by the previous transform
+                // of the bone, pulled to the target's joints.
+                let anchor = options.joint_anchor * wsum;
+                for j in [p, c] {
+                    pairs.push((
+                        template.joints.position(j),
+                        target.joints.position(j),
+                        anchor,
+                    ));
+                }
+                if let Some(fit) = kabsch(&pairs) {
+                    *tr = fit;
+                }
+            });
+        (posed, posed_normals) = skin(template.positions, template.normals, weights, &transforms);
+    }
+    timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let gate = options.gate_end * unit_len;
+    let near = nearest(&posed, &posed_normals)?;
+    let mut has_counterpart = Vec::with_capacity(n);
+    let matches = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, _))| {
+            let d = norm(sub(posed[v], target.positions[q as usize]));
+            let seen = d <= gate
+                && dot(posed_normals[v], target.normals[q as usize]) >= options.min_normal_cosine;
+            has_counterpart.push(seen);
+            crate::Match {
+                template: v as u32,
+                target: q,
+                confidence: if seen { 1.0 / (1.0 + d / gate) } else { 0.0 },
+                descriptor_distance: d / unit_len,
+                profile_gap: 0.0,
+                candidate_spread: None,
+            }
+        })
+        .collect();
+    timings.push(("map", t.elapsed().as_secs_f64()));
+    Ok(ArticulatedMatches {
+        matches,
+        has_counterpart,
+        posed,
+        transforms,
+        timings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rot_z(a: f64) -> Mat3 {
+        let (s, c) = a.sin_cos();
+        [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+    }
+
+    #[test]
+    fn swing_takes_a_onto_b() {
+        for (a, b) in [
+            ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+            ([1.0, 2.0, 3.0], [-3.0, 0.5, 1.0]),
+            ([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]),
+            ([1.0, 1.0, 0.0], [1.0, 1.0, 0.0]),
+        ] {
+            let r = swing(a, b);
+            let ra = unit(mat_vec(&r, a)).unwrap();
+            let ub = unit(b).unwrap();
+            assert!(norm(sub(ra, ub)) < 1e-12, "{a:?} → {b:?}: {ra:?}");
+            // Orthonormal, det +1.
+            let rtr = mat_mul(&transpose(&r), &r);
+            for i in 0..3 {
+                for j in 0..3 {
+                    let e = if i == j { 1.0 } else { 0.0 };
+                    assert!((rtr[i][j] - e).abs() < 1e-12);
+                }
+            }
+            assert!((dot(r[0], cross(r[1], r[2])) - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn kabsch_recovers_a_rigid_motion() {
+        let r = mat_mul(&rot_z(0.7), &swing([0.0, 0.0, 1.0], [0.3, -0.2, 0.9]));
+        let t = [0.4, -1.0, 2.5];
+        let pts = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.2],
+            [0.0, 1.0, -0.3],
+            [0.3, 0.2, 1.0],
+            [-0.5, 0.7, 0.1],
+        ];
+        let pairs: Vec<_> = pts
+            .iter()
+            .enumerate()
+            .map(|(i, &a)| (a, add(mat_vec(&r, a), t), 1.0 + i as f64))
+            .collect();
+        let fit = kabsch(&pairs).unwrap();
+        for (a, b, _) in &pairs {
+            assert!(norm(sub(fit.apply(*a), *b)) < 1e-10);
+        }
+        // Collinear points do not determine a rotation.
+        let line: Vec<_> = (0..5)
+            .map(|i| ([i as f64, 0.0, 0.0], [0.0, i as f64, 0.0], 1.0))
+            .collect();
+        assert!(kabsch(&line).is_none());
+    }
+
+    /// A rigidly moved skeleton gives the same rigid motion for every bone.
+    #[test]
+    fn bone_transforms_of_a_rigid_motion_are_that_motion() {
+        let s = symcorr_attach::testbody::t_pose(1.0);
+        let r = mat_mul(&rot_z(-1.1), &swing([1.0, 0.0, 0.0], [0.2, 0.3, 0.9]));
+        let t = [1.0, 2.0, -0.5];
+        let mut moved = s.clone();
+        for p in moved.positions.iter_mut() {
+            *p = add(mat_vec(&r, *p), t);
+        }
+        for (b, tr) in bone_transforms(&s, &moved).iter().enumerate() {
+            for x in [[0.1, 0.5, 0.0], [-0.3, 1.2, 0.2]] {
+                let want = add(mat_vec(&r, x), t);
+                assert!(norm(sub(tr.apply(x), want)) < 1e-9, "bone {b}");
+            }
+        }
+    }
+
+    /// Bending one elbow moves only the forearm's bones, and carries the wrist onto the
+    /// target's wrist.
+    #[test]
+    fn bone_transforms_follow_a_bent_elbow() {
+        let s = symcorr_attach::testbody::t_pose(1.0);
+        let mut bent = s.clone();
+        let elbow = s.position(Joint::ElbowLeft);
+        let r = rot_z(0.9);
+        for j in [Joint::WristLeft, Joint::HandLeft] {
+            let p = s.position(j);
+            bent.positions[j.index()] = add(elbow, mat_vec(&r, sub(p, elbow)));
+        }
+        let tr = bone_transforms(&s, &bent);
+        for (b, &(p, c)) in BONES.iter().enumerate() {
+            for j in [p, c] {
+                let got = tr[b].apply(s.position(j));
+                assert!(
+                    norm(sub(got, bent.position(j))) < 1e-9,
+                    "bone {b} joint {j:?}"
+                );
+            }
+        }
+    }
+}
