@@ -59,6 +59,7 @@ use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use symcorr_mesh::TriMesh;
 use thiserror::Error;
 
@@ -625,6 +626,77 @@ pub fn eigenpairs_cached(
     Ok((eig, CacheOutcome::Computed { path, miss, saved }))
 }
 
+/// Called with every [`CacheOutcome`] of a [`CachePolicy`] (to print warnings, count hits).
+pub type Notify = Arc<dyn Fn(&CacheOutcome) + Send + Sync>;
+
+/// Where to cache, and who hears about it: what a pipeline carries in its options.
+///
+/// ```
+/// use std::sync::atomic::{AtomicUsize, Ordering};
+/// use std::sync::Arc;
+/// use symcorr_spectral::cache::{CacheLocation, CachePolicy};
+/// let hits = Arc::new(AtomicUsize::new(0));
+/// let h = hits.clone();
+/// let policy = CachePolicy::new(CacheLocation::Dir("cache".into())).with_notify(move |o| {
+///     if o.is_hit() {
+///         h.fetch_add(1, Ordering::Relaxed);
+///     }
+///     if let Some(w) = o.warning() {
+///         eprintln!("warning: {w}");
+///     }
+/// });
+/// # let _ = policy;
+/// ```
+#[derive(Clone)]
+pub struct CachePolicy {
+    /// Where the files go.
+    pub location: CacheLocation,
+    /// Told every outcome (`None`: nobody).
+    pub notify: Option<Notify>,
+}
+
+impl std::fmt::Debug for CachePolicy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CachePolicy")
+            .field("location", &self.location)
+            .field("notify", &self.notify.as_ref().map(|_| "Fn(&CacheOutcome)"))
+            .finish()
+    }
+}
+
+impl CachePolicy {
+    /// A policy with no observer.
+    pub fn new(location: CacheLocation) -> CachePolicy {
+        CachePolicy {
+            location,
+            notify: None,
+        }
+    }
+
+    /// The same policy, telling `f` every outcome.
+    pub fn with_notify(self, f: impl Fn(&CacheOutcome) + Send + Sync + 'static) -> CachePolicy {
+        CachePolicy {
+            notify: Some(Arc::new(f)),
+            ..self
+        }
+    }
+
+    /// [`eigenpairs_cached`] at this policy's location, then tells the observer.
+    pub fn eigenpairs(
+        &self,
+        mesh: &TriMesh,
+        laplacian: &Laplacian,
+        k: usize,
+        options: &EigenOptions,
+    ) -> Result<(Eigenpairs, CacheOutcome), SpectralError> {
+        let (eig, outcome) = eigenpairs_cached(mesh, laplacian, k, options, &self.location)?;
+        if let Some(f) = &self.notify {
+            f(&outcome);
+        }
+        Ok((eig, outcome))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -911,6 +983,24 @@ mod tests {
             assert!(o.is_hit());
         }
         assert_eq!(std::fs::read_dir(dir.join("many")).unwrap().count(), 2);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn policy_tells_its_observer_every_outcome() {
+        let mesh = icosphere(1);
+        let lap = Laplacian::new(&mesh).unwrap();
+        let dir = tmpdir("policy");
+        let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let s = seen.clone();
+        let policy = CachePolicy::new(CacheLocation::Dir(dir.clone()))
+            .with_notify(move |o| s.lock().unwrap().push(o.is_hit()));
+        assert!(format!("{policy:?}").contains("Dir"));
+        let opts = EigenOptions::default();
+        for _ in 0..3 {
+            policy.eigenpairs(&mesh, &lap, 4, &opts).unwrap();
+        }
+        assert_eq!(*seen.lock().unwrap(), [false, true, true]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

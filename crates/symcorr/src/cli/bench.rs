@@ -1,6 +1,7 @@
-//! `symcorr bench DATASET [--pairs FILE] [--mode sparse|dense] [--json OUT] [--out-dir DIR]`
+//! `symcorr bench DATASET [--pairs FILE] [--mode sparse|dense] [--json OUT] [--out-dir DIR]
+//! [--cache | --cache-dir DIR]`
 
-use super::match_cmd::MethodArgs;
+use super::match_cmd::{CacheArgs, CacheCounts, MethodArgs};
 use super::progress::Bar;
 use super::CliError;
 use serde_json::{json, Value};
@@ -29,7 +30,8 @@ Examples:
   symcorr bench fixtures/synth/bodies
   symcorr bench fixtures/synth/bodies --mode dense --json summary.json --out-dir results/
   symcorr bench fixtures/synth/bodies --method paper --json paper.json
-  symcorr bench fixtures/synth/bodies --method paper --no-skeleton-filter --json ablation.json"
+  symcorr bench fixtures/synth/bodies --method paper --no-skeleton-filter --json ablation.json
+  symcorr bench fixtures/synth/bodies --cache     # eigenpairs kept in fixtures/synth/bodies/meshes/*.symcorr-eigs"
 )]
 pub struct BenchArgs {
     /// Dataset folder.
@@ -55,6 +57,8 @@ pub struct BenchArgs {
     /// Frame of the joint logs to use (default: the first).
     #[arg(long)]
     pub frame: Option<usize>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
 }
 
 /// The JSON summary (keys fixed by the issue: `mean_error`, `flip_rate`, `within_0.05`,
@@ -180,7 +184,10 @@ pub fn write_pair_files(
 }
 
 pub fn run(args: BenchArgs) -> Result<(), CliError> {
-    let pipeline = args.method.pipeline(args.mode == ModeArg::Dense)?;
+    let mut pipeline = args.method.pipeline(args.mode == ModeArg::Dense)?;
+    let counts = std::sync::Arc::new(CacheCounts::default());
+    let meshes = args.dataset.join("meshes");
+    pipeline.options.prepare.cache = args.cache.policy(&meshes, Some(&meshes), &counts);
     if let Some(j) = &args.json {
         super::match_cmd::check_output_dir(j)?;
     }
@@ -194,6 +201,9 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
     .map_err(|e| CliError(e.to_string()))?;
     bar.finish();
     print!("{}", table(&report, true));
+    if let Some(s) = counts.summary() {
+        println!("{s}");
+    }
     let label = if pipeline.options.method == symcorr::Method::Refined {
         "refined (landmarks + ZoomOut)"
     } else if pipeline.options.matching.skeleton_filter {

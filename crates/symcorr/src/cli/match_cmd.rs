@@ -1,5 +1,5 @@
 //! `symcorr match TEMPLATE TARGET --template-joints J1 --target-joints J2 --out corr.json
-//! [--dense] [--samples N] [--frame N] [--ply-out DIR]`
+//! [--dense] [--samples N] [--frame N] [--ply-out DIR] [--cache | --cache-dir DIR]`
 
 use super::CliError;
 use std::path::{Path, PathBuf};
@@ -11,6 +11,7 @@ use symcorr::output::{
 };
 use symcorr::{Mode, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_correspond::CandidateOptions;
+use symcorr_spectral::cache::{CacheLocation, CachePolicy};
 
 /// Arguments of `symcorr match`.
 #[derive(clap::Args, Debug)]
@@ -18,7 +19,8 @@ use symcorr_correspond::CandidateOptions;
   symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json
   symcorr match a.ply b.ply --template-joints a.json --target-joints b.txt --out corr.json --dense --ply-out colours/
   symcorr match a.off b.off --template-joints a.json --target-joints b.json --out ablation.json --method paper --no-skeleton-filter
-  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json --dense --method refined")]
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json --dense --method refined
+  symcorr match a.off b.off --template-joints a.json --target-joints b.json --out corr.json --cache   # reuses a.off.symcorr-eigs, b.off.symcorr-eigs")]
 pub struct MatchArgs {
     /// Template mesh (OBJ, OFF, PLY, glTF/GLB).
     pub template: PathBuf,
@@ -54,6 +56,78 @@ pub struct MatchArgs {
     /// `template_points`, `fallbacks`, `seconds`, `timings_s`, `repair` (per mesh), `files`.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub cache: CacheArgs,
+}
+
+/// `--cache` / `--cache-dir`: the on-disk eigenpair cache (`match` and `bench`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct CacheArgs {
+    /// Keep each mesh's Laplace–Beltrami eigenpairs next to it as MESH.symcorr-eigs and reuse
+    /// them in later runs (for `bench`: in DATASET/meshes/, one HASH.symcorr-eigs per mesh).
+    /// A file is used only for exactly the mesh and settings it was written for; a stale or
+    /// corrupted one is recomputed and rewritten (with a warning if corrupted). Timings then
+    /// show `eigenpairs_cached` instead of `eigenpairs`.
+    #[arg(long, conflicts_with = "cache_dir")]
+    pub cache: bool,
+    /// Like --cache, but every mesh's eigenpairs go into DIR (created if needed), named by a
+    /// hash of the mesh and the solver settings.
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+}
+
+/// Counts of the eigenpair cache's outcomes in one run (for the summary line).
+#[derive(Debug, Default)]
+pub struct CacheCounts {
+    /// Meshes whose eigenpairs came from the cache.
+    pub hits: std::sync::atomic::AtomicUsize,
+    /// Meshes whose eigenpairs were computed (and written).
+    pub computed: std::sync::atomic::AtomicUsize,
+}
+
+impl CacheCounts {
+    /// `"eigenpair cache: H of N meshes read from it"`, or `None` when the cache was not used.
+    pub fn summary(&self) -> Option<String> {
+        use std::sync::atomic::Ordering::Relaxed;
+        let (h, c) = (self.hits.load(Relaxed), self.computed.load(Relaxed));
+        (h + c > 0).then(|| format!("eigenpair cache: {h} of {} meshes read from it", h + c))
+    }
+}
+
+impl CacheArgs {
+    /// The cache policy for `mesh` (`None` without --cache/--cache-dir): `next_to` is the
+    /// directory used by --cache in place of the mesh's own file (bench), `None` for
+    /// MESH.symcorr-eigs. Corruption and failed writes are warned about on stderr; `counts`
+    /// records hits.
+    pub fn policy(
+        &self,
+        mesh: &Path,
+        next_to: Option<&Path>,
+        counts: &std::sync::Arc<CacheCounts>,
+    ) -> Option<CachePolicy> {
+        let location = match (&self.cache_dir, self.cache, next_to) {
+            (Some(dir), _, _) => CacheLocation::Dir(dir.clone()),
+            (None, true, Some(dir)) => CacheLocation::Dir(dir.to_path_buf()),
+            (None, true, None) => {
+                let mut p = mesh.as_os_str().to_owned();
+                p.push(format!(".{}", symcorr_spectral::cache::EXTENSION));
+                CacheLocation::File(PathBuf::from(p))
+            }
+            (None, false, _) => return None,
+        };
+        let counts = counts.clone();
+        Some(CachePolicy::new(location).with_notify(move |o| {
+            use std::sync::atomic::Ordering::Relaxed;
+            if o.is_hit() {
+                counts.hits.fetch_add(1, Relaxed);
+            } else {
+                counts.computed.fetch_add(1, Relaxed);
+            }
+            if let Some(w) = o.warning() {
+                eprintln!("symcorr: warning: {w}");
+            }
+        }))
+    }
 }
 
 /// `--method`: the paper's pipeline or the refined one.
@@ -216,26 +290,25 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let format = super::joints_format(args.joints_format.as_deref())?;
     check_output_dir(&args.out)?;
     let start = Instant::now();
+    let counts = std::sync::Arc::new(CacheCounts::default());
+    let with_cache = |mesh: &Path| {
+        let mut p = pipeline.clone();
+        p.options.prepare.cache = args.cache.policy(mesh, None, &counts);
+        p
+    };
+    let (pa, pb) = (with_cache(&args.template), with_cache(&args.target));
     let progress = super::progress::Spinner::new("preparing meshes");
     let (a, b) = rayon::join(
         || {
             load_prepared(
-                &pipeline,
+                &pa,
                 &args.template,
                 &args.template_joints,
                 args.frame,
                 format,
             )
         },
-        || {
-            load_prepared(
-                &pipeline,
-                &args.target,
-                &args.target_joints,
-                args.frame,
-                format,
-            )
-        },
+        || load_prepared(&pb, &args.target, &args.target_joints, args.frame, format),
     );
     let (a, b) = (a?, b?);
     progress.set("matching");
@@ -285,6 +358,9 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         corr.matches.len(),
         corr.filter.fallbacks,
     );
+    if let Some(s) = counts.summary() {
+        println!("{s}");
+    }
     for f in files {
         println!("wrote {}", f.display());
     }
