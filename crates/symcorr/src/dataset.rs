@@ -10,11 +10,13 @@
 //! for a mesh whose vertices are *not* in the common order (a single-view scan), one line per
 //! vertex: the id of the corresponding vertex in the common order, or `-1` when it has none.
 //! A pair whose target has a truth file is evaluated on the visible part: only template points
-//! that some target vertex corresponds to; the truth `q*` of template point `p` is the first
-//! target vertex whose truth is `p`, and the mirror image of `q*` the first target vertex whose
-//! truth is `mirror(p)` (no flip is counted where that is not visible). A partial target's own
-//! area depends on the view, so its errors are normalised by the template's √area instead.
-//! Templates must be in the common order (no truth file).
+//! that some target vertex corresponds to. A match `p ↦ q` lands on the common-order point
+//! `c = truth(q)`; its error is the geodesic distance from `c` to `p` **on the template**
+//! over the template's √area, and it is a flip when `c` lies nearer to `mirror(p)` than to `p`
+//! on the template (counted where `g(p, mirror(p)) > 0.1·√area`). Distances on the template,
+//! not on the scan, because a single-view scan's holes and cracks make its own geodesics
+//! wander far from the body's (the SHREC'16 partial-matching benchmark measures on the full
+//! shape for the same reason). Templates must be in the common order (no truth file).
 //!
 //! Each mesh is prepared once ([`PreparedMesh`]), then the pairs run in parallel (rayon).
 
@@ -360,13 +362,14 @@ impl BenchReport {
     }
 }
 
-/// Evaluates `corr` against the dataset's ground truth on `target`'s evaluation graph (built
-/// on its repaired mesh), with `mirror` (common-order ids) for the flip rate.
+/// Evaluates `corr` against the dataset's ground truth, with `mirror` (common-order ids) for
+/// the flip rate. `graph` is the evaluation graph of the target's repaired mesh — or, with
+/// `target_truth`, of the template's.
 ///
 /// Without `target_truth`, input vertex `i` of the template corresponds to input vertex `i` of
 /// the target (DESIGN.md's layout). With it (a partial scan, see the module docs), target
 /// input vertex `v` corresponds to common id `target_truth[v]`; only visible template points
-/// are evaluated and errors are normalised by the template's area. The stages run on repaired
+/// are evaluated, on the template's surface. The stages run on repaired
 /// meshes, so ids are translated through [`PreparedMesh::input_id`] and
 /// [`PreparedMesh::prepared_ids`]; a match whose true point the repair removed is left out.
 ///
@@ -379,27 +382,12 @@ pub fn evaluate_pair(
     corr: &Correspondence,
     mirror: Option<&[u32]>,
 ) -> (Evaluation, Vec<f64>) {
+    if let Some(t) = target_truth {
+        return evaluate_partial(template, target, t, graph, corr, mirror);
+    }
+    // Input id i of the template is input id i of the target; both through their repairs.
     let to_target = target.prepared_ids();
-    // Common id → target input id.
-    let common_to_input: Vec<Option<u32>> = match target_truth {
-        None => (0..to_target.len() as u32).map(Some).collect(),
-        Some(t) => {
-            let n = template.input_mesh().num_vertices();
-            let mut out = vec![None; n];
-            for (v, c) in t.iter().enumerate() {
-                if let Some(c) = c {
-                    if let Some(slot) = out.get_mut(*c as usize) {
-                        slot.get_or_insert(v as u32);
-                    }
-                }
-            }
-            out
-        }
-    };
-    let common_to_target = |c: u32| -> Option<u32> {
-        let input = (*common_to_input.get(c as usize)?)?;
-        *to_target.get(input as usize)?
-    };
+    let common_to_target = |c: u32| -> Option<u32> { *to_target.get(c as usize)? };
     let mut pairs = Vec::with_capacity(corr.matches.len());
     let mut truth = Vec::with_capacity(corr.matches.len());
     let mut confidence = Vec::with_capacity(corr.matches.len());
@@ -410,35 +398,72 @@ pub fn evaluate_pair(
             confidence.push(m.confidence);
         }
     }
-    // The mirror map in the target's repaired ids (an invisible or removed mirror image maps
-    // to the vertex itself: such a point cannot count as a flip).
+    // The mirror map in the target's repaired ids (a removed mirror image maps to the vertex
+    // itself: such a point cannot count as a flip).
     let mirror: Option<Vec<u32>> = mirror.map(|m| {
         (0..target.num_vertices() as u32)
             .map(|v| {
-                let input = target.input_id(v) as usize;
-                let common = match target_truth {
-                    None => Some(input as u32),
-                    Some(t) => t.get(input).copied().flatten(),
-                };
-                common
-                    .and_then(|c| m.get(c as usize).copied())
+                m.get(target.input_id(v) as usize)
+                    .copied()
                     .and_then(common_to_target)
                     .unwrap_or(v)
             })
             .collect()
     });
-    let area = if target_truth.is_some() {
-        template.area
-    } else {
-        target.area
-    };
     let evaluation = evaluate(
         graph,
-        area,
+        target.area,
         &pairs,
         |i| truth[i as usize],
         mirror.as_deref(),
     );
+    (evaluation, confidence)
+}
+
+/// [`evaluate_pair`] for a partial target: on the template's graph (see the module docs).
+fn evaluate_partial(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    target_truth: &[Option<u32>],
+    graph: &EvalGraph,
+    corr: &Correspondence,
+    mirror: Option<&[u32]>,
+) -> (Evaluation, Vec<f64>) {
+    // Common id = template input id → template prepared id.
+    let to_template = template.prepared_ids();
+    let common_to_template = |c: u32| to_template.get(c as usize).copied().flatten();
+    let mut visible = vec![false; template.num_vertices()];
+    for c in target_truth.iter().flatten() {
+        if let Some(p) = common_to_template(*c) {
+            visible[p as usize] = true;
+        }
+    }
+    let mut pairs = Vec::with_capacity(corr.matches.len());
+    let mut confidence = Vec::with_capacity(corr.matches.len());
+    for m in &corr.matches {
+        if !visible[m.template as usize] {
+            continue;
+        }
+        let landed = target_truth
+            .get(target.input_id(m.target) as usize)
+            .copied()
+            .flatten()
+            .and_then(common_to_template);
+        if let Some(c) = landed {
+            pairs.push((m.template, c));
+            confidence.push(m.confidence);
+        }
+    }
+    let mirror: Option<Vec<u32>> = mirror.map(|m| {
+        (0..template.num_vertices() as u32)
+            .map(|v| {
+                m.get(template.input_id(v) as usize)
+                    .and_then(|&c| common_to_template(c))
+                    .unwrap_or(v)
+            })
+            .collect()
+    });
+    let evaluation = evaluate(graph, template.area, &pairs, |p| p, mirror.as_deref());
     (evaluation, confidence)
 }
 
@@ -537,14 +562,24 @@ pub fn run_bench(
             }
         }
     }
-    // Evaluation graphs per target, built once.
-    let graphs: BTreeMap<&str, EvalGraph> = dataset
+    // Evaluation graphs per target (per template for a partial target), built once.
+    let graph_of = |a: &'_ str, b: &'_ str| -> String {
+        if truths.contains_key(b) {
+            a.to_string()
+        } else {
+            b.to_string()
+        }
+    };
+    let graphs: BTreeMap<String, EvalGraph> = dataset
         .pairs
         .iter()
-        .map(|(_, b)| b.as_str())
+        .map(|(a, b)| graph_of(a, b))
         .collect::<std::collections::BTreeSet<_>>()
         .into_iter()
-        .map(|b| (b, EvalGraph::new(&prepared[index[b]].1.mesh)))
+        .map(|g| {
+            let graph = EvalGraph::new(&prepared[index[g.as_str()]].1.mesh);
+            (g, graph)
+        })
         .collect();
     let total_pairs = dataset.pairs.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -560,7 +595,7 @@ pub fn run_bench(
                 &ta.1,
                 &tb.1,
                 truths.get(b.as_str()).map(Vec::as_slice),
-                &graphs[b.as_str()],
+                &graphs[&graph_of(a, b)],
                 &corr,
                 dataset.mirror.as_deref(),
             );
@@ -652,7 +687,8 @@ mod tests {
         let b = pipeline.prepare(scan, &sk).unwrap();
         assert!(b.repair.removed_vertices >= 1, "the stray vertex goes");
         let corr = pipeline.run(&a, &b).unwrap();
-        let graph = EvalGraph::new(&b.mesh);
+        // Partial targets are measured on the template.
+        let graph = EvalGraph::new(&a.mesh);
         let to_b = b.prepared_ids();
         let target_of = |common: u32| -> Option<u32> {
             let v = new_id[common as usize];
