@@ -141,6 +141,18 @@ pub enum MethodArg {
     Refined,
 }
 
+/// `--partial`: how the refined method treats the target.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PartialArg {
+    /// Partial when its boundary is long (a single view).
+    #[default]
+    Auto,
+    /// Always a partial view.
+    Yes,
+    /// Always a whole surface.
+    No,
+}
+
 /// Method options shared by `match` and `bench`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MethodArgs {
@@ -151,6 +163,11 @@ pub struct MethodArgs {
     /// Template points in sparse mode (farthest-point sample).
     #[arg(long, default_value_t = symcorr::DEFAULT_SAMPLES)]
     pub samples: usize,
+    /// Refined method: is the target a partial view (a single-view scan)? `auto` decides by
+    /// the length of its boundary; a partial target is matched by skeleton-driven articulated
+    /// alignment and template points it does not show are reported (`no_counterpart`).
+    #[arg(long, value_enum, default_value_t = PartialArg::Auto)]
+    pub partial: PartialArg,
     /// Ablation: skip the skeleton filter (the paper's method without its contribution).
     #[arg(long)]
     pub no_skeleton_filter: bool,
@@ -211,6 +228,11 @@ impl MethodArgs {
         o.method = match self.method {
             MethodArg::Paper => symcorr::Method::Paper,
             MethodArg::Refined => symcorr::Method::Refined,
+        };
+        o.partial = match self.partial {
+            PartialArg::Auto => symcorr::PartialTarget::Auto,
+            PartialArg::Yes => symcorr::PartialTarget::Yes,
+            PartialArg::No => symcorr::PartialTarget::No,
         };
         o.matching.candidates = CandidateOptions {
             nearest: Some(self.candidates),
