@@ -66,7 +66,8 @@ pub struct PrepareOptions {
     /// Number of Laplace–Beltrami eigenpairs behind the si-HKS.
     pub eigenpairs: usize,
     /// si-HKS parameters. `tau_start`/`tau_end` are taken **relative to the mesh's area**:
-    /// the times used are `t = area · α^τ` (see [`PrepareOptions::default`]).
+    /// the times used are `t = area · α^τ` ([`SiHksParams::relative_to_area`]; default
+    /// [`SiHksParams::area_relative`]).
     pub si_hks: SiHksParams,
     /// Radius of the base vertex set's greedy cover, in units of √area (§3.3).
     pub base_radius: f64,
@@ -101,19 +102,13 @@ pub const DEFAULT_BASE_RADIUS: f64 = 0.1;
 pub const DEFAULT_MIDLINE_MARGIN: f64 = 0.0;
 
 impl Default for PrepareOptions {
-    /// si-HKS: Bronstein & Kokkinos's `α = 2`, step 1/16 and 6 frequencies, over
-    /// `t/area ∈ [2^-8, 2^3]`. Their absolute window (`τ ∈ [1, 25]`, `t ≥ 2`) suits meshes
-    /// normalised to a small scale; on a body in metres it lies where every non-constant
-    /// eigenfunction has decayed (`e^{-λt}` with `λ·area ≈ 4πk`), leaving no detail. Measured on
-    /// the generated bodies (see the README).
+    /// si-HKS: [`SiHksParams::area_relative`] (Bronstein & Kokkinos's `α = 2`, step 1/16 and 6
+    /// frequencies, over `t/area ∈ [2^-8, 2^3]`; why and the measurements: its docs and the
+    /// README).
     fn default() -> Self {
         PrepareOptions {
             eigenpairs: DEFAULT_EIGENPAIRS,
-            si_hks: SiHksParams {
-                tau_start: -8.0,
-                tau_end: 3.0,
-                ..SiHksParams::default()
-            },
+            si_hks: SiHksParams::area_relative(),
             base_radius: DEFAULT_BASE_RADIUS,
             attach: AttachOptions::default(),
             midline_margin: DEFAULT_MIDLINE_MARGIN,
@@ -545,14 +540,8 @@ fn spectral_stages(
             eig
         }
     };
-    // Times relative to the area: t = area·α^τ  ⇔  τ' = τ + log_α(area).
-    let shift = mesh.total_area().ln() / options.si_hks.alpha.ln();
-    let params = SiHksParams {
-        tau_start: options.si_hks.tau_start + shift,
-        tau_end: options.si_hks.tau_end + shift,
-        ..options.si_hks.clone()
-    };
-    let desc = si_hks(&eig, &params)?;
+    // Times relative to the area: t = area·α^τ.
+    let desc = si_hks(&eig, &options.si_hks.relative_to_area(mesh.total_area()))?;
     let descriptors = Descriptors::from_mat(desc.as_ref())?;
     lap("si_hks", &mut timings);
     let curvature = gaussian_curvature(mesh);
