@@ -9,8 +9,9 @@
 //! paths overestimate true geodesics by a few percent on irregular triangulations (zig-zag);
 //! this bias is the same for every method evaluated with this code.
 //!
-//! This bounded search is local to evaluation (symcorr-spectral's Dijkstra computes whole
-//! distance rows, which would cost `V log V` per match); it never feeds the matching itself.
+//! The search is symcorr-spectral's [`EdgeGraph::search`] (the one owner of edge-graph
+//! geodesics; whole distance rows would cost `V log V` per match); evaluation never feeds the
+//! matching itself.
 //!
 //! A flip is a match lying strictly closer to `mirror(q*)` than to `q*`; the same search
 //! detects it (`mirror(q*)` settled before `q*`). Only matches where `g(q*, mirror(q*)) >
@@ -19,67 +20,27 @@
 //! distance instead.
 
 use rayon::prelude::*;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 use symcorr_mesh::geometry::{norm, sub};
 use symcorr_mesh::TriMesh;
+use symcorr_spectral::{DijkstraScratch, EdgeGraph};
 
 /// The relative radius under which a vertex and its mirror image are too close for a flip to
 /// be counted (DESIGN.md, Metrics: 0.1·√area).
 pub const FLIP_MIN_SEPARATION: f64 = 0.1;
 
-/// Mesh edges as a weighted graph (CSR, Euclidean edge lengths) with a bounded Dijkstra.
+/// Mesh edges as a weighted graph (symcorr-spectral's [`EdgeGraph`]: CSR, Euclidean edge
+/// lengths) with the vertex positions for the Euclidean fallback.
 #[derive(Debug, Clone)]
 pub struct EvalGraph {
-    offsets: Vec<usize>,
-    neighbors: Vec<u32>,
-    lengths: Vec<f64>,
+    graph: EdgeGraph,
     positions: Vec<[f64; 3]>,
-}
-
-/// Reusable per-thread buffers for [`EvalGraph`] searches (visited stamps instead of clearing).
-struct Scratch {
-    dist: Vec<f64>,
-    stamp: Vec<u32>,
-    settled: Vec<u32>,
-    epoch: u32,
-    heap: BinaryHeap<Reverse<(u64, u32)>>,
-}
-
-impl Scratch {
-    fn new(n: usize) -> Scratch {
-        Scratch {
-            dist: vec![0.0; n],
-            stamp: vec![0; n],
-            settled: vec![0; n],
-            epoch: 0,
-            heap: BinaryHeap::new(),
-        }
-    }
 }
 
 impl EvalGraph {
     /// The edge graph of `mesh`.
     pub fn new(mesh: &TriMesh) -> EvalGraph {
-        let nb = mesh.vertex_neighbors();
-        let mut offsets = Vec::with_capacity(nb.len() + 1);
-        let mut neighbors = Vec::new();
-        let mut lengths = Vec::new();
-        offsets.push(0);
-        for (v, list) in nb.iter().enumerate() {
-            for &u in list {
-                if u as usize == v {
-                    continue;
-                }
-                neighbors.push(u);
-                lengths.push(norm(sub(mesh.positions[v], mesh.positions[u as usize])));
-            }
-            offsets.push(neighbors.len());
-        }
         EvalGraph {
-            offsets,
-            neighbors,
-            lengths,
+            graph: EdgeGraph::new(mesh),
             positions: mesh.positions.clone(),
         }
     }
@@ -88,54 +49,32 @@ impl EvalGraph {
         norm(sub(self.positions[a as usize], self.positions[b as usize]))
     }
 
-    /// Dijkstra from `source`; `visit(v, d)` is called as each vertex is settled, in order of
-    /// distance, and returns false to stop. Stops by itself beyond `radius`.
+    /// Dijkstra from `source` ([`EdgeGraph::search`]); `visit(v, d)` is called as each vertex
+    /// is settled, in order of distance, and returns false to stop. Stops by itself beyond
+    /// `radius`.
+    ///
+    /// Panics if `source` is not a vertex of the graph (as indexing the positions with it
+    /// would): the public entry points document this.
     fn search(
         &self,
-        s: &mut Scratch,
+        s: &mut DijkstraScratch,
         source: u32,
         radius: f64,
-        mut visit: impl FnMut(u32, f64) -> bool,
+        visit: impl FnMut(u32, f64) -> bool,
     ) {
-        s.epoch = s.epoch.wrapping_add(1);
-        if s.epoch == 0 {
-            // Wrapped: reset the stamps once every 2³² searches.
-            s.stamp.iter_mut().for_each(|x| *x = 0);
-            s.settled.iter_mut().for_each(|x| *x = 0);
-            s.epoch = 1;
-        }
-        let e = s.epoch;
-        s.heap.clear();
-        s.dist[source as usize] = 0.0;
-        s.stamp[source as usize] = e;
-        // Non-negative finite f64s order like their bit patterns.
-        s.heap.push(Reverse((0f64.to_bits(), source)));
-        while let Some(Reverse((bits, v))) = s.heap.pop() {
-            let d = f64::from_bits(bits);
-            let vi = v as usize;
-            if s.settled[vi] == e || d > s.dist[vi] {
-                continue;
-            }
-            if d > radius {
-                return;
-            }
-            s.settled[vi] = e;
-            if !visit(v, d) {
-                return;
-            }
-            for k in self.offsets[vi]..self.offsets[vi + 1] {
-                let u = self.neighbors[k] as usize;
-                let nd = d + self.lengths[k];
-                if s.stamp[u] != e || nd < s.dist[u] {
-                    s.stamp[u] = e;
-                    s.dist[u] = nd;
-                    s.heap.push(Reverse((nd.to_bits(), u as u32)));
-                }
-            }
-        }
+        let n = self.positions.len();
+        assert!(
+            (source as usize) < n,
+            "vertex {source} out of range (the mesh has {n} vertices)"
+        );
+        // Invariant: source checked above and every scratch is made for this graph.
+        self.graph
+            .search(s, source, radius, visit)
+            .expect("source in range, scratch sized for this graph");
     }
 
-    /// Edge-path geodesic distance between `a` and `b` (Euclidean if unreachable).
+    /// Edge-path geodesic distance between `a` and `b` (Euclidean if unreachable). Panics if
+    /// `a` or `b` is not a vertex.
     ///
     /// ```
     /// use symcorr_mesh::TriMesh;
@@ -144,7 +83,7 @@ impl EvalGraph {
     /// assert_eq!(EvalGraph::new(&m).distance(0, 2), 5.0);
     /// ```
     pub fn distance(&self, a: u32, b: u32) -> f64 {
-        let mut s = Scratch::new(self.positions.len());
+        let mut s = DijkstraScratch::new(&self.graph);
         let mut out = None;
         self.search(&mut s, a, f64::INFINITY, |v, d| {
             if v == b {
@@ -217,6 +156,7 @@ pub fn within(errors: &[f64], x: f64) -> f64 {
 /// Evaluates matches `(template vertex, target vertex)` against ground truth
 /// (`truth(template vertex) = q*`, a target vertex), with an optional `mirror` map of the
 /// target (`mirror[v]` = the vertex mirror-symmetric to `v`). Runs in parallel (rayon).
+/// Panics if a match, truth or mirror vertex is not a vertex of `graph`.
 ///
 /// ```
 /// use symcorr_mesh::TriMesh;
@@ -234,13 +174,12 @@ pub fn evaluate(
     truth: impl Fn(u32) -> u32 + Sync,
     mirror: Option<&[u32]>,
 ) -> Evaluation {
-    let n = graph.positions.len();
     let sqrt_area = target_area.sqrt();
     let sep = FLIP_MIN_SEPARATION * sqrt_area;
     let results: Vec<(f64, Option<bool>)> = matches
         .par_iter()
         .map_init(
-            || Scratch::new(n),
+            || DijkstraScratch::new(&graph.graph),
             |s, &(p, q)| {
                 let qs = truth(p);
                 let m = mirror.map(|m| m[qs as usize]);

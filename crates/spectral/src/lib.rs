@@ -70,7 +70,7 @@ pub mod testmesh;
 pub use curvature::gaussian_curvature;
 pub use descriptors::{hks, hks_times, si_hks, wks, SiHksParams, WksParams};
 pub use eigen::{eigenpairs, EigenOptions, Eigenpairs};
-pub use geodesic::{dijkstra, dijkstra_many, EdgeGraph, HeatGeodesics};
+pub use geodesic::{dijkstra, dijkstra_many, DijkstraScratch, EdgeGraph, HeatGeodesics};
 pub use laplacian::{Laplacian, SystemFactor, COT_CLAMP, DEGENERATE_REL};
 pub use sampling::base_vertex_set;
 

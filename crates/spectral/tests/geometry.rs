@@ -240,3 +240,52 @@ fn area_relative_si_hks_is_scale_invariant_on_a_narrow_window() {
     let a2 = si_hks(&e2, &p1).unwrap();
     assert!(rel_diff(&s1, &a2) > 1e-3, "{}", rel_diff(&s1, &a2));
 }
+
+#[test]
+fn bounded_search_settles_in_order_at_the_full_dijkstra_distances() {
+    let mesh = body();
+    let g = EdgeGraph::new(&mesh);
+    let n = g.len();
+    let mut scratch = DijkstraScratch::new(&g);
+    for source in [0u32, 17, (n / 2) as u32, (n - 1) as u32] {
+        let full = g.distances(source).unwrap();
+        // Everything: same distances, bit for bit, in non-decreasing order.
+        let mut seen = Vec::new();
+        g.search(&mut scratch, source, f64::INFINITY, |v, d| {
+            seen.push((v, d));
+            true
+        })
+        .unwrap();
+        assert_eq!(seen.len(), n);
+        assert!(seen.windows(2).all(|w| w[0].1 <= w[1].1));
+        assert!(seen
+            .iter()
+            .all(|&(v, d)| d.to_bits() == full[v as usize].to_bits()));
+        // Within a radius: exactly the vertices at most that far.
+        let r = full.iter().cloned().fold(0.0, f64::max) * 0.3;
+        let mut inside = 0;
+        g.search(&mut scratch, source, r, |v, d| {
+            assert!(d <= r && d == full[v as usize]);
+            inside += 1;
+            true
+        })
+        .unwrap();
+        assert_eq!(inside, full.iter().filter(|&&d| d <= r).count());
+        // Stopped at a target: its distance, having settled only nearer vertices.
+        let target = seen[n * 2 / 3].0;
+        let mut settled = 0;
+        let mut got = None;
+        g.search(&mut scratch, source, f64::INFINITY, |v, d| {
+            settled += 1;
+            got = (v == target).then_some(d);
+            v != target
+        })
+        .unwrap();
+        assert_eq!(got, Some(full[target as usize]));
+        let nearer = full.iter().filter(|&&d| d <= full[target as usize]).count();
+        assert!(settled <= nearer && nearer < n, "{settled} {nearer}");
+    }
+    assert!(g.search(&mut scratch, n as u32, 1.0, |_, _| true).is_err());
+    let small = EdgeGraph::new(&icosphere(0));
+    assert!(small.search(&mut scratch, 0, 1.0, |_, _| true).is_err());
+}
