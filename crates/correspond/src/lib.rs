@@ -129,9 +129,6 @@ pub use sample::farthest_point_sample;
 pub use selection::{assign_confidence, base_profile, select, Match};
 pub use symmetry::refine_symmetry_plane;
 
-/// The linear-algebra crate of this API ([`SpectralBasis`], [`RefineSide`] take faer matrices).
-pub use faer;
-
 use std::time::Instant;
 use symcorr_attach::Segment;
 

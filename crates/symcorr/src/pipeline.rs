@@ -372,13 +372,13 @@ struct Spectral {
 #[derive(Debug, Clone)]
 pub struct RefineData {
     /// M-orthonormal Laplace–Beltrami eigenvectors (`n × k`, the same eigenpairs as the si-HKS).
-    pub basis: symcorr_correspond::faer::Mat<f64>,
+    pub basis: faer::Mat<f64>,
     /// Lumped mass per vertex.
     pub mass: Vec<f64>,
     /// Skeleton landmark coordinates: geodesic distance (heat method) over √area to each
     /// joint's landmark ([`skeleton_landmarks`] — rings and tips — then the nearest surface
     /// vertex of each joint), `n × 40`, columns in joint order.
-    pub landmarks: symcorr_correspond::faer::Mat<f64>,
+    pub landmarks: faer::Mat<f64>,
     /// Sagittal halves with each midline plane refined by the surface's symmetry
     /// ([`symmetric_midline_halves`]).
     pub halves: Vec<i8>,
