@@ -148,6 +148,8 @@ pub struct PreparedMesh {
     pub attachment: Attachment,
     /// Sagittal half per vertex of the midline segments ([`midline_halves`]).
     pub halves: Vec<i8>,
+    /// Sagittal coordinate per vertex of the midline segments ([`midline_sagittal`]).
+    pub sagittal: Vec<f64>,
     /// What the refined method needs (with [`PrepareOptions::refine_data`]).
     pub refine: Option<RefineData>,
     /// Total length of the mesh's boundary edges (0 for a closed surface): a single-view scan
@@ -208,6 +210,7 @@ impl PreparedMesh {
             &attachment.joints,
             options.midline_margin * area.sqrt(),
         );
+        let sagittal = midline_sagittal(&mesh, &attachment.labels, &attachment.joints);
         let refine = match sp.refine {
             Some(r) => Some(RefineData::new(&mesh, &attachment, r, &mut timings)?),
             None => None,
@@ -216,6 +219,7 @@ impl PreparedMesh {
         Ok(PreparedMesh {
             boundary_length,
             halves,
+            sagittal,
             refine,
             area,
             mesh,
@@ -289,6 +293,7 @@ impl PreparedMesh {
             labels: &self.attachment.labels,
             profile: &self.profile,
             halves: Some(&self.halves),
+            sagittal: Some(&self.sagittal),
             positions: Some(&self.mesh.positions),
         }
     }
@@ -310,6 +315,52 @@ pub fn midline_halves(
     joints: &Skeleton,
     margin: f64,
 ) -> Vec<i8> {
+    midline_signed_distances(mesh, labels, joints)
+        .into_iter()
+        .map(|side| {
+            if side > margin {
+                1
+            } else if side < -margin {
+                -1
+            } else {
+                0
+            }
+        })
+        .collect()
+}
+
+/// The sagittal coordinate of each vertex on a midline segment (pelvis, torso, head) for the
+/// sagittal band (symcorr-correspond's `sagittal_band`, beyond the paper): the signed distance
+/// to the segment's plane of [`midline_halves`] (`+` on the subject's left) over the segment's
+/// half-width on this mesh — the 90th percentile of the segment's |distances| — so that bodies
+/// of different build compare; `0` on every limb segment.
+pub fn midline_sagittal(mesh: &TriMesh, labels: &[Segment], joints: &Skeleton) -> Vec<f64> {
+    let mut d = midline_signed_distances(mesh, labels, joints);
+    for seg in [Segment::Pelvis, Segment::Torso, Segment::Head] {
+        let mut abs: Vec<f64> = d
+            .iter()
+            .zip(labels)
+            .filter(|(_, &l)| l == seg)
+            .map(|(x, _)| x.abs())
+            .collect();
+        if abs.is_empty() {
+            continue;
+        }
+        let k = (abs.len() * 9 / 10).min(abs.len() - 1);
+        abs.select_nth_unstable_by(k, f64::total_cmp);
+        let width = abs[k];
+        for (x, &l) in d.iter_mut().zip(labels) {
+            if l == seg {
+                *x = if width > 0.0 { *x / width } else { 0.0 };
+            }
+        }
+    }
+    d
+}
+
+/// Signed distance of each midline vertex to its segment's joint plane ([`midline_halves`]),
+/// `0` on limb segments.
+fn midline_signed_distances(mesh: &TriMesh, labels: &[Segment], joints: &Skeleton) -> Vec<f64> {
     let p = |j: Joint| joints.position(j);
     let unit = |v: [f64; 3]| {
         let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
@@ -345,17 +396,10 @@ pub fn midline_halves(
                 Segment::Pelvis => (hips_o, hips_n),
                 Segment::Torso => (torso_o, torso_n),
                 Segment::Head => (sh_o, sh_n),
-                _ => return 0,
+                _ => return 0.0,
             };
             let d = sub(x, o);
-            let side = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-            if side > margin {
-                1
-            } else if side < -margin {
-                -1
-            } else {
-                0
-            }
+            d[0] * n[0] + d[1] * n[1] + d[2] * n[2]
         })
         .collect()
 }

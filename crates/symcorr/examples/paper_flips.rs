@@ -1,0 +1,432 @@
+//! Developer experiment: where the paper pipeline's flips come from, on a dataset in DESIGN.md's
+//! layout with the rig's reference labels (`labels/NAME.txt`, one segment index per line).
+//!
+//! `cargo run --release -p symcorr --example paper_flips -- DATASET [dense] [VARIANT,...]`
+//!
+//! Every mesh is prepared once; each variant of the matching options then runs on every pair
+//! and prints mean error and flip rate. For the first variant every flip is classified:
+//! * `tmpl_label`: the template point's attachment label differs from its reference label;
+//! * `target_label`: the target's attachment label at the true vertex differs from the
+//!   reference label (the filter cannot keep the true match);
+//! * `halves`: labels right, but the template point and its true vertex got opposite
+//!   sagittal halves (the midline split is wrong on one mesh);
+//! * `selection`: labels and halves right — the candidates / eq. 8 picked the mirror side.
+//!   `in_list` says whether some filtered candidate lay nearer the truth than its mirror.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+use symcorr::dataset::{read_mesh, read_skeleton, Dataset};
+use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
+use symcorr_attach::{Joint, Segment};
+use symcorr_correspond::{
+    candidates, evaluate, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
+    EvalGraph, MatchOptions, Side,
+};
+
+struct Mesh {
+    p: PreparedMesh,
+    reference: Vec<Segment>,
+    graph: EvalGraph,
+    /// Signed distance over √area (0 on limbs) to the segment's plane: joint planes, refined by
+    /// symmetry for the segments of bit mask k (1 pelvis, 2 torso, 4 head).
+    sd: Vec<Vec<f64>>,
+    /// Per plane set and segment, the 90th percentile of |sd| (half-width).
+    width: Vec<[f64; 17]>,
+}
+
+/// The joint planes of `symcorr::midline_halves` (refined by the surface's symmetry with
+/// `sym`), as signed distances over √area.
+fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
+    let j = &m.attachment.joints;
+    let p = |x: Joint| j.position(x);
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let mid =
+        |a: [f64; 3], b: [f64; 3]| [(a[0] + b[0]) / 2., (a[1] + b[1]) / 2., (a[2] + b[2]) / 2.];
+    let unit = |v: [f64; 3]| {
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        [v[0] / n, v[1] / n, v[2] / n]
+    };
+    let hn = unit(sub(p(Joint::HipLeft), p(Joint::HipRight)));
+    let ho = mid(p(Joint::HipLeft), p(Joint::HipRight));
+    let sn = unit(sub(p(Joint::ShoulderLeft), p(Joint::ShoulderRight)));
+    let so = mid(p(Joint::ShoulderLeft), p(Joint::ShoulderRight));
+    let tn = unit([hn[0] + sn[0], hn[1] + sn[1], hn[2] + sn[2]]);
+    let to = mid(ho, so);
+    let fit = |seg: Segment, o: [f64; 3], n: [f64; 3]| {
+        let bit = match seg {
+            Segment::Pelvis => 1,
+            Segment::Torso => 2,
+            _ => 4,
+        };
+        if sym & bit == 0 {
+            return (o, n);
+        }
+        let pts: Vec<[f64; 3]> = m
+            .mesh
+            .positions
+            .iter()
+            .zip(m.labels())
+            .filter(|(_, &l)| l == seg)
+            .map(|(x, _)| *x)
+            .collect();
+        let stride = pts.len().div_ceil(1500).max(1);
+        let pts: Vec<[f64; 3]> = pts.into_iter().step_by(stride).collect();
+        refine_symmetry_plane(&pts, o, n, 10)
+    };
+    let (ho, hn) = fit(Segment::Pelvis, ho, hn);
+    let (to, tn) = fit(Segment::Torso, to, tn);
+    let (so, sn) = fit(Segment::Head, so, sn);
+    let s = m.area.sqrt();
+    m.mesh
+        .positions
+        .iter()
+        .zip(m.labels())
+        .map(|(&x, l)| {
+            let (o, n) = match l {
+                Segment::Pelvis => (ho, hn),
+                Segment::Torso => (to, tn),
+                Segment::Head => (so, sn),
+                _ => return 0.0,
+            };
+            let d = sub(x, o);
+            (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / s
+        })
+        .collect()
+}
+
+fn read_labels(path: &Path) -> Vec<Segment> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| Segment::from_index(l.trim().parse().unwrap()).unwrap())
+        .collect()
+}
+
+fn side(m: &PreparedMesh) -> Side<'_> {
+    Side {
+        descriptors: &m.descriptors,
+        labels: &m.attachment.labels,
+        profile: &m.profile,
+        halves: Some(&m.halves),
+        sagittal: Some(&m.sagittal),
+        positions: Some(&m.mesh.positions),
+    }
+}
+
+#[derive(Default, Clone, Copy)]
+struct Rule {
+    /// Refine these segments' planes by symmetry (1 pelvis, 2 torso, 4 head).
+    sym: u8,
+    /// Halves (signs) from the chosen planes instead of `PreparedMesh::halves`.
+    own_halves: bool,
+    /// Normalise by the segment's half-width instead of √area.
+    width: bool,
+    /// Keep a candidate when |s(q) − s(p)| ≤ diff.
+    diff: Option<f64>,
+    /// Keep a candidate when s(q)·sign(s(p)) ≥ ratio·|s(p)|.
+    ratio: Option<f64>,
+    /// Selection term λ·|s(q) − s(p)|.
+    lambda: f64,
+}
+
+fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
+    let mut o = MatchOptions::default();
+    let mut r = Rule::default();
+    let mut custom = false;
+    for part in name.split('+') {
+        let num = |pre: &str| part.strip_prefix(pre).and_then(|x| x.parse::<f64>().ok());
+        match part {
+            "base" => {}
+            "paper" => {
+                o.midline_halves = false;
+                o.sagittal_ratio = None;
+            }
+            "noband" => o.sagittal_ratio = None,
+            "off" => o.skeleton_filter = false,
+            "sym" => r.sym = 7,
+            "own" => r.own_halves = true,
+            "w" => r.width = true,
+            "c" => custom = true,
+            _ => {
+                if let Some(x) = part.strip_prefix("band") {
+                    o.sagittal_ratio = Some(x.parse().unwrap());
+                    continue;
+                }
+                if let Some(n) = part.strip_prefix('n') {
+                    o.candidates.nearest = Some(n.parse().unwrap());
+                    continue;
+                } else if let Some(x) = num("s") {
+                    r.sym = x as u8;
+                } else if let Some(x) = num("d") {
+                    r.diff = Some(x);
+                } else if let Some(x) = num("r") {
+                    r.ratio = Some(x);
+                } else if let Some(x) = num("l") {
+                    r.lambda = x;
+                } else {
+                    panic!("unknown variant part {part}");
+                }
+            }
+        }
+        if !["base", "paper", "off", "noband"].contains(&part)
+            && !part.starts_with('n')
+            && !part.starts_with("band")
+        {
+            custom = true;
+        }
+    }
+    (o, custom.then_some(r))
+}
+
+/// candidates → skeleton filter (halves) → sagittal rule → selection.
+fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> Vec<(u32, u32)> {
+    let (ta, tb) = (&ma.p, &mb.p);
+    let k = r.sym as usize;
+    let (sa, sb) = (&ma.sd[k], &mb.sd[k]);
+    let norm = |m: &Mesh, s: &[f64], v: usize| {
+        let l = m.p.labels()[v];
+        if r.width {
+            s[v] / m.width[k][l.index()]
+        } else {
+            s[v]
+        }
+    };
+    let sign = |x: f64| {
+        if x > 0.0 {
+            1i8
+        } else if x < 0.0 {
+            -1
+        } else {
+            0
+        }
+    };
+    let own: (Vec<i8>, Vec<i8>) = (
+        sa.iter().map(|&x| sign(x)).collect(),
+        sb.iter().map(|&x| sign(x)).collect(),
+    );
+    let halves = if r.own_halves {
+        (&own.0[..], &own.1[..])
+    } else {
+        (&ta.halves[..], &tb.halves[..])
+    };
+    let mut cands = candidates(&ta.descriptors, &tb.descriptors, points, &o.candidates).unwrap();
+    skeleton_filter(
+        &mut cands,
+        points,
+        (ta.labels(), tb.labels()),
+        Some(halves),
+        &ta.descriptors,
+        &tb.descriptors,
+    );
+    let midline = |l: Segment| matches!(l, Segment::Pelvis | Segment::Torso | Segment::Head);
+    for (list, &p) in cands.iter_mut().zip(points) {
+        let p = p as usize;
+        let lp = ta.labels()[p];
+        if !midline(lp) {
+            continue;
+        }
+        let spn = norm(ma, sa, p);
+        let ok = |q: usize| {
+            let sq = norm(mb, sb, q);
+            r.diff.is_none_or(|d| (sq - spn).abs() <= d)
+                && r.ratio.is_none_or(|a| sq * spn.signum() >= a * spn.abs())
+        };
+        list.retain(|c| ok(c.vertex as usize));
+        if list.is_empty() {
+            let best = (0..tb.num_vertices())
+                .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0 && ok(q))
+                .map(|q| Candidate {
+                    vertex: q as u32,
+                    distance: ta.descriptors.distance(p, &tb.descriptors, q),
+                })
+                .min_by(|a, b| a.distance.total_cmp(&b.distance));
+            list.extend(best);
+        }
+    }
+    if r.lambda > 0.0 {
+        return cands
+            .iter()
+            .zip(points)
+            .filter_map(|(list, &p)| {
+                let pu = p as usize;
+                let dp = ta.profile[pu];
+                let spn = if midline(ta.labels()[pu]) {
+                    norm(ma, sa, pu)
+                } else {
+                    0.0
+                };
+                list.iter()
+                    .map(|c| {
+                        let q = c.vertex as usize;
+                        let sq = if midline(tb.labels()[q]) {
+                            norm(mb, sb, q)
+                        } else {
+                            0.0
+                        };
+                        (
+                            (tb.profile[q] - dp).abs() + r.lambda * (sq - spn).abs(),
+                            c.vertex,
+                        )
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .map(|(_, q)| (p, q))
+            })
+            .collect();
+    }
+    select(&cands, points, &ta.profile, &tb.profile)
+        .iter()
+        .map(|m| (m.template, m.target))
+        .collect()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let root = Path::new(&args[0]);
+    let dense = args.iter().any(|a| a == "dense");
+    let variants: Vec<String> = args
+        .iter()
+        .skip(1)
+        .filter(|a| *a != "dense")
+        .flat_map(|a| a.split(',').map(String::from).collect::<Vec<_>>())
+        .collect();
+    let variants = if variants.is_empty() {
+        vec!["base".to_string()]
+    } else {
+        variants
+    };
+    let ds = Dataset::open(root, None).unwrap();
+    let mirror = ds.mirror.clone().unwrap();
+    let pipeline = Pipeline::new(PipelineOptions {
+        method: Method::Paper,
+        mode: if dense {
+            Mode::Dense
+        } else {
+            Mode::DEFAULT_SPARSE
+        },
+        ..PipelineOptions::default()
+    });
+    let t = Instant::now();
+    let names = ds.used_names();
+    use rayon::prelude::*;
+    let meshes: BTreeMap<String, Mesh> = names
+        .par_iter()
+        .map(|n| {
+            let mesh = read_mesh(&ds.meshes[n]).unwrap();
+            let sk = read_skeleton(&ds.joints[n], None).unwrap();
+            let p = pipeline.prepare(mesh, &sk).unwrap();
+            let reference = read_labels(&root.join("labels").join(format!("{n}.txt")));
+            let graph = EvalGraph::new(&p.mesh);
+            let sd: Vec<Vec<f64>> = (0..8).map(|k| signed_distances(&p, k)).collect();
+            let mut width = vec![[1.0; 17]; 8];
+            for (k, d) in sd.iter().enumerate() {
+                for seg in [Segment::Pelvis, Segment::Torso, Segment::Head] {
+                    let mut v: Vec<f64> = d
+                        .iter()
+                        .zip(p.labels())
+                        .filter(|(_, &l)| l == seg)
+                        .map(|(x, _)| x.abs())
+                        .collect();
+                    if v.is_empty() {
+                        continue;
+                    }
+                    v.sort_by(f64::total_cmp);
+                    width[k][seg.index()] = v[v.len() * 9 / 10];
+                }
+            }
+            (
+                n.clone(),
+                Mesh {
+                    p,
+                    reference,
+                    graph,
+                    sd,
+                    width,
+                },
+            )
+        })
+        .collect();
+    eprintln!(
+        "prepared {} meshes in {:.1} s",
+        meshes.len(),
+        t.elapsed().as_secs_f64()
+    );
+    for (vi, v) in variants.iter().enumerate() {
+        let (opts, rule) = variant(v);
+        let mut total = (0.0, 0usize, 0usize, 0usize);
+        let mut classes: BTreeMap<&str, usize> = BTreeMap::new();
+        let mut by_seg: BTreeMap<(&str, &str), usize> = BTreeMap::new();
+        let mut by_pair: Vec<(String, usize, usize)> = Vec::new();
+        for (a, b) in &ds.pairs {
+            let (ma, mb) = (&meshes[a], &meshes[b]);
+            let points = pipeline.points(&ma.p);
+            let pairs: Vec<(u32, u32)> = match &rule {
+                None => match_points(&side(&ma.p), &side(&mb.p), &points, &opts)
+                    .unwrap()
+                    .matches
+                    .iter()
+                    .map(|m| (m.template, m.target))
+                    .collect(),
+                Some(r) => custom(ma, mb, &points, &opts, r),
+            };
+            let e = evaluate(&mb.graph, mb.p.area, &pairs, |v| v, Some(&mirror));
+            let (c, f) = e.flip_counts();
+            total.0 += e.errors.iter().sum::<f64>();
+            total.1 += e.errors.len();
+            total.2 += c;
+            total.3 += f;
+            by_pair.push((format!("{a}->{b}"), f, c));
+            if vi > 0 && std::env::var("ALL").is_err() {
+                continue;
+            }
+            for (i, (&(p, q), flip)) in pairs.iter().zip(&e.flips).enumerate() {
+                if *flip != Some(true) {
+                    continue;
+                }
+                let (p, q) = (p as usize, q as usize);
+                let rp = ma.reference[p];
+                let class = if ma.p.attachment.labels[p] != rp {
+                    "tmpl_label"
+                } else if mb.p.attachment.labels[p] != mb.reference[p] {
+                    "target_label"
+                } else if ma.p.halves[p] * mb.p.halves[p] < 0 {
+                    "halves"
+                } else {
+                    "selection"
+                };
+                *classes.entry(class).or_default() += 1;
+                *by_seg.entry((class, rp.name())).or_default() += 1;
+                if std::env::var("VERBOSE").is_ok() {
+                    println!(
+                        "  {a}->{b} p={p} ref={} tl={} ul={} hp={} hu={} q={q} ql={} qh={} err={:.3} cls={class} sd p {:.3} q* {:.3} q {:.3} m(q*) {}",
+                        rp.name(),
+                        ma.p.attachment.labels[p].name(),
+                        mb.p.attachment.labels[p].name(),
+                        ma.p.halves[p],
+                        mb.p.halves[p],
+                        mb.p.attachment.labels[q].name(),
+                        mb.p.halves[q],
+                        e.errors[i],
+                        ma.sd[0][p],
+                        mb.sd[0][p],
+                        mb.sd[0][q],
+                        mirror[p],
+                    );
+                }
+            }
+        }
+        println!(
+            "{v}: mean {:.4} flips {}/{} = {:.3} %",
+            total.0 / total.1 as f64,
+            total.3,
+            total.2,
+            100.0 * total.3 as f64 / total.2.max(1) as f64
+        );
+        if vi == 0 || std::env::var("ALL").is_ok() {
+            println!("  classes {classes:?}");
+            println!("  by segment {by_seg:?}");
+            let flipped: Vec<_> = by_pair.iter().filter(|x| x.1 > 0).collect();
+            println!("  pairs with flips: {flipped:?}");
+        }
+    }
+}
