@@ -32,6 +32,7 @@ struct Source {
 
 fn sources(
     x: [f64; 3],
+    normal: [f64; 3],
     v: u32,
     p: &[[f64; 3]; 20],
     active: &[usize],
@@ -60,8 +61,11 @@ fn sources(
             break;
         }
         // Visibility of the bone at its closest point (Baran & Popović test the segment
-        // from the vertex to the bone against the surface).
-        if bvh.segment_blocked(x, d[i].2, v) {
+        // from the vertex to the bone against the surface), and the bone must lie behind the
+        // vertex's tangent plane: where two limbs touch or interpenetrate (inner thighs, a
+        // linear-blend-skinned groin) the segment to the *other* limb's bone may cross no
+        // triangle, but it leaves this limb through its outward normal.
+        if facing(normal, x, d[i].2) || bvh.segment_blocked(x, d[i].2, v) {
             continue;
         }
         let mut bones = vec![d[i].1];
@@ -69,7 +73,7 @@ fn sources(
             if dk > di * (1.0 + TIE) {
                 break;
             }
-            if !bvh.segment_blocked(x, qk, v) {
+            if !facing(normal, x, qk) && !bvh.segment_blocked(x, qk, v) {
                 bones.push(bk);
             }
         }
@@ -81,6 +85,17 @@ fn sources(
     }
     nearest
 }
+
+/// True if `q` lies in front of the surface at `x` (outward `normal`): more than
+/// [`FRONT`] of the way along the normal.
+fn facing(normal: [f64; 3], x: [f64; 3], q: [f64; 3]) -> bool {
+    let e = sub(q, x);
+    dot(normal, e) > FRONT * norm(e)
+}
+
+/// Cosine between a vertex's outward normal and the direction to a bone above which the bone is
+/// "in front of" the surface and no heat source for it (0: the tangent plane).
+const FRONT: f64 = 0.0;
 
 /// Computes bone-heat weights for `active` bones (indices into [`BONES`]) with joints `p`.
 pub(crate) fn bone_heat(
@@ -148,9 +163,33 @@ pub(crate) fn bone_heat(
         };
         let m = sub_mesh.num_vertices();
         let bvh = TriangleBvh::new(mesh);
+        let mut normals = sub_mesh.vertex_normals();
+        // The facing test needs outward normals; a mesh wound the other way round (or a scan
+        // meshed facing away) is recognised by its nearest bones lying in front of most
+        // vertices, and its normals are turned round.
+        let in_front = (0..m)
+            .into_par_iter()
+            .filter(|&i| {
+                let x = sub_mesh.positions[i];
+                let q = active
+                    .iter()
+                    .map(|&b| closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]))
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map_or(x, |c| c.0);
+                dot(normals[i], sub(q, x)) > 0.0
+            })
+            .count();
+        if 2 * in_front > m {
+            for n in &mut normals {
+                *n = [-n[0], -n[1], -n[2]];
+            }
+        }
         let src: Vec<Source> = (0..m)
             .into_par_iter()
-            .map(|i| sources(sub_mesh.positions[i], old_id[i], p, active, reach, &bvh))
+            .map(|i| {
+                let x = sub_mesh.positions[i];
+                sources(x, normals[i], old_id[i], p, active, reach, &bvh)
+            })
             .collect();
         let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;
         // Per component: at least one heat source, or every vertex uses its nearest bone.

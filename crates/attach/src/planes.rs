@@ -11,7 +11,7 @@
 //! centre) this is the plane bisecting the angle between them — between the left and right
 //! siblings it is the sagittal plane through the midline joint.
 
-use crate::vec3::{dot, sub, unit};
+use crate::vec3::{dot, scale, sub, unit};
 use crate::{Joint, Segment};
 
 /// One boundary: segments `a` and `b` meet at `joint`; `normal` points into `b`'s side.
@@ -34,6 +34,16 @@ fn away_from(s: Segment, j: Joint, p: &[[f64; 3]; 20], usable: &[bool; 20]) -> O
     unit(sub(p[other.index()], p[j.index()]))
 }
 
+/// Unit trunk axis, hip centre → shoulder centre (the longest midline baseline, least affected
+/// by joint noise).
+pub(crate) fn trunk_axis(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[f64; 3]> {
+    let (h, s) = (Joint::HipCenter.index(), Joint::ShoulderCenter.index());
+    if !(usable[h] && usable[s]) {
+        return None;
+    }
+    unit(sub(p[s], p[h]))
+}
+
 /// The planes between every two segments that share a joint (skipping bones that were dropped
 /// or are degenerate).
 pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<JointPlane> {
@@ -51,7 +61,18 @@ pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<Joint
                 continue;
             };
             // d_A into the joint is −da; the bisector of (−da, db) is db − da.
-            if let Some(normal) = unit(sub(db, da)) {
+            let mut n = sub(db, da);
+            // Between left/right twins the bisector is the body's sagittal plane, which
+            // contains the trunk axis: keep only the part of the normal perpendicular to it.
+            // With one twin bone noisy (a hip joint moved onto the surface near the hip
+            // centre, so that hip bone points up) the plain bisector tilts by up to 45° and
+            // the plane cuts through the other thigh, whose vertices then took the wrong side.
+            if a.mirror() == b {
+                if let Some(up) = trunk_axis(p, usable) {
+                    n = sub(n, scale(up, dot(n, up)));
+                }
+            }
+            if let Some(normal) = unit(n) {
                 out.push(JointPlane {
                     a,
                     b,

@@ -193,3 +193,33 @@ fn single_view_scan_labels_its_visible_surface() {
         assert!(!a.diagnostics.mirror.swapped);
     }
 }
+
+#[test]
+fn inward_winding_gives_the_same_labels() {
+    // Bone heat only takes bones behind a vertex's tangent plane as heat sources, which needs
+    // outward normals; a mesh wound the other way round must be recognised and give the same
+    // labels and weights.
+    let (sk, mesh, _, _) = body();
+    let mut flipped = mesh.clone();
+    for t in &mut flipped.triangles {
+        t.swap(1, 2);
+    }
+    let a = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    let b = attach(&flipped, &sk, &AttachOptions::default()).unwrap();
+    let differ = (0..mesh.num_vertices())
+        .filter(|&v| a.labels[v] != b.labels[v])
+        .count();
+    assert_eq!(
+        differ,
+        0,
+        "{differ} of {} labels differ",
+        mesh.num_vertices()
+    );
+    // The same weights up to round-off (the triangles' corner order changes sums).
+    for v in 0..mesh.num_vertices() {
+        let (wa, wb) = (a.weights.segment_weights(v), b.weights.segment_weights(v));
+        for s in 0..17 {
+            assert!((wa[s] - wb[s]).abs() < 1e-9, "vertex {v}: {wa:?} vs {wb:?}");
+        }
+    }
+}

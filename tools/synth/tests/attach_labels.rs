@@ -61,6 +61,47 @@ fn mirror_map() -> &'static [u32] {
     M.get_or_init(|| model().assets.body_mirror().unwrap())
 }
 
+/// Signed distance of every body vertex from the body's plane of symmetry in the rest pose
+/// (metres, positive = the subject's left): half the lateral offset between the vertex and its
+/// mirror vertex. This is the vertex's anatomical side, whatever the pose.
+fn rest_side() -> &'static Vec<f64> {
+    static S: OnceLock<Vec<f64>> = OnceLock::new();
+    S.get_or_init(|| {
+        let base = model().body(&Shape::default()).unwrap();
+        let mirror = mirror_map();
+        // OBJ frame: x = the subject's left.
+        base.rest
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(v, p)| 0.5 * (p[0] - base.rest.positions[mirror[v] as usize][0]))
+            .collect()
+    })
+}
+
+/// Which side a segment belongs to: −1 right, 0 midline, +1 left.
+fn side_of(s: Segment) -> i32 {
+    if s.name().ends_with("_left") {
+        1
+    } else if s.name().ends_with("_right") {
+        -1
+    } else {
+        0
+    }
+}
+
+/// Vertices closer than this to the rest-pose plane of symmetry have no anatomical side in the
+/// anatomical cross-side figure (metres).
+const MIDLINE_M: f64 = 0.01;
+
+/// What is known about a vertex: its reference segment and its anatomical side (rest-pose
+/// signed distance to the plane of symmetry, [`rest_side`]).
+#[derive(Debug, Clone, Copy)]
+struct Truth {
+    segment: Segment,
+    side: f64,
+}
+
 /// The 20 poses of the acceptance set: the named ones, four walk phases, and 13 random
 /// joint-limited poses (rejected while distant parts intersect).
 const POSES: [&str; 20] = [
@@ -179,14 +220,27 @@ struct Score {
     strict: f64,
     mirrored: f64,
     tolerant: f64,
+    /// Area labelled with a left (right) segment whose reference segment is a midline or right
+    /// (left) one.
+    cross_ref: f64,
+    /// Area labelled with a left (right) segment lying more than [`MIDLINE_M`] on the right
+    /// (left) of the plane of symmetry in the rest pose: the labels that let a correspondence
+    /// map a vertex onto the other side of the body.
+    cross_anat: f64,
+    /// The same beyond [`FAR_M`] of the plane of symmetry (a vertex that far from the midline
+    /// mapped to the other side is a left/right flip, not a boundary question).
+    cross_far: f64,
 }
+
+/// See [`Score::cross_far`] (metres).
+const FAR_M: f64 = 0.03;
 
 /// Scores `got` against `want` on the vertices where `want` is known.
 fn score(
     name: &str,
     m: &TriMesh,
     got: &[Segment],
-    want: &[Option<Segment>],
+    want: &[Option<Truth>],
     mirror_map: Option<&[u32]>,
 ) -> Score {
     let hops = segment_hops();
@@ -194,17 +248,33 @@ fn score(
     let mut by_ref: Vec<Vec<[f64; 3]>> = vec![Vec::new(); 17];
     for (v, w) in want.iter().enumerate() {
         if let Some(w) = w {
-            by_ref[w.index()].push(m.positions[v]);
+            by_ref[w.segment.index()].push(m.positions[v]);
         }
     }
     let mut conf = [[0.0f64; 17]; 17];
+    let mut cross_conf = [[0.0f64; 17]; 17];
     let (mut total, mut same, mut mirrored, mut tolerant) = (0.0, 0.0, 0.0, 0.0);
+    let (mut cross_ref, mut cross_anat, mut cross_far) = (0.0, 0.0, 0.0);
     let mut mirrored_at = Vec::new();
+    let mut anat_at = Vec::new();
     for v in 0..m.num_vertices() {
-        let Some(w) = want[v] else { continue };
+        let Some(t) = want[v] else { continue };
+        let w = t.segment;
         let g = got[v];
         total += area[v];
         conf[w.index()][g.index()] += area[v];
+        let gs = side_of(g);
+        if gs != 0 && side_of(w) != gs {
+            cross_ref += area[v];
+        }
+        if gs != 0 && t.side * f64::from(gs) < -MIDLINE_M {
+            cross_anat += area[v];
+            cross_conf[w.index()][g.index()] += area[v];
+            anat_at.push((v, w, g, t.side));
+            if t.side * f64::from(gs) < -FAR_M {
+                cross_far += area[v];
+            }
+        }
         if g == w {
             same += area[v];
             tolerant += area[v];
@@ -229,31 +299,58 @@ fn score(
         strict: same / total,
         mirrored: mirrored / total,
         tolerant: tolerant / total,
+        cross_ref: cross_ref / total,
+        cross_anat: cross_anat / total,
+        cross_far: cross_far / total,
     };
     eprintln!(
-        "{name}: strict {:.4} tolerant {:.4} mirrored {:.5}",
-        s.strict, s.tolerant, s.mirrored
+        "{name}: strict {:.4} tolerant {:.4} mirrored {:.5} cross-side ref {:.5} anatomical {:.5} \
+         beyond {} cm {:.5}",
+        s.strict,
+        s.tolerant,
+        s.mirrored,
+        s.cross_ref,
+        s.cross_anat,
+        FAR_M * 100.0,
+        s.cross_far
     );
     if verbose() {
-        let mut pairs: Vec<(f64, usize, usize)> = (0..17)
-            .flat_map(|a| (0..17).map(move |b| (a, b)))
-            .filter(|(a, b)| a != b)
-            .map(|(a, b)| (conf[a][b] / total, a, b))
-            .filter(|x| x.0 > 0.002)
-            .collect();
-        pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
-        let text: Vec<String> = pairs
-            .iter()
-            .map(|(f, a, b)| {
-                format!(
-                    "{}→{} {:.3}",
-                    Segment::ALL[*a].name(),
-                    Segment::ALL[*b].name(),
-                    f
-                )
-            })
-            .collect();
-        eprintln!("  ref→got {}", text.join(", "));
+        let confusions = |conf: &[[f64; 17]; 17], min: f64| -> String {
+            let mut pairs: Vec<(f64, usize, usize)> = (0..17)
+                .flat_map(|a| (0..17).map(move |b| (a, b)))
+                .filter(|(a, b)| a != b)
+                .map(|(a, b)| (conf[a][b] / total, a, b))
+                .filter(|x| x.0 > min)
+                .collect();
+            pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
+            let text: Vec<String> = pairs
+                .iter()
+                .map(|(f, a, b)| {
+                    format!(
+                        "{}→{} {:.4}",
+                        Segment::ALL[*a].name(),
+                        Segment::ALL[*b].name(),
+                        f
+                    )
+                })
+                .collect();
+            text.join(", ")
+        };
+        eprintln!("  ref→got {}", confusions(&conf, 0.002));
+        if cross_anat > 0.0 {
+            eprintln!(
+                "  anatomical cross-side ref→got {}",
+                confusions(&cross_conf, 0.0)
+            );
+            for (v, w, g, sd) in anat_at.iter().take(3) {
+                eprintln!(
+                    "  cross-side v{v} at {:?} (rest side {sd:.3}): ref {} got {}",
+                    m.positions[*v],
+                    w.name(),
+                    g.name()
+                );
+            }
+        }
         if let Some(mirror) = mirror_map {
             let mut d: Vec<f64> = mirrored_at
                 .iter()
@@ -283,22 +380,57 @@ fn score(
     s
 }
 
-fn summary(set: &str, s: &[Score]) -> (f64, f64, f64, f64, f64) {
+/// Mean / worst over a set of bodies.
+#[derive(Debug, Clone, Copy)]
+struct Summary {
+    mean: f64,
+    worst: f64,
+    tmean: f64,
+    tworst: f64,
+    mirrored: f64,
+    cross_ref: f64,
+    cross_anat: f64,
+    cross_far: f64,
+}
+
+fn summary(set: &str, s: &[Score]) -> Summary {
     let n = s.len() as f64;
-    let mean = s.iter().map(|x| x.strict).sum::<f64>() / n;
-    let worst = s.iter().map(|x| x.strict).fold(1.0, f64::min);
-    let tmean = s.iter().map(|x| x.tolerant).sum::<f64>() / n;
-    let tworst = s.iter().map(|x| x.tolerant).fold(1.0, f64::min);
-    let mirror = s.iter().map(|x| x.mirrored).fold(0.0, f64::max);
+    let max = |f: fn(&Score) -> f64| s.iter().map(f).fold(0.0, f64::max);
+    let out = Summary {
+        mean: s.iter().map(|x| x.strict).sum::<f64>() / n,
+        worst: s.iter().map(|x| x.strict).fold(1.0, f64::min),
+        tmean: s.iter().map(|x| x.tolerant).sum::<f64>() / n,
+        tworst: s.iter().map(|x| x.tolerant).fold(1.0, f64::min),
+        mirrored: max(|x| x.mirrored),
+        cross_ref: max(|x| x.cross_ref),
+        cross_anat: max(|x| x.cross_anat),
+        cross_far: max(|x| x.cross_far),
+    };
+    let cross_ref_mean = s.iter().map(|x| x.cross_ref).sum::<f64>() / n;
     eprintln!(
-        "{set}: strict mean {mean:.4} worst {worst:.4}; tolerant ({} cm) mean {tmean:.4} worst {tworst:.4}; mirrored max {mirror:.5}",
-        TOLERANCE_M * 100.0
+        "{set}: strict mean {:.4} worst {:.4}; tolerant ({} cm) mean {:.4} worst {:.4}; mirrored max {:.5}; \
+         cross-side by reference mean {cross_ref_mean:.5} max {:.5}, anatomical max {:.5} \
+         (beyond {} cm {:.5})",
+        out.mean,
+        out.worst,
+        TOLERANCE_M * 100.0,
+        out.tmean,
+        out.tworst,
+        out.mirrored,
+        out.cross_ref,
+        out.cross_anat,
+        FAR_M * 100.0,
+        out.cross_far
     );
-    (mean, worst, tmean, tworst, mirror)
+    out
 }
 
 fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
-    let want: Vec<Option<Segment>> = reference().iter().map(|&s| Some(s)).collect();
+    let want: Vec<Option<Truth>> = reference()
+        .iter()
+        .zip(rest_side())
+        .map(|(&segment, &side)| Some(Truth { segment, side }))
+        .collect();
     bodies()
         .iter()
         .enumerate()
@@ -319,24 +451,35 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
         .collect()
 }
 
-// Measured (2 shapes × 20 poses, attach defaults, 2026-11-23): exact joints strict mean 0.857 /
-// worst 0.828, boundary-tolerant (3 cm) mean 0.912 / worst 0.884, mirrored area 0; noisy joints
-// strict mean 0.811 / worst 0.733, tolerant 0.874 / 0.804, mirrored ≤ 0.0013 (inner thighs at the
-// groin labelled with the other thigh). Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
-// strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
-// noisy joints are NOT reached. The reference labels follow the MakeHuman rig's skinning
-// conventions (small front-only clavicles, a pelvis band above the Kinect spine joint, buttocks
-// in the hips); the residual confusion is printed with ATTACH_EVAL_VERBOSE=1 and listed in
-// symcorr-attach's docs. The assertions guard the measured levels (a little below them).
+// Measured (2 shapes × 20 poses, attach defaults, 2026-11-23, after the trunk-perpendicular
+// sagittal plane and the tangent-plane test of bone heat): exact joints strict mean 0.859 / worst
+// 0.828, boundary-tolerant (3 cm) mean 0.914 / worst 0.884, mirrored area 0, anatomical
+// cross-side area ≤ 0.0018 (≤ 0.0003 beyond 3 cm: s0_random-7, whose linear-blend-skinned neck
+// carries vertices 1.5–3 cm right of the rest midline to 9 cm left of the shoulder centre, where
+// the left clavicle is the nearest bone); noisy joints strict mean 0.816 / worst 0.757, tolerant
+// 0.879 / 0.827, mirrored ≤ 0.0019 and cross-side ≤ 0.0007 beyond 3 cm (inner thighs at the
+// groin of the heavy shape, within 3.5 cm of the midline, labelled with the other thigh). Issue
+// 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy) strict agreement and zero mirrored area: the
+// agreement targets and zero mirrored area with noisy joints are NOT reached. The reference
+// labels follow the MakeHuman rig's skinning conventions (small front-only clavicles, a pelvis
+// band above the Kinect spine joint, buttocks in the hips); the residual confusion is printed
+// with ATTACH_EVAL_VERBOSE=1 and listed in symcorr-attach's docs. The assertions guard the
+// measured levels (a little below them).
 
 #[test]
 fn exact_joints_40_bodies() {
     let s = run_bodies(None);
-    let (mean, worst, tmean, _, mirror) = summary("exact", &s);
-    assert!(mean >= 0.85, "mean strict agreement {mean}");
-    assert!(worst >= 0.82, "worst strict agreement {worst}");
-    assert!(tmean >= 0.90, "mean tolerant agreement {tmean}");
-    assert_eq!(mirror, 0.0, "mirrored area");
+    let r = summary("exact", &s);
+    assert!(r.mean >= 0.855, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.82, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.91, "mean tolerant agreement {}", r.tmean);
+    assert_eq!(r.mirrored, 0.0, "mirrored area");
+    assert!(r.cross_anat <= 0.0025, "cross-side area {}", r.cross_anat);
+    assert!(
+        r.cross_far <= 0.0005,
+        "cross-side area beyond 3 cm {}",
+        r.cross_far
+    );
 }
 
 #[test]
@@ -349,15 +492,21 @@ fn noisy_joints_40_bodies() {
         seed: 5,
     };
     let s = run_bodies(Some(noise));
-    let (mean, worst, tmean, _, mirror) = summary("noisy", &s);
-    assert!(mean >= 0.80, "mean strict agreement {mean}");
-    assert!(worst >= 0.72, "worst strict agreement {worst}");
-    assert!(tmean >= 0.86, "mean tolerant agreement {tmean}");
-    assert!(mirror <= 0.002, "mirrored area {mirror}");
+    let r = summary("noisy", &s);
+    assert!(r.mean >= 0.81, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.75, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.87, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mirrored <= 0.0025, "mirrored area {}", r.mirrored);
+    assert!(r.cross_anat <= 0.005, "cross-side area {}", r.cross_anat);
+    assert!(
+        r.cross_far <= 0.001,
+        "cross-side area beyond 3 cm {}",
+        r.cross_far
+    );
 }
 
 /// The scan folder's depth, vertex ids and joints → scan mesh, reference label per scan vertex.
-fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Segment>>) {
+fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     let dir = root().join("fixtures/synth").join(dir);
     let depth = symcorr_kinect::read_depth_png16(dir.join("depth.png")).unwrap();
     let ids = symcorr_kinect::read_depth_png16(dir.join("vertex_ids.png")).unwrap();
@@ -371,7 +520,10 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Segment>>) {
         .map(|&px| {
             let (u, v) = (px % k.width, px / k.width);
             match ids.at(u, v) {
-                Some(id) if id > 0 => Some(reference()[id as usize - 1]),
+                Some(id) if id > 0 => Some(Truth {
+                    segment: reference()[id as usize - 1],
+                    side: rest_side()[id as usize - 1],
+                }),
                 _ => None,
             }
         })
@@ -379,8 +531,8 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Segment>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured: strict 0.862 (ideal scan) / 0.841 (Kinect realism), tolerant 0.935 / 0.907, no
-// mirrored area. Issue 5's target is ≥ 0.90 strict agreement on the visible surface: not reached
+// Measured: strict 0.870 (ideal scan) / 0.851 (Kinect realism), tolerant 0.946 / 0.920, no
+// mirrored or cross-side area. Issue 5's target is ≥ 0.90 strict agreement on the visible surface: not reached
 // (same conventions gap as above); the assertions guard the measured level.
 #[test]
 fn virtual_kinect_scans() {
@@ -390,8 +542,9 @@ fn virtual_kinect_scans() {
         let a = attach(&mesh, &joints, &AttachOptions::default()).unwrap();
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
-    let (_, worst, _, tworst, mirror) = summary("scans", &s);
-    assert!(worst >= 0.83, "worst strict agreement {worst}");
-    assert!(tworst >= 0.90, "worst tolerant agreement {tworst}");
-    assert_eq!(mirror, 0.0, "mirrored area");
+    let r = summary("scans", &s);
+    assert!(r.worst >= 0.845, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.915, "worst tolerant agreement {}", r.tworst);
+    assert_eq!(r.mirrored, 0.0, "mirrored area");
+    assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }
