@@ -1,9 +1,10 @@
 //! Frame alignment: bring the skeleton into the mesh's units and frame (DESIGN.md, Algorithm 1:
 //! "express the skeleton in the mesh's frame").
 
+use crate::geom::mat_vec;
 use crate::repair::{extent, skeleton_height};
-use crate::vec3::{add, dist, mat_vec, scale, sub};
 use crate::{AttachError, FrameAlignment};
+use symcorr_mesh::geometry::{add, dist, scale, sub};
 use symcorr_mesh::TriMesh;
 
 /// Largest accepted median joint-to-surface distance, in skeleton heights. Joints inside a
@@ -63,7 +64,7 @@ pub(crate) fn coverage(
         .map(|&x| {
             bones
                 .iter()
-                .map(|&(a, b)| crate::vec3::closest_on_segment(x, a, b).1)
+                .map(|&(a, b)| crate::geom::closest_on_segment(x, a, b).1)
                 .fold(f64::INFINITY, f64::min)
         })
         .collect();

@@ -2,10 +2,11 @@
 //! `(L + M·H) w_b = M·H·p_b` for every bone `b`, one factorisation for all of them.
 
 use crate::bvh::TriangleBvh;
-use crate::vec3::{closest_on_segment, cross, dot, norm, sub};
+use crate::geom::closest_on_segment;
 use crate::{AttachError, BoneWeights, ComponentReport, BONES};
 use faer::Mat;
 use rayon::prelude::*;
+use symcorr_mesh::geometry::{cross, dot, norm, sub};
 use symcorr_mesh::TriMesh;
 use symcorr_spectral::{Laplacian, DEGENERATE_REL};
 

@@ -143,13 +143,13 @@
 mod align;
 mod bvh;
 mod error;
+mod geom;
 mod heat;
 pub mod palette;
 mod planes;
 mod refine;
 mod repair;
 mod skeleton;
-mod vec3;
 
 pub use error::AttachError;
 pub use skeleton::{Joint, Segment, Skeleton, BONES};
@@ -257,8 +257,8 @@ impl FrameAlignment {
 
     /// Applies the similarity to a point.
     pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
-        vec3::add(
-            vec3::scale(vec3::mat_vec(&self.rotation, p), self.scale),
+        symcorr_mesh::geometry::add(
+            symcorr_mesh::geometry::scale(geom::mat_vec(&self.rotation, p), self.scale),
             self.translation,
         )
     }
@@ -302,7 +302,7 @@ pub struct JointMove {
 impl JointMove {
     /// Distance moved, in mesh units.
     pub fn distance(&self) -> f64 {
-        vec3::dist(self.from, self.to)
+        symcorr_mesh::geometry::dist(self.from, self.to)
     }
 }
 

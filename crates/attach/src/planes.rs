@@ -11,8 +11,9 @@
 //! centre) this is the plane bisecting the angle between them — between the left and right
 //! siblings it is the sagittal plane through the midline joint.
 
-use crate::vec3::{dot, scale, sub, unit};
+use crate::geom::unit;
 use crate::{Joint, Segment};
+use symcorr_mesh::geometry::{dot, scale, sub};
 
 /// One boundary: segments `a` and `b` meet at `joint`; `normal` points into `b`'s side.
 #[derive(Debug, Clone, Copy)]

@@ -1,8 +1,9 @@
 //! Handedness check and joint refinement (DESIGN.md, Algorithm 1: "move each joint to the
 //! interior, toward the medial axis of its cross-section, keep bone lengths plausible").
 
-use crate::vec3::{add, closest_on_segment, cross, dist, dot, norm, scale, sub, unit};
+use crate::geom::{closest_on_segment, unit};
 use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
+use symcorr_mesh::geometry::{add, cross, dist, dot, norm, scale, sub};
 use symcorr_mesh::TriMesh;
 
 /// A swap needs the combined facing evidence below `-MIRROR_MARGIN`. The evidence is exactly

@@ -1,8 +1,8 @@
 //! Joint repair before attachment: missing, untracked or non-finite joints are rebuilt from
 //! their chain where that is well defined, otherwise dropped (with their bones).
 
-use crate::vec3::{dist, lerp};
 use crate::{AttachError, Joint, JointRepair, Skeleton, BONES};
+use symcorr_mesh::geometry::{dist, lerp};
 
 pub(crate) struct Repaired {
     pub positions: [[f64; 3]; 20],

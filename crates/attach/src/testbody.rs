@@ -2,9 +2,10 @@
 //! with reference labels (the segment whose capsule surface is nearest). Used by the tests,
 //! benches and documentation examples; not part of the stable API.
 
-use crate::vec3::{add, closest_on_segment, scale, sub};
+use crate::geom::closest_on_segment;
 use crate::{bone_segment, Joint, Segment, Skeleton, BONES};
 use std::collections::HashMap;
+use symcorr_mesh::geometry::{add, scale, sub};
 use symcorr_mesh::TriMesh;
 
 /// Capsule radius per bone of [`BONES`] (metres at scale 1).
@@ -74,7 +75,7 @@ fn sdf(x: [f64; 3], sk: &Skeleton, s: f64) -> (f64, usize) {
 /// hip→shoulder distance) with grid step `step`, returning the mesh and per-vertex reference
 /// labels (segment of the nearest capsule).
 pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
-    let s = crate::vec3::dist(
+    let s = symcorr_mesh::geometry::dist(
         sk.position(Joint::HipCenter),
         sk.position(Joint::ShoulderCenter),
     ) / 0.45;

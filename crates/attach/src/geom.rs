@@ -1,32 +1,12 @@
-//! Tiny 3-vector helpers on `[f64; 3]` (the rest come from `symcorr_mesh::geometry`).
+//! The few 3-vector helpers on `[f64; 3]` that `symcorr_mesh::geometry` does not have.
 
-pub(crate) use symcorr_mesh::geometry::{cross, dot, norm, sub};
-
-#[inline]
-pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-#[inline]
-pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-#[inline]
-pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    norm(sub(a, b))
-}
+use symcorr_mesh::geometry::{add, dist, dot, norm, scale, sub};
 
 /// `a` scaled to unit length, or `None` if it is (numerically) zero.
 #[inline]
 pub(crate) fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
     let l = norm(a);
     (l > 1e-12 && l.is_finite()).then(|| scale(a, 1.0 / l))
-}
-
-#[inline]
-pub(crate) fn lerp(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    add(a, scale(sub(b, a), t))
 }
 
 /// Closest point to `p` on the segment `a–b` and its distance.
