@@ -164,3 +164,99 @@ fn a_corrupted_or_truncated_file_is_recomputed_with_a_warning_never_used() {
     assert!(w1.contains("checksum") && w1.contains("recomputed"), "{w1}");
     assert!(w2.contains("bytes"), "{w2}");
 }
+
+/// The command line: `match --cache` writes MESH.symcorr-eigs next to each mesh and reads it
+/// back (timing `eigenpairs_cached`, same pairs); a corrupted file is a warning on stderr and
+/// a recomputation, not a failure; `bench --cache-dir` reports its hits; --cache and
+/// --cache-dir together are a usage error.
+#[test]
+fn command_line_cache_flags() {
+    use std::process::Command;
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies");
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for name in ["s0_rest", "s0_arms-down"] {
+        std::fs::copy(
+            fixtures.join("meshes").join(format!("{name}.ply")),
+            d.join(format!("{name}.ply")),
+        )
+        .unwrap();
+    }
+    let joints = |n: &str| fixtures.join("joints").join(format!("{n}.json"));
+    let run_match = |out: &str, extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_symcorr"))
+            .arg("match")
+            .arg(d.join("s0_rest.ply"))
+            .arg(d.join("s0_arms-down.ply"))
+            .arg("--template-joints")
+            .arg(joints("s0_rest"))
+            .arg("--target-joints")
+            .arg(joints("s0_arms-down"))
+            .arg("--out")
+            .arg(d.join(out))
+            .args(["--samples", "100"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let doc: Option<serde_json::Value> = o
+            .status
+            .success()
+            .then(|| serde_json::from_slice(&std::fs::read(d.join(out)).unwrap()).unwrap());
+        (o, doc)
+    };
+    let (o, cold) = run_match("cold.json", &["--cache"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cold = cold.unwrap();
+    let eigs = d.join("s0_rest.ply.symcorr-eigs");
+    assert!(eigs.is_file() && d.join("s0_arms-down.ply.symcorr-eigs").is_file());
+    assert!(cold["timings_s"]["eigenpairs"].as_f64().is_some());
+    assert!(cold["timings_s"].get("eigenpairs_cached").is_none());
+
+    let (o, warm) = run_match("warm.json", &["--cache"]);
+    let warm = warm.unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("eigenpair cache: 2 of 2 meshes read from it"),
+        "{stdout}"
+    );
+    assert!(warm["timings_s"]["eigenpairs_cached"].as_f64().is_some());
+    assert!(warm["timings_s"].get("eigenpairs").is_none());
+    assert_eq!(warm["pairs"], cold["pairs"]);
+
+    flip_byte(&eigs, 1000);
+    let (o, again) = run_match("again.json", &["--cache"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("warning") && stderr.contains("s0_rest.ply.symcorr-eigs"),
+        "{stderr}"
+    );
+    assert_eq!(again.unwrap()["pairs"], cold["pairs"]);
+
+    let (o, _) = run_match("x.json", &["--cache", "--cache-dir", "x"]);
+    assert_eq!(o.status.code(), Some(2));
+
+    // bench with a directory cache, one pair, twice.
+    let pairs = d.join("pairs.txt");
+    std::fs::write(&pairs, "s0_rest s0_arms-down\n").unwrap();
+    let cache = d.join("eigs");
+    let bench = || {
+        let o = Command::new(env!("CARGO_BIN_EXE_symcorr"))
+            .arg("bench")
+            .arg(&fixtures)
+            .arg("--pairs")
+            .arg(&pairs)
+            .args(["--samples", "100", "--cache-dir"])
+            .arg(&cache)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    assert!(bench().contains("eigenpair cache: 0 of 2 meshes read from it"));
+    assert_eq!(std::fs::read_dir(&cache).unwrap().count(), 2);
+    let second = bench();
+    assert!(
+        second.contains("eigenpair cache: 2 of 2 meshes read from it"),
+        "{second}"
+    );
+}
