@@ -6,14 +6,15 @@ use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
 use symcorr_mesh::geometry::{add, cross, dist, dot, norm, scale, sub};
 use symcorr_mesh::TriMesh;
 
-/// A swap needs the combined facing evidence below `-MIRROR_MARGIN`. The evidence is exactly
-/// antisymmetric under a side swap, so the margin trades missed fixes for wrong swaps, and a
-/// wrong swap mirrors every label (a whole map flipped). Measured on 40 generated bodies
-/// (20 poses × 2 shapes, `tools/bench/make_datasets.sh`), exact and σ = 3 cm joints: correct
-/// skeletons scored ≥ −0.344 (a noisy random pose; 0.15 swapped it), every standing, walking,
-/// T- and A-pose ≥ +0.54 — so 0.45 fixes swapped skeletons in those poses and leaves
-/// contorted poses with weak evidence as given (the evidence is reported).
-pub(crate) const MIRROR_MARGIN: f64 = 0.45;
+/// A swap needs the combined facing evidence ([`crate::MirrorCheck::evidence`]) below
+/// `-MIRROR_MARGIN`. The evidence is exactly antisymmetric under a side swap, so the margin
+/// trades missed fixes for wrong swaps, and a wrong swap mirrors every label (a whole map
+/// flipped). Measured on 40 generated bodies (20 poses × 2 shapes), exact joints and σ = 3 cm
+/// joints with two noise seeds (tools/synth/tests/attach_labels.rs, `handedness_of_the_40_bodies`):
+/// without the knee cue a correct noisy random pose scored −0.344; with it every correct
+/// skeleton scores ≥ +0.33, so no correct skeleton is swapped and 118 of 120 swapped ones are
+/// detected (the other two score −0.43 and −0.33: left as given, reported).
+pub const MIRROR_MARGIN: f64 = 0.45;
 
 /// The torso frame `(up, left, facing)`: up = hip centre → shoulder centre, left = right → left
 /// shoulders and hips (made orthogonal to up), facing = left × up (right-handed).
@@ -46,11 +47,13 @@ pub(crate) fn mirror_check(
     let mut out = MirrorCheck {
         skeleton_evidence: None,
         mesh_evidence: None,
+        knee_evidence: None,
         swapped: false,
     };
     let Some([_, left, facing]) = torso_frame(p, usable) else {
         return out;
     };
+    out.knee_evidence = knee_evidence(p, usable, facing);
     let (mut sk, mut nsk, mut me, mut nme) = (0.0, 0, 0.0, 0);
     for (knee, ankle, foot) in [
         (J::KneeLeft, J::AnkleLeft, J::FootLeft),
@@ -104,9 +107,44 @@ pub(crate) fn mirror_check(
     out
 }
 
-/// Combined evidence: the mesh counts fully, the feet joints (noisy) half.
+/// The knees' flexion cue: a knee is a hinge that bends forward, so a bent knee lies in front of
+/// the hip–ankle line (along the torso's facing direction) and a mirrored skeleton, whose
+/// facing direction is reversed, puts it behind. Per leg `cos(knee offset, facing)` weighted by
+/// how bent the leg is (offset / thigh length, from 0 below 0.05 to 1 at 0.25: a straight leg
+/// says nothing), averaged over the legs. Independent of the feet, so it holds where the feet are
+/// unreliable (a kneeling or sitting pose, a foot joint on the surface).
+fn knee_evidence(p: &[[f64; 3]; 20], usable: &[bool; 20], facing: [f64; 3]) -> Option<f64> {
+    use Joint as J;
+    let mut sum = 0.0;
+    let mut n = 0;
+    for (hip, knee, ankle) in [
+        (J::HipLeft, J::KneeLeft, J::AnkleLeft),
+        (J::HipRight, J::KneeRight, J::AnkleRight),
+    ] {
+        if !(usable[hip.index()] && usable[knee.index()] && usable[ankle.index()]) {
+            continue;
+        }
+        let (h, k, a) = (p[hip.index()], p[knee.index()], p[ankle.index()]);
+        let (q, _) = closest_on_segment(k, h, a);
+        let off = sub(k, q);
+        let thigh = dist(h, k);
+        if !(thigh > 0.0) {
+            continue;
+        }
+        n += 1;
+        let Some(d) = unit(off) else { continue };
+        // Offsets under 5 % of the thigh (2 cm on an adult) are joint noise on a straight leg.
+        let bend = ((norm(off) / thigh - 0.05) / 0.2).clamp(0.0, 1.0);
+        sum += bend * dot(d, facing);
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// Combined evidence: the mesh and the knees count fully, the feet joints (noisy) half.
 pub(crate) fn mirror_decision(m: &MirrorCheck) -> f64 {
-    m.mesh_evidence.unwrap_or(0.0) + 0.5 * m.skeleton_evidence.unwrap_or(0.0)
+    m.mesh_evidence.unwrap_or(0.0)
+        + 0.5 * m.skeleton_evidence.unwrap_or(0.0)
+        + m.knee_evidence.unwrap_or(0.0)
 }
 
 pub(crate) struct Refined {
