@@ -176,6 +176,15 @@ impl SegmentPools {
     pub fn num_template(&self) -> usize {
         self.groups.len()
     }
+
+    /// The template vertices of each group for which `keep` holds (a subset for
+    /// [`nearest_in_pools_for`]).
+    pub(crate) fn members_where(&self, keep: impl Fn(u32) -> bool) -> Vec<Vec<u32>> {
+        self.members
+            .iter()
+            .map(|m| m.iter().copied().filter(|&v| keep(v)).collect())
+            .collect()
+    }
 }
 
 /// For every template vertex `p`, the target vertex of `p`'s pool whose feature row is nearest
@@ -195,9 +204,9 @@ pub fn nearest_in_pools(
     nearest_in_pools_for(template, target, pools, None)
 }
 
-/// [`nearest_in_pools`] for the template vertices `subset` only (all when `None`); entries of
-/// other vertices are `(0, ∞)`.
-fn nearest_in_pools_for(
+/// [`nearest_in_pools`] for the template vertices `subset` only (all when `None`; otherwise
+/// per group, like [`SegmentPools::members_where`]); entries of other vertices are `(0, ∞)`.
+pub(crate) fn nearest_in_pools_for(
     template: MatRef<'_, f64>,
     target: MatRef<'_, f64>,
     pools: &SegmentPools,
