@@ -281,6 +281,15 @@ pub struct MirrorCheck {
     /// Knee flexion cue in [-1, 1]: bent knees lie in front of the hip–ankle line along the
     /// facing direction (`None` without usable legs; near 0 for straight legs).
     pub knee_evidence: Option<f64>,
+    /// The mesh cue in mesh units: how much farther the surface around the ankles reaches
+    /// forward than backward along the facing direction, mean over the feet (`None` without
+    /// usable feet).
+    pub mesh_offset: Option<f64>,
+    /// Mesh vertices the mesh cue used (both feet).
+    pub mesh_vertices: usize,
+    /// The skeleton's facing direction (unit, `left × up` of the torso frame: left = right → left
+    /// shoulders and hips, up = hip centre → shoulder centre); `None` if the torso is degenerate.
+    pub facing: Option<[f64; 3]>,
     /// True if the sides were swapped (policy [`MirrorPolicy::Fix`]).
     pub swapped: bool,
 }
@@ -507,6 +516,9 @@ pub fn attach(
         skeleton_evidence: None,
         mesh_evidence: None,
         knee_evidence: None,
+        mesh_offset: None,
+        mesh_vertices: 0,
+        facing: None,
         swapped: false,
     };
     if options.mirror != MirrorPolicy::Ignore {

@@ -48,13 +48,18 @@ pub(crate) fn mirror_check(
         skeleton_evidence: None,
         mesh_evidence: None,
         knee_evidence: None,
+        mesh_offset: None,
+        mesh_vertices: 0,
+        facing: None,
         swapped: false,
     };
     let Some([_, left, facing]) = torso_frame(p, usable) else {
         return out;
     };
+    out.facing = Some(facing);
     out.knee_evidence = knee_evidence(p, usable, facing);
     let (mut sk, mut nsk, mut me, mut nme) = (0.0, 0, 0.0, 0);
+    let mut offset = 0.0;
     for (knee, ankle, foot) in [
         (J::KneeLeft, J::AnkleLeft, J::FootLeft),
         (J::KneeRight, J::AnkleRight, J::FootRight),
@@ -99,11 +104,14 @@ pub(crate) fn mirror_check(
         }
         if n >= 8 && fwd + back > 0.0 {
             me += (fwd - back) / (fwd + back);
+            offset += fwd - back;
             nme += 1;
+            out.mesh_vertices += n;
         }
     }
     out.skeleton_evidence = (nsk > 0).then(|| sk / nsk as f64);
     out.mesh_evidence = (nme > 0).then(|| me / nme as f64);
+    out.mesh_offset = (nme > 0).then(|| offset / nme as f64);
     out
 }
 
