@@ -245,9 +245,12 @@ pub fn skin(
         .unzip()
 }
 
+/// A fit pair: (template rest position, target position, weight).
+type Pair = ([f64; 3], [f64; 3], f64);
+
 /// Weighted Kabsch: the rotation and translation minimising `Σ w_i |R a_i + t − b_i|²`;
 /// `None` with fewer than three points of positive weight or a degenerate cross-covariance.
-fn kabsch(pairs: &[([f64; 3], [f64; 3], f64)]) -> Option<BoneTransform> {
+fn kabsch(pairs: &[Pair]) -> Option<BoneTransform> {
     let wsum: f64 = pairs.iter().map(|p| p.2).sum();
     if pairs.iter().filter(|p| p.2 > 0.0).count() < 3 || wsum <= 0.0 {
         return None;
@@ -270,7 +273,7 @@ fn kabsch(pairs: &[([f64; 3], [f64; 3], f64)]) -> Option<BoneTransform> {
     }
     let svd = h.svd().ok()?;
     let (u, s, v) = (svd.U(), svd.S(), svd.V());
-    if !(s[0] > 0.0) || s[1] < 1e-9 * s[0] {
+    if s[0].is_nan() || s[0] <= 0.0 || s[1] < 1e-9 * s[0] {
         return None;
     }
     // R = V diag(1, 1, det(V Uᵀ)) Uᵀ.
@@ -366,6 +369,8 @@ pub struct ArticulatedOptions {
     pub joint_anchor: f64,
     /// Geodesic band of the target pools (see [`SegmentPools::new`]), in the target's √area.
     pub band: f64,
+    /// At most this many template vertices (an even stride sample) drive the ICP fits.
+    pub icp_points: usize,
 }
 
 impl Default for ArticulatedOptions {
@@ -378,9 +383,13 @@ impl Default for ArticulatedOptions {
             min_normal_cosine: 0.3,
             joint_anchor: 0.1,
             band: 0.02,
+            icp_points: DEFAULT_ICP_POINTS,
         }
     }
 }
+
+/// Default [`ArticulatedOptions::icp_points`].
+pub const DEFAULT_ICP_POINTS: usize = 16_000;
 
 /// The result of [`articulated_match`].
 #[derive(Debug, Clone)]
@@ -565,7 +574,11 @@ pub fn articulated_match(
             beta * target.normals[i][j - 3]
         }
     });
-    let nearest = |posed: &[[f64; 3]], pn: &[[f64; 3]]| {
+    // The ICP fits use an even stride sample of at most `icp_points` template vertices (a
+    // bone's rigid fit needs hundreds of pairs, not tens of thousands); the final map uses all.
+    let stride = n.div_ceil(options.icp_points.max(1)).max(1);
+    let sample = pools.members_where(|v| v as usize % stride == 0);
+    let nearest = |posed: &[[f64; 3]], pn: &[[f64; 3]], subset: Option<&[Vec<u32>]>| {
         let f = Mat::from_fn(n, 6, |i, j| {
             if j < 3 {
                 posed[i][j]
@@ -573,7 +586,7 @@ pub fn articulated_match(
                 beta * pn[i][j - 3]
             }
         });
-        crate::nearest_in_pools(f.as_ref(), target_features.as_ref(), &pools)
+        crate::refine::nearest_in_pools_for(f.as_ref(), target_features.as_ref(), &pools, subset)
     };
     let mut transforms = bone_transforms(template.joints, target.joints);
     let head_bone = BONES
@@ -602,10 +615,13 @@ pub fn articulated_match(
         };
         let gate =
             unit_len * (options.gate_start * (options.gate_end / options.gate_start).powf(frac));
-        let near = nearest(&posed, &posed_normals)?;
+        let near = nearest(&posed, &posed_normals, Some(&sample))?;
         // Pairs per bone: (rest position, target position, weight).
-        let mut per_bone: Vec<Vec<([f64; 3], [f64; 3], f64)>> = vec![Vec::new(); 19];
-        for (v, &(q, _)) in near.iter().enumerate() {
+        let mut per_bone: Vec<Vec<Pair>> = vec![Vec::new(); 19];
+        for (v, &(q, d2)) in near.iter().enumerate() {
+            if !d2.is_finite() {
+                continue; // not in the sample
+            }
             let y = target.positions[q as usize];
             if norm(sub(posed[v], y)) > gate
                 || dot(posed_normals[v], target.normals[q as usize]) < options.min_normal_cosine
@@ -648,7 +664,7 @@ pub fn articulated_match(
 
     let t = Instant::now();
     let gate = options.gate_end * unit_len;
-    let near = nearest(&posed, &posed_normals)?;
+    let near = nearest(&posed, &posed_normals, None)?;
     let mut has_counterpart = Vec::with_capacity(n);
     let matches = near
         .iter()
@@ -701,10 +717,10 @@ mod tests {
             assert!(norm(sub(ra, ub)) < 1e-12, "{a:?} → {b:?}: {ra:?}");
             // Orthonormal, det +1.
             let rtr = mat_mul(&transpose(&r), &r);
-            for i in 0..3 {
-                for j in 0..3 {
+            for (i, row) in rtr.iter().enumerate() {
+                for (j, x) in row.iter().enumerate() {
                     let e = if i == j { 1.0 } else { 0.0 };
-                    assert!((rtr[i][j] - e).abs() < 1e-12);
+                    assert!((x - e).abs() < 1e-12);
                 }
             }
             assert!((dot(r[0], cross(r[1], r[2])) - 1.0).abs() < 1e-12);
