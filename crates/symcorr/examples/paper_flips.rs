@@ -77,6 +77,34 @@ fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
     let (ho, hn) = fit(Segment::Pelvis, ho, hn);
     let (to, tn) = fit(Segment::Torso, to, tn);
     let (so, sn) = fit(Segment::Head, so, sn);
+    // Bit 8: the skull (head vertices beyond half the neck→head bone) gets its own plane,
+    // fitted by symmetry on the skull alone, starting at the head joint.
+    let (sc, hj) = (p(Joint::ShoulderCenter), p(Joint::Head));
+    let bone = sub(hj, sc);
+    let bl2 = bone[0] * bone[0] + bone[1] * bone[1] + bone[2] * bone[2];
+    let tpos = |x: [f64; 3]| {
+        let d = sub(x, sc);
+        (d[0] * bone[0] + d[1] * bone[1] + d[2] * bone[2]) / bl2
+    };
+    let skull_t: f64 = std::env::var("SKULL_T")
+        .ok()
+        .and_then(|x| x.parse().ok())
+        .unwrap_or(0.5);
+    let skull = if sym & 8 != 0 {
+        let pts: Vec<[f64; 3]> = m
+            .mesh
+            .positions
+            .iter()
+            .zip(m.labels())
+            .filter(|(x, &l)| l == Segment::Head && tpos(**x) > skull_t)
+            .map(|(x, _)| *x)
+            .collect();
+        let stride = pts.len().div_ceil(1500).max(1);
+        let pts: Vec<[f64; 3]> = pts.into_iter().step_by(stride).collect();
+        Some(refine_symmetry_plane(&pts, hj, sn, 10))
+    } else {
+        None
+    };
     let s = m.area.sqrt();
     m.mesh
         .positions
@@ -86,7 +114,10 @@ fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
             let (o, n) = match l {
                 Segment::Pelvis => (ho, hn),
                 Segment::Torso => (to, tn),
-                Segment::Head => (so, sn),
+                Segment::Head => match skull {
+                    Some(pl) if tpos(x) > skull_t => pl,
+                    _ => (so, sn),
+                },
                 _ => return 0.0,
             };
             let d = sub(x, o);
@@ -317,8 +348,16 @@ fn main() {
             let p = pipeline.prepare(mesh, &sk).unwrap();
             let reference = read_labels(&root.join("labels").join(format!("{n}.txt")));
             let graph = EvalGraph::new(&p.mesh);
-            let sd: Vec<Vec<f64>> = (0..8).map(|k| signed_distances(&p, k)).collect();
-            let mut width = vec![[1.0; 17]; 8];
+            let sd: Vec<Vec<f64>> = (0..16)
+                .map(|k| {
+                    if [0, 4, 7, 8, 12].contains(&k) {
+                        signed_distances(&p, k)
+                    } else {
+                        vec![0.0; p.num_vertices()]
+                    }
+                })
+                .collect();
+            let mut width = vec![[1.0; 17]; 16];
             for (k, d) in sd.iter().enumerate() {
                 for seg in [Segment::Pelvis, Segment::Torso, Segment::Head] {
                     let mut v: Vec<f64> = d
@@ -351,6 +390,27 @@ fn main() {
         meshes.len(),
         t.elapsed().as_secs_f64()
     );
+    if std::env::var("PLANES").is_ok() {
+        // Plane quality: for a perfect plane sd(v) = −sd(mirror(v)).
+        for (n, m) in &meshes {
+            let mut line = format!("{n:>14}");
+            for seg in [Segment::Pelvis, Segment::Torso, Segment::Head] {
+                for k in [0usize, 7, 8, 12] {
+                    let (mut sum, mut cnt) = (0.0, 0usize);
+                    for v in 0..m.p.num_vertices() {
+                        let w = mirror[v] as usize;
+                        if m.reference[v] == seg && m.p.labels()[v] == seg && m.p.labels()[w] == seg
+                        {
+                            sum += (m.sd[k][v] + m.sd[k][w]).abs();
+                            cnt += 1;
+                        }
+                    }
+                    line += &format!(" {}{k} {:.4}", &seg.name()[..2], sum / cnt.max(1) as f64);
+                }
+            }
+            println!("{line}");
+        }
+    }
     for (vi, v) in variants.iter().enumerate() {
         let (opts, rule) = variant(v);
         let mut total = (0.0, 0usize, 0usize, 0usize);
