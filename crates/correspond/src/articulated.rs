@@ -347,6 +347,8 @@ pub struct ArticulatedSide<'a> {
     pub labels: &'a [Segment],
     /// The skeleton (refined joints) in this mesh's frame.
     pub joints: &'a Skeleton,
+    /// Per vertex: on the mesh's boundary? (`None`: a closed surface.) Used on the target side.
+    pub boundary: Option<&'a [bool]>,
     /// Total surface area.
     pub area: f64,
 }
@@ -371,6 +373,9 @@ pub struct ArticulatedOptions {
     pub band: f64,
     /// At most this many template vertices (an even stride sample) drive the ICP fits.
     pub icp_points: usize,
+    /// A pair whose target point lies on the target's boundary is rejected (and the template
+    /// point has no counterpart) when longer than this.
+    pub boundary_gate: f64,
 }
 
 impl Default for ArticulatedOptions {
@@ -384,6 +389,7 @@ impl Default for ArticulatedOptions {
             joint_anchor: 0.1,
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
+            boundary_gate: 0.01,
         }
     }
 }
@@ -537,7 +543,11 @@ pub fn articulated_match(
     use std::time::Instant;
     let (n, m) = (template.positions.len(), target.positions.len());
     for (name, s, len) in [("template", template, n), ("target", target, m)] {
-        if len == 0 || s.normals.len() != len || s.labels.len() != len {
+        if len == 0
+            || s.normals.len() != len
+            || s.labels.len() != len
+            || s.boundary.is_some_and(|b| b.len() != len)
+        {
             return Err(CorrespondError::InvalidArgument(format!(
                 "{name}: {len} positions, {} normals, {} labels",
                 s.normals.len(),
@@ -552,6 +562,10 @@ pub fn articulated_match(
         )));
     }
     let unit_len = template.area.sqrt();
+    // A template point whose nearest target point is on the target's border, and not right at
+    // it, lies beyond what the target shows (the standard rejection of partial ICP).
+    let boundary_gate = options.boundary_gate * unit_len;
+    let on_boundary = |q: u32| target.boundary.is_some_and(|b| b[q as usize]);
     let mut timings = Vec::new();
     let t = Instant::now();
     // No sagittal halves on the midline segments: the alignment already puts each side on its
@@ -623,8 +637,10 @@ pub fn articulated_match(
                 continue; // not in the sample
             }
             let y = target.positions[q as usize];
-            if norm(sub(posed[v], y)) > gate
+            let d = norm(sub(posed[v], y));
+            if d > gate
                 || dot(posed_normals[v], target.normals[q as usize]) < options.min_normal_cosine
+                || (on_boundary(q) && d > boundary_gate)
             {
                 continue;
             }
@@ -672,7 +688,8 @@ pub fn articulated_match(
         .map(|(v, &(q, _))| {
             let d = norm(sub(posed[v], target.positions[q as usize]));
             let seen = d <= gate
-                && dot(posed_normals[v], target.normals[q as usize]) >= options.min_normal_cosine;
+                && dot(posed_normals[v], target.normals[q as usize]) >= options.min_normal_cosine
+                && !(on_boundary(q) && d > boundary_gate);
             has_counterpart.push(seen);
             crate::Match {
                 template: v as u32,

@@ -767,8 +767,14 @@ fn articulated(
         )
     };
     let (tn, qn) = (normals(template), normals(target));
-    fn side<'a>(m: &'a PreparedMesh, normals: &'a [[f64; 3]]) -> ArticulatedSide<'a> {
+    let boundary = target.mesh.boundary_vertices();
+    fn side<'a>(
+        m: &'a PreparedMesh,
+        normals: &'a [[f64; 3]],
+        boundary: Option<&'a [bool]>,
+    ) -> ArticulatedSide<'a> {
         ArticulatedSide {
+            boundary,
             positions: &m.mesh.positions,
             normals,
             labels: &m.attachment.labels,
@@ -777,9 +783,9 @@ fn articulated(
         }
     }
     Ok(articulated_match(
-        &side(template, &tn),
+        &side(template, &tn, None),
         &template.attachment.weights,
-        &side(target, &qn),
+        &side(target, &qn, Some(&boundary)),
         &graph,
         options,
     )?)

@@ -1,0 +1,223 @@
+//! Skeleton-driven articulated alignment on the capsule body: a target made by skinning the
+//! template onto a bent skeleton (same connectivity, so the identity is the truth), whole and
+//! as a front-only partial view with renumbered vertices.
+
+use symcorr_attach::testbody::{capsule_body, t_pose};
+use symcorr_attach::{attach, AttachOptions, Joint, Skeleton};
+use symcorr_correspond::{
+    articulated_match, bone_transforms, outward_normals, skin, ArticulatedOptions, ArticulatedSide,
+};
+use symcorr_mesh::geometry::{add, dist, sub};
+use symcorr_mesh::TriMesh;
+use symcorr_spectral::EdgeGraph;
+
+/// Rotates the joints below `pivot` in the chain `chain` by `angle` about the z axis.
+fn bend(sk: &mut Skeleton, pivot: Joint, chain: &[Joint], angle: f64) {
+    let o = sk.position(pivot);
+    let (s, c) = angle.sin_cos();
+    for &j in chain {
+        let d = sub(sk.position(j), o);
+        sk.positions[j.index()] = add(o, [c * d[0] - s * d[1], s * d[0] + c * d[1], d[2]]);
+    }
+}
+
+struct Body {
+    mesh: TriMesh,
+    skeleton: Skeleton,
+}
+
+fn bodies() -> (Body, Body, symcorr_attach::Attachment) {
+    let sk = t_pose(1.0);
+    let (mesh, _) = capsule_body(&sk, 0.03);
+    let att = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    let mut bent = sk.clone();
+    bend(
+        &mut bent,
+        Joint::ElbowLeft,
+        &[Joint::WristLeft, Joint::HandLeft],
+        1.0,
+    );
+    bend(
+        &mut bent,
+        Joint::KneeRight,
+        &[Joint::AnkleRight, Joint::FootRight],
+        -0.6,
+    );
+    // Move the whole body as well: the target lives in another frame.
+    for p in bent.positions.iter_mut() {
+        *p = add(*p, [0.3, -0.1, 2.0]);
+    }
+    let normals = mesh.vertex_normals();
+    let (posed, _) = skin(
+        &mesh.positions,
+        &normals,
+        &att.weights,
+        &bone_transforms(&sk, &bent),
+    );
+    let target = TriMesh::new(posed, mesh.triangles.clone()).unwrap();
+    (
+        Body { mesh, skeleton: sk },
+        Body {
+            mesh: target,
+            skeleton: bent,
+        },
+        att,
+    )
+}
+
+fn side<'a>(
+    mesh: &'a TriMesh,
+    att: &'a symcorr_attach::Attachment,
+    normals: &'a [[f64; 3]],
+    boundary: Option<&'a [bool]>,
+) -> ArticulatedSide<'a> {
+    ArticulatedSide {
+        boundary,
+        positions: &mesh.positions,
+        normals,
+        labels: &att.labels,
+        joints: &att.joints,
+        area: mesh.total_area(),
+    }
+}
+
+#[test]
+fn a_skinned_copy_is_matched_to_itself() {
+    let (a, b, att_a) = bodies();
+    let att_b = attach(&b.mesh, &b.skeleton, &AttachOptions::default()).unwrap();
+    let na = outward_normals(
+        &a.mesh.positions,
+        a.mesh.vertex_normals(),
+        &att_a.labels,
+        &att_a.joints,
+    );
+    let nb = outward_normals(
+        &b.mesh.positions,
+        b.mesh.vertex_normals(),
+        &att_b.labels,
+        &att_b.joints,
+    );
+    let out = articulated_match(
+        &side(&a.mesh, &att_a, &na, None),
+        &att_a.weights,
+        &side(&b.mesh, &att_b, &nb, None),
+        &EdgeGraph::new(&b.mesh),
+        &ArticulatedOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(out.matches.len(), a.mesh.num_vertices());
+    let err: Vec<f64> = out
+        .matches
+        .iter()
+        .map(|m| {
+            dist(
+                b.mesh.positions[m.target as usize],
+                b.mesh.positions[m.template as usize],
+            )
+        })
+        .collect();
+    let mean = err.iter().sum::<f64>() / err.len() as f64;
+    // Edge length of the capsule body is 3 cm; the skinning is exactly representable.
+    assert!(mean < 0.01, "mean error {mean}");
+    let seen = out.has_counterpart.iter().filter(|&&h| h).count();
+    assert!(
+        seen as f64 > 0.98 * a.mesh.num_vertices() as f64,
+        "{seen} of {} with a counterpart on a whole surface",
+        a.mesh.num_vertices()
+    );
+    // No match lands on the other side of the body (x < 0 is the subject's left here).
+    let crossed = out
+        .matches
+        .iter()
+        .filter(|m| {
+            let (p, q) = (
+                a.mesh.positions[m.template as usize][0],
+                b.mesh.positions[m.target as usize][0] - 0.3,
+            );
+            p.abs() > 0.15 && p * q < 0.0
+        })
+        .count();
+    assert_eq!(crossed, 0);
+}
+
+#[test]
+fn a_front_view_reports_the_back_as_without_counterpart() {
+    let (a, b, att_a) = bodies();
+    // Front view: triangles facing +z (the camera), vertices renumbered in reverse.
+    let tn = b.mesh.triangle_normals();
+    let front: Vec<[u32; 3]> = b
+        .mesh
+        .triangles
+        .iter()
+        .zip(&tn)
+        .filter(|(_, n)| n[2] > 0.2)
+        .map(|(t, _)| *t)
+        .collect();
+    let mut used: Vec<u32> = front.iter().flatten().copied().collect();
+    used.sort_unstable();
+    used.dedup();
+    used.reverse();
+    let mut new_id = vec![u32::MAX; b.mesh.num_vertices()];
+    for (i, &v) in used.iter().enumerate() {
+        new_id[v as usize] = i as u32;
+    }
+    let scan = TriMesh::new(
+        used.iter().map(|&v| b.mesh.positions[v as usize]).collect(),
+        front
+            .iter()
+            .map(|t| t.map(|v| new_id[v as usize]))
+            .collect(),
+    )
+    .unwrap();
+    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
+    let na = outward_normals(
+        &a.mesh.positions,
+        a.mesh.vertex_normals(),
+        &att_a.labels,
+        &att_a.joints,
+    );
+    // Wound the other way round: outward_normals must turn them.
+    let ns = outward_normals(
+        &scan.positions,
+        scan.vertex_normals()
+            .iter()
+            .map(|n| [-n[0], -n[1], -n[2]])
+            .collect(),
+        &att_s.labels,
+        &att_s.joints,
+    );
+    let out = articulated_match(
+        &side(&a.mesh, &att_a, &na, None),
+        &att_a.weights,
+        &side(&scan, &att_s, &ns, Some(&scan.boundary_vertices())),
+        &EdgeGraph::new(&scan),
+        &ArticulatedOptions::default(),
+    )
+    .unwrap();
+    let (mut tp, mut fp, mut fneg, mut err, mut n_err) = (0, 0, 0, 0.0, 0);
+    for (m, &seen) in out.matches.iter().zip(&out.has_counterpart) {
+        let visible = new_id[m.template as usize] != u32::MAX;
+        match (visible, seen) {
+            (true, true) => tp += 1,
+            (false, true) => fp += 1,
+            (true, false) => fneg += 1,
+            _ => {}
+        }
+        if visible {
+            err += dist(
+                scan.positions[m.target as usize],
+                scan.positions[new_id[m.template as usize] as usize],
+            );
+            n_err += 1;
+        }
+    }
+    let mean = err / n_err as f64;
+    assert!(mean < 0.015, "mean error on the visible part {mean}");
+    // The counterpart flag separates the seen front from the unseen back.
+    let precision = tp as f64 / (tp + fp) as f64;
+    let recall = tp as f64 / (tp + fneg) as f64;
+    assert!(
+        precision > 0.9 && recall > 0.9,
+        "precision {precision}, recall {recall}"
+    );
+}
