@@ -314,9 +314,13 @@ impl PreparedMesh {
 /// says how the head is turned against the shoulders, so its plane is the shoulders' refined
 /// by the skull's own left/right symmetry ([`refine_symmetry_plane`]); the neck keeps the
 /// shoulders' plane. Measured with the sagittal band (58 pairs, sparse): flips 13 → 11 of
-/// 47.6k with exact joints, 146 → 118 with σ = 3 cm (mean 0.0542 → 0.0522). Refining the
+/// 47.6k with exact joints, 146 → 118 with σ = 3 cm (mean 0.0542 → 0.0524). Refining the
 /// whole head, torso or pelvis plane by symmetry instead did worse with exact joints (the
-/// neck bends in the random poses; 56 flips).
+/// neck bends in the random poses; 56 flips). Known limit: the refinement (nearest-point
+/// reflect–refit) corrects a turn only partly — on the generated random poses the skull's
+/// left/right consistency error falls by about a third, and on a smooth synthetic egg-shaped
+/// skull turned 15° it moves the plane by about 1° (tests/midline.rs checks only that a
+/// symmetric skull stays split correctly).
 pub fn midline_halves(
     mesh: &TriMesh,
     labels: &[Segment],
