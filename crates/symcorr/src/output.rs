@@ -40,7 +40,9 @@ pub fn pair_timings(
     out
 }
 
-/// The `symcorr.correspondence/1` document (DESIGN.md, Data formats).
+/// The `symcorr.correspondence/1` document (DESIGN.md, Data formats). For a partial target
+/// (a single-view scan) `pairs` holds only the template points the target shows; the others
+/// are listed by template id under the extra key `no_counterpart`.
 pub fn correspondence_json(
     template_path: &str,
     template: &PreparedMesh,
@@ -50,10 +52,21 @@ pub fn correspondence_json(
     timings: &[(String, f64)],
 ) -> Value {
     // Ids in the file are the input files' ids (the stages ran on the repaired meshes).
+    // Template points a partial target does not show are listed apart, not as pairs.
+    let seen = |i: usize| corr.has_counterpart.as_ref().is_none_or(|h| h[i]);
+    let no_counterpart: Vec<u32> = corr
+        .matches
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| !seen(i))
+        .map(|(_, m)| template.input_id(m.template))
+        .collect();
     let pairs: Vec<Value> = corr
         .matches
         .iter()
-        .map(|m| {
+        .enumerate()
+        .filter(|&(i, _)| seen(i))
+        .map(|(_, m)| {
             json!([
                 template.input_id(m.template),
                 target.input_id(m.target),
@@ -70,7 +83,7 @@ pub fn correspondence_json(
         .iter()
         .map(|(n, s)| (n.clone(), json!(round6(*s))))
         .collect();
-    json!({
+    let mut doc = json!({
         "format": CORRESPONDENCE_FORMAT,
         "template": {"path": template_path, "vertices": template.input_mesh().num_vertices()},
         "target": {"path": target_path, "vertices": target.input_mesh().num_vertices()},
@@ -84,7 +97,11 @@ pub fn correspondence_json(
             "segment_missing": corr.filter.segment_missing,
         },
         "timings_s": timings,
-    })
+    });
+    if corr.has_counterpart.is_some() {
+        doc["no_counterpart"] = json!(no_counterpart);
+    }
+    doc
 }
 
 /// The repair report as JSON (stable keys; counts refer to the input mesh).

@@ -354,9 +354,15 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     }
     let seconds = start.elapsed().as_secs_f64();
     let points = corr.filter.points.max(corr.matches.len());
+    let unseen = corr
+        .has_counterpart
+        .as_ref()
+        .map(|h| h.iter().filter(|&&x| !x).count());
+    let matched = corr.matches.len() - unseen.unwrap_or(0);
     if args.json {
         let doc = serde_json::json!({
-            "matches": corr.matches.len(),
+            "matches": matched,
+            "no_counterpart": unseen,
             "template_points": points,
             "fallbacks": corr.filter.fallbacks,
             "seconds": seconds,
@@ -375,11 +381,15 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             println!("{side}: {}", p.repair.to_string().replace('\n', "; "));
         }
     }
-    println!(
-        "{} matches ({points} template points, {} skeleton-filter fallbacks) in {seconds:.2} s",
-        corr.matches.len(),
-        corr.filter.fallbacks,
-    );
+    match unseen {
+        Some(u) => println!(
+            "partial target: {matched} matches, {u} of {points} template points not shown by it, in {seconds:.2} s"
+        ),
+        None => println!(
+            "{matched} matches ({points} template points, {} skeleton-filter fallbacks) in {seconds:.2} s",
+            corr.filter.fallbacks,
+        ),
+    }
     if let Some(s) = counts.summary() {
         println!("{s}");
     }
