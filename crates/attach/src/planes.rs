@@ -110,6 +110,50 @@ pub(crate) fn apply(
     }
 }
 
+/// The side of a segment: `1` left, `-1` right, `0` midline.
+fn side(s: Segment) -> i32 {
+    match s.mirror().index().cmp(&s.index()) {
+        std::cmp::Ordering::Greater => 1,
+        std::cmp::Ordering::Less => -1,
+        std::cmp::Ordering::Equal => 0,
+    }
+}
+
+/// True if two side segments lie on the same side of the body.
+pub(crate) fn same_side(a: Segment, b: Segment) -> bool {
+    side(a) == side(b)
+}
+
+/// The root (hip or clavicle) of the limb chain a side segment belongs to.
+fn root(s: Segment) -> Segment {
+    use Segment as S;
+    match s {
+        S::ClavicleLeft | S::UpperArmLeft | S::ForearmLeft => S::ClavicleLeft,
+        S::ClavicleRight | S::UpperArmRight | S::ForearmRight => S::ClavicleRight,
+        S::HipLeft | S::ThighLeft | S::ShinLeft | S::FootLeft => S::HipLeft,
+        S::HipRight | S::ThighRight | S::ShinRight | S::FootRight => S::HipRight,
+        s => s,
+    }
+}
+
+/// Joint planes change a vertex's side only through the left/right plane between the twin
+/// roots (hips, clavicles); chained with the hip/thigh plane of the other side (two sweeps) a
+/// groin vertex that bone heat gave to the right thigh could end on the *left thigh* when a
+/// noisy hip joint tilted the planes. A limb segment of the other side than bone heat's label
+/// needs bone heat's support: such a vertex keeps the other side's root (hip or clavicle), where
+/// [`midline_guard`] can still give it the midline label. Returns the number changed.
+pub(crate) fn keep_limb_sides(heat_labels: &[Segment], labels: &mut [Segment]) -> usize {
+    let mut changed = 0;
+    for (h, l) in heat_labels.iter().zip(labels.iter_mut()) {
+        let (sh, sl) = (side(*h), side(*l));
+        if sh != 0 && sl == -sh && root(*l) != *l {
+            *l = root(*l);
+            changed += 1;
+        }
+    }
+    changed
+}
+
 /// The midline guard: a vertex labelled with one of two left/right twins that meet at a midline
 /// joint (hips at the hip centre, clavicles at the shoulder centre) but lying within `band` of
 /// the plane between them is relabelled with the midline segment at that joint (pelvis; head or
@@ -154,6 +198,36 @@ mod tests {
 
     fn plane(planes: &[JointPlane], a: Segment, b: Segment) -> JointPlane {
         *planes.iter().find(|p| p.a == a && p.b == b).unwrap()
+    }
+
+    #[test]
+    fn planes_change_sides_only_into_the_twin_root() {
+        use Segment as S;
+        let heat = [
+            S::ThighRight,
+            S::ThighRight,
+            S::Pelvis,
+            S::UpperArmLeft,
+            S::ThighLeft,
+        ];
+        let mut labels = [
+            S::ThighLeft,
+            S::HipLeft,
+            S::ThighLeft,
+            S::ForearmRight,
+            S::ShinLeft,
+        ];
+        assert_eq!(keep_limb_sides(&heat, &mut labels), 2);
+        assert_eq!(
+            labels,
+            [
+                S::HipLeft,
+                S::HipLeft,
+                S::ThighLeft,
+                S::ClavicleRight,
+                S::ShinLeft
+            ]
+        );
     }
 
     #[test]
