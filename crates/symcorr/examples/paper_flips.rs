@@ -159,6 +159,32 @@ struct Rule {
     ratio: Option<f64>,
     /// Selection term λ·|s(q) − s(p)|.
     lambda: f64,
+    /// The library's sagittal band (ratio 0.5) on the library's coordinates.
+    libband: bool,
+    /// Limbs: keep a candidate when its position along the segment's bone chain differs from
+    /// the point's by at most this fraction of the chain.
+    axial: Option<f64>,
+}
+
+/// Position along the segment's chain (first joint → last joint), 0..1, per vertex (0 on
+/// midline segments).
+fn axial(m: &PreparedMesh) -> Vec<f64> {
+    let j = &m.attachment.joints;
+    m.mesh
+        .positions
+        .iter()
+        .zip(m.labels())
+        .map(|(&x, &l)| {
+            if matches!(l, Segment::Pelvis | Segment::Torso | Segment::Head) {
+                return 0.0;
+            }
+            let b = l.bones();
+            let (a, c) = (j.position(b[0].0), j.position(b[b.len() - 1].1));
+            let d = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let e = [x[0] - a[0], x[1] - a[1], x[2] - a[2]];
+            (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        })
+        .collect()
 }
 
 fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
@@ -179,6 +205,7 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
             "own" => r.own_halves = true,
             "w" => r.width = true,
             "c" => custom = true,
+            "lib" => r.libband = true,
             _ => {
                 if let Some(x) = part.strip_prefix("band") {
                     o.sagittal_ratio = Some(x.parse().unwrap());
@@ -193,6 +220,8 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
                     r.diff = Some(x);
                 } else if let Some(x) = num("r") {
                     r.ratio = Some(x);
+                } else if let Some(x) = num("a") {
+                    r.axial = Some(x);
                 } else if let Some(x) = num("l") {
                     r.lambda = x;
                 } else {
@@ -250,6 +279,47 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
         &ta.descriptors,
         &tb.descriptors,
     );
+    if r.libband {
+        symcorr_correspond::sagittal_band(
+            &mut cands,
+            points,
+            (ta.labels(), tb.labels()),
+            (&ta.sagittal, &tb.sagittal),
+            0.5,
+            &ta.descriptors,
+            &tb.descriptors,
+        );
+    }
+    if let Some(delta) = r.axial {
+        let (xa, xb) = (axial(ta), axial(tb));
+        for (list, &p) in cands.iter_mut().zip(points) {
+            let p = p as usize;
+            let lp = ta.labels()[p];
+            if matches!(lp, Segment::Pelvis | Segment::Torso | Segment::Head) {
+                continue;
+            }
+            let ok = |q: usize| tb.labels()[q] == lp && (xb[q] - xa[p]).abs() <= delta;
+            let kept: Vec<Candidate> = list
+                .iter()
+                .copied()
+                .filter(|c| ok(c.vertex as usize))
+                .collect();
+            if !kept.is_empty() {
+                *list = kept;
+                continue;
+            }
+            let best = (0..tb.num_vertices())
+                .filter(|&q| ok(q))
+                .map(|q| Candidate {
+                    vertex: q as u32,
+                    distance: ta.descriptors.distance(p, &tb.descriptors, q),
+                })
+                .min_by(|a, b| a.distance.total_cmp(&b.distance));
+            if let Some(b) = best {
+                *list = vec![b];
+            }
+        }
+    }
     let midline = |l: Segment| matches!(l, Segment::Pelvis | Segment::Torso | Segment::Head);
     for (list, &p) in cands.iter_mut().zip(points) {
         let p = p as usize;
@@ -397,8 +467,8 @@ fn main() {
             for seg in [Segment::Pelvis, Segment::Torso, Segment::Head] {
                 for k in [0usize, 7, 8, 12] {
                     let (mut sum, mut cnt) = (0.0, 0usize);
-                    for v in 0..m.p.num_vertices() {
-                        let w = mirror[v] as usize;
+                    for (v, &w) in mirror.iter().enumerate().take(m.p.num_vertices()) {
+                        let w = w as usize;
                         if m.reference[v] == seg && m.p.labels()[v] == seg && m.p.labels()[w] == seg
                         {
                             sum += (m.sd[k][v] + m.sd[k][w]).abs();
