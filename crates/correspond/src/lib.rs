@@ -105,7 +105,14 @@
 //!   one flip; a symmetric difference rule `|s(q) − s(p)| ≤ τ` left more flips (0.034 % at
 //!   τ = 0.02 √area) and points without any candidate. Planes refined by the surface's symmetry
 //!   (as the refined method uses) made the paper's method worse with exact joints (0.26 %
-//!   flips without the band).
+//!   flips without the band). With σ = 3 cm joints (sparse): flips 0.733 % → 0.307 % at a
+//!   mean error cost of 0.0530 → 0.0542 (ratio 0.2: 0.491 %, 0.0534; 0.35: 0.403 %, 0.0539).
+//!   Limb candidates restricted to the point's position along its bone chain (± 0.15 or
+//!   0.25 of the chain) did not remove the crotch flips the band cannot reach: not kept.
+//!   Whole benchmark with the skull plane of `symcorr::midline_halves` (release binary,
+//!   58 pairs each, `symcorr bench --method paper`): exact joints sparse 0.0444 / 0.172 % →
+//!   0.0437 / 0.02 %, dense 0.0352 / 0.184 % → 0.0344 / 0.04 %; σ = 3 cm sparse 0.0532 /
+//!   0.79 % → 0.0524 / 0.25 %.
 //! * **Fallback.** If the filter removes every candidate, the nearest target vertex of the same
 //!   segment by descriptor is used and counted ([`FilterStats::fallbacks`]); if the target has
 //!   no vertex of that segment at all, the point keeps its unfiltered candidates
