@@ -471,7 +471,8 @@ fn twist_search(
                 let x = tr.apply(template.positions[v]);
                 let y = target.positions[near[v].0 as usize];
                 let d = norm(sub(x, y));
-                total += d.min(gate).powi(2);
+                // Scored in the search's own metric (position and normal).
+                total += near[v].1.min(gate * gate);
                 if d <= gate {
                     pairs.push((template.positions[v], y, 1.0));
                 }
@@ -510,8 +511,11 @@ fn twist_search(
     Ok(best.0)
 }
 
-/// Starting twists of [`twist_search`], in degrees.
-pub const TWISTS: [f64; 8] = [0.0, 45.0, 90.0, 135.0, 180.0, -135.0, -90.0, -45.0];
+/// Starting twists of [`twist_search`], in degrees: within a head's range of rotation against
+/// the chest (about ±80°; the starting pose is the chest's). Wider starts let a head whose
+/// back fits about as well as its face turn round: with σ = 3 cm joints, ±180° flipped whole
+/// heads in 13 of 58 pairs.
+pub const TWISTS: [f64; 7] = [0.0, 30.0, 60.0, 90.0, -30.0, -60.0, -90.0];
 /// Rigid ICP steps per start of [`twist_search`].
 const TWIST_ICP_STEPS: usize = 4;
 
