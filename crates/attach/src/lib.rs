@@ -127,7 +127,11 @@
 //! * Midline band 0.05 × skeleton height (≈ 8.5 cm each side for a 1.7 m body): measured 0.02 →
 //!   exact mirrored 0.0004, noisy 0.0053; 0.03 → 0, 0.0036; 0.04 → 0, 0.0023; 0.05 → 0, 0.0013
 //!   with strict agreement *up* (0.8557 → 0.8570: the rig's pelvis reaches between the hips);
-//!   0.07 gave no further mirror gain and lower scan agreement.
+//!   0.07 gave no further mirror gain and lower scan agreement. Re-measured after the side fixes
+//!   (side-first argmax, twin-root planes, tangent-plane heat): 0.03 → exact strict 0.8567,
+//!   cross-side area beyond 3 cm 0.0059 (clavicle labels across the neck), noisy mirrored
+//!   0.0032; 0.04 → 0.8569, 0.0021, 0.0009; 0.05 → 0.8585, 0.0003, 0.0003: the band still
+//!   earns its width.
 //! * Tried and dropped (measured on the same bodies): deciding the side of hip/clavicle vertices
 //!   by the geodesically nearer thigh/upper arm (without the guard, mirrored area up from 0.0074
 //!   to 0.012 — one leg forward pulls the buttock cleft towards it), by the nearer hip+thigh
