@@ -109,21 +109,21 @@
 //!   the buttocks, the clavicles are small); a pelvis reach of 1.3, hips 1.2 and clavicles 0.75
 //!   raised the mean area agreement there only from 0.820 to 0.826, so the default stays 1.
 //! * Measured on generated MakeHuman bodies (tools/synth/tests/attach_labels.rs: 20 poses ×
-//!   2 shapes; reference labels = the rig's dominant skinning bone mapped to the 17 segments),
-//!   area agreement exact joints mean 0.857 / worst 0.828 (bone heat alone 0.823 / 0.796),
-//!   σ = 3 cm + 10 % surface-biased joints 0.811 / 0.733, virtual-Kinect scans 0.862 (ideal) /
-//!   0.841 (Kinect realism); mirrored area 0 (exact), ≤ 0.0013 (noisy: inner thighs at the groin
-//!   labelled with the other thigh by bone heat from noisy hips), 0 (scans). Issue 5's 0.95 /
-//!   0.90 agreement and zero mirrored area with noisy joints are not reached. Residual confusion
-//!   (exact, share of the body's area, before the midline guard was widened to 0.05): torso →
-//!   clavicle 2.7 % (the rig's clavicle region is a small patch in front of the shoulder; the
-//!   Kinect clavicle bone starts at the neck centre, and the back of the shoulder is the rig's
-//!   spine), torso → upper arm 1.9 % (armpit), pelvis → hip 1.9 % and hip → thigh 1.8 % (the
-//!   rig's hip/pelvis/thigh split follows its own pelvis bone, not planes at the Kinect hip
-//!   joints), pelvis → torso 1.0 %, head → clavicle 1.0 %, upper arm → clavicle 0.9 %, thigh →
-//!   shin 0.8 %. Most of it lies within 3 cm of the reference boundary: counting
-//!   neighbouring-segment disagreements within 3 cm as agreeing gives 0.912 (exact) / 0.874
-//!   (noisy) / 0.935 and 0.907 (scans).
+//!   2 shapes). The reference labels are the rig's dominant skinning bone mapped to the 17
+//!   segments (tools/synth mapping.rs): a *skinning* convention, not a geometric one — the rig's
+//!   clavicle region is a small patch in front of the shoulder, its pelvis band reaches above
+//!   the Kinect spine joint, its buttocks belong to the hips, and its pelvis-bone vertices are
+//!   split between pelvis and hips by the nearest Kinect bone. Attachment instead cuts segments
+//!   at planes through the Kinect joints, so the two disagree along every boundary by a band a
+//!   few centimetres wide. Area agreement (2026-11-23): exact joints mean 0.859 / worst 0.828
+//!   (bone heat alone 0.823 / 0.796 before the joint planes), σ = 3 cm + 10 % surface-biased
+//!   joints 0.816 / 0.757, virtual-Kinect scans 0.870 (ideal) / 0.851 (Kinect realism); counting
+//!   neighbouring-segment disagreements within 3 cm of the reference boundary as agreeing:
+//!   0.914 / 0.879 / 0.946 and 0.920. Mirrored area 0 (exact, scans), ≤ 0.0003 (noisy).
+//!   Issue 5's 0.95 / 0.90 strict agreement is not reached. Residual confusion (exact, mean
+//!   share of the body's area): hip → pelvis 2.8 % (the midline band, and the rig's hips
+//!   reaching the buttocks), torso → upper arm 1.8 % (armpit), hip → thigh 1.7 %, pelvis → hip
+//!   1.5 %, torso → clavicle 1.5 %, pelvis → torso 1.0 % — all boundary bands.
 //! * Midline band 0.05 × skeleton height (≈ 8.5 cm each side for a 1.7 m body): measured 0.02 →
 //!   exact mirrored 0.0004, noisy 0.0053; 0.03 → 0, 0.0036; 0.04 → 0, 0.0023; 0.05 → 0, 0.0013
 //!   with strict agreement *up* (0.8557 → 0.8570: the rig's pelvis reaches between the hips);
