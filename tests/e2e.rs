@@ -108,8 +108,8 @@ fn demo_writes_files_that_parse() {
     assert!(checked > 100, "{checked} single matches");
     let svg = std::fs::read_to_string(out.join("curve.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-    // symcorr refined, the paper's pipeline, and its ablation.
-    assert_eq!(svg.matches("<polyline").count(), 3);
+    // symcorr articulated and refined, the paper's pipeline, and its ablation.
+    assert_eq!(svg.matches("<polyline").count(), 4);
 }
 
 /// A fixture pair (same body shape, exact joints) matches under the pipeline issue's
@@ -314,4 +314,51 @@ fn usage_errors_exit_2_and_help_has_examples() {
             .count(),
         1
     );
+}
+
+/// A single-view scan as the target (`symcorr scan` from the bundled depth frame of
+/// s0_walk-10, then `match` against the whole s0_rest): the default method treats it as a
+/// partial view, every template vertex is either a pair or listed under `no_counterpart`, and
+/// the view shows roughly half of the body.
+#[test]
+fn scan_target_reports_template_points_without_counterpart() {
+    let dir = tempfile::tempdir().unwrap();
+    let scan_dir = fixtures().join("../scan");
+    let scan = dir.path().join("scan.ply");
+    let out = run(bin()
+        .arg("scan")
+        .arg("--depth")
+        .arg(scan_dir.join("depth.png"))
+        .arg("--intrinsics")
+        .arg(scan_dir.join("intrinsics.json"))
+        .arg("--joints")
+        .arg(scan_dir.join("joints.json"))
+        .arg("--out")
+        .arg(&scan));
+    assert!(out.status.success());
+    let corr = dir.path().join("corr.json");
+    let out = run(bin()
+        .arg("match")
+        .arg(mesh("s0_rest"))
+        .arg(&scan)
+        .arg("--template-joints")
+        .arg(joints("s0_rest"))
+        .arg("--target-joints")
+        .arg(scan_dir.join("joints.json"))
+        .arg("--dense")
+        .arg("--out")
+        .arg(&corr));
+    assert!(out.status.success());
+    let doc = read_json(&corr);
+    let n = doc["template"]["vertices"].as_u64().unwrap() as usize;
+    let pairs = doc["pairs"].as_array().unwrap().len();
+    let unseen = doc["no_counterpart"].as_array().unwrap().len();
+    assert_eq!(pairs + unseen, n);
+    let shown = pairs as f64 / n as f64;
+    assert!(
+        shown > 0.3 && shown < 0.7,
+        "the view shows {shown} of the template"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("partial target"), "{stdout}");
 }

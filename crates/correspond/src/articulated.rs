@@ -401,7 +401,7 @@ pub const DEFAULT_ICP_POINTS: usize = 16_000;
 #[derive(Debug, Clone)]
 pub struct ArticulatedMatches {
     /// One match per template vertex, in vertex order; `confidence` is `1/(1 + d/gate)` with
-    /// `d` the final distance, and 0 for points without a counterpart.
+    /// `d` the final distance (over √area in `descriptor_distance`).
     pub matches: Vec<crate::Match>,
     /// Per template vertex: does the target show it (within the final gate, same facing)?
     pub has_counterpart: Vec<bool>,
@@ -698,7 +698,7 @@ pub fn articulated_match(
             crate::Match {
                 template: v as u32,
                 target: q,
-                confidence: if seen { 1.0 / (1.0 + d / gate) } else { 0.0 },
+                confidence: 1.0 / (1.0 + d / gate),
                 descriptor_distance: d / unit_len,
                 profile_gap: 0.0,
                 candidate_spread: None,

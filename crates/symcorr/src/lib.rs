@@ -57,9 +57,8 @@ mod pipeline;
 
 pub use pipeline::{
     midline_halves, midline_sagittal, symmetric_midline_halves, Correspondence, Method, Mode,
-    PartialTarget, Pipeline, PipelineOptions, PrepareOptions, PreparedMesh, RefineData,
-    DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES,
-    PARTIAL_BOUNDARY_RATIO,
+    Pipeline, PipelineOptions, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
+    DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES, PARTIAL_BOUNDARY_RATIO,
 };
 
 /// Everything that can go wrong in the pipeline, by stage.

@@ -84,6 +84,11 @@ pub struct PrepareOptions {
     /// it off for [`Method::Refined`], which does not use them (then `base_set` and `profile`
     /// are empty and the paper's method refuses the mesh).
     pub paper_data: bool,
+    /// Run the spectral stages at all (Laplacian, eigenpairs, si-HKS, curvature).
+    /// [`Pipeline::prepare`] turns them off for [`Method::Articulated`], which needs only the
+    /// attachment; the descriptors are then one zero column, and the paper's and the refined
+    /// methods refuse the mesh.
+    pub spectral_data: bool,
     /// Keep the eigenpairs on disk and reuse them ([`symcorr_spectral::cache`]): `None` (the
     /// default) always runs the eigensolver. A file is used only if it was written for exactly
     /// this (repaired) mesh, eigenpair count and solver setting; a stale, corrupted or unreadable
@@ -114,6 +119,7 @@ impl Default for PrepareOptions {
             midline_margin: DEFAULT_MIDLINE_MARGIN,
             refine_data: false,
             paper_data: true,
+            spectral_data: true,
             cache: None,
         }
     }
@@ -173,7 +179,7 @@ impl PreparedMesh {
         skeleton: &Skeleton,
         options: &PrepareOptions,
     ) -> Result<PreparedMesh, PipelineError> {
-        if options.eigenpairs < 2 {
+        if options.spectral_data && options.eigenpairs < 2 {
             return Err(PipelineError::InvalidOption(format!(
                 "eigenpairs = {} (need at least 2)",
                 options.eigenpairs
@@ -592,6 +598,19 @@ fn spectral_stages(
     options: &PrepareOptions,
 ) -> Result<(Spectral, Timings), PipelineError> {
     let mut timings = Vec::new();
+    if !options.spectral_data {
+        let n = mesh.num_vertices();
+        return Ok((
+            Spectral {
+                descriptors: Descriptors::new(n, 1, vec![0.0; n])?,
+                curvature: Vec::new(),
+                base_set: Vec::new(),
+                profile: Vec::new(),
+                refine: None,
+            },
+            timings,
+        ));
+    }
     let mut clock = Instant::now();
     let mut lap = |name: &str, timings: &mut Timings| {
         timings.push((name.to_string(), clock.elapsed().as_secs_f64()));
@@ -669,34 +688,19 @@ pub struct PipelineOptions {
     pub method: Method,
     /// Options of the refined method.
     pub refine: RefineOptions,
-    /// When the refined method treats the target as a partial view (articulated alignment
-    /// instead of spectral refinement).
-    pub partial: PartialTarget,
-    /// Options of the refined method on partial targets.
+    /// Options of the articulated method.
     pub articulated: ArticulatedOptions,
-}
-
-/// How [`Pipeline::run`]'s refined method treats the target.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum PartialTarget {
-    /// Partial when [`PreparedMesh::is_partial`] says so.
-    #[default]
-    Auto,
-    /// Always a partial view: skeleton-driven articulated alignment
-    /// (symcorr-correspond's `articulated_match`).
-    Yes,
-    /// Always a whole surface: landmarks, si-HKS and ZoomOut (`refine_dense`).
-    No,
 }
 
 impl PipelineOptions {
     /// Refuses combinations that would silently run something else than asked: the skeleton
     /// filter switch (`matching.skeleton_filter = false`, the paper's ablation) has no meaning
-    /// for [`Method::Refined`], whose segment pools are its skeleton constraint.
+    /// for [`Method::Refined`] and [`Method::Articulated`], whose segment pools are their
+    /// skeleton constraint.
     pub fn check(&self) -> Result<(), PipelineError> {
-        if self.method == Method::Refined && !self.matching.skeleton_filter {
+        if self.method != Method::Paper && !self.matching.skeleton_filter {
             return Err(PipelineError::InvalidOption(
-                "switching the skeleton filter off is the paper pipeline's ablation; the refined method always keeps matches on their segment".into(),
+                "switching the skeleton filter off is the paper pipeline's ablation; the articulated and refined methods always keep matches on their segment".into(),
             ));
         }
         Ok(())
@@ -709,9 +713,8 @@ impl Default for PipelineOptions {
             prepare: PrepareOptions::default(),
             matching: MatchOptions::default(),
             mode: Mode::DEFAULT_SPARSE,
-            method: Method::Refined,
+            method: Method::Articulated,
             refine: RefineOptions::default(),
-            partial: PartialTarget::Auto,
             articulated: ArticulatedOptions::default(),
         }
     }
@@ -720,8 +723,16 @@ impl Default for PipelineOptions {
 /// Which matching method [`Pipeline::run`] uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Method {
-    /// The paper: si-HKS candidates, skeleton filter, eq. 8 selection.
+    /// Beyond the paper, the default: skeleton-driven articulated alignment
+    /// (symcorr-correspond's `articulated_match`): the template, skinned with its bone-heat
+    /// weights, is posed onto the target's skeleton and fitted bone by bone (ICP within
+    /// segment pools, the head's twist searched), then every template vertex takes the nearest
+    /// target vertex of its pool. Whole surfaces and partial views (single-view scans) alike;
+    /// on a partial target ([`PreparedMesh::is_partial`]) [`Correspondence::has_counterpart`]
+    /// says which template points it shows. Needs no spectral data.
     #[default]
+    Articulated,
+    /// The paper: si-HKS candidates, skeleton filter, eq. 8 selection.
     Paper,
     /// Beyond the paper (DESIGN.md, Algorithm 7; symcorr-correspond's `refine_dense`): an
     /// initial map by nearest neighbour in skeleton-landmark + si-HKS space within each segment,
@@ -743,15 +754,16 @@ pub struct Correspondence {
     /// Seconds per pair stage (`sampling`, `candidates`, `skeleton_filter`, `selection`; for
     /// the refined method `segment_pools`, `initial_map`, `zoomout`).
     pub timings: Vec<(String, f64)>,
-    /// Refined method: fraction of target vertices hit by the dense map (`None` for the paper's).
+    /// Articulated and refined methods: fraction of target vertices hit by the dense map
+    /// (`None` for the paper's).
     pub coverage: Option<f64>,
-    /// Partial targets (refined method): per match, whether the target shows the template
-    /// point at all (`false`: no counterpart; the match is then only the nearest guess and has
-    /// confidence 0). `None` when the target is a whole surface.
+    /// Partial targets (articulated method): per match, whether the target shows the template
+    /// point at all (`false`: no counterpart; the match is then only the nearest guess).
+    /// `None` when the target is a whole surface.
     pub has_counterpart: Option<Vec<bool>>,
 }
 
-/// The refined method on a partial target: skeleton-driven articulated alignment of the
+/// The articulated method: skeleton-driven articulated alignment of the
 /// template onto the target (symcorr-correspond's `articulated_match`).
 fn articulated(
     template: &PreparedMesh,
@@ -826,13 +838,20 @@ impl Pipeline {
         mesh: TriMesh,
         skeleton: &Skeleton,
     ) -> Result<PreparedMesh, PipelineError> {
-        if self.options.method == Method::Refined {
-            let mut o = self.options.prepare.clone();
-            o.refine_data = true;
-            o.paper_data = false;
-            return PreparedMesh::new(mesh, skeleton, &o);
+        let mut o = self.options.prepare.clone();
+        match self.options.method {
+            Method::Refined => {
+                o.refine_data = true;
+                o.paper_data = false;
+            }
+            Method::Articulated => {
+                o.spectral_data = false;
+                o.refine_data = false;
+                o.paper_data = false;
+            }
+            Method::Paper => {}
         }
-        PreparedMesh::new(mesh, skeleton, &self.options.prepare)
+        PreparedMesh::new(mesh, skeleton, &o)
     }
 
     /// The template points this pipeline matches on `template` (sample or all vertices).
@@ -853,12 +872,7 @@ impl Pipeline {
         let t = Instant::now();
         let points = self.points(template);
         let mut timings = vec![("sampling".to_string(), t.elapsed().as_secs_f64())];
-        let partial = match self.options.partial {
-            PartialTarget::Auto => target.is_partial(),
-            PartialTarget::Yes => true,
-            PartialTarget::No => false,
-        };
-        if self.options.method == Method::Refined && partial {
+        if self.options.method == Method::Articulated {
             let out = articulated(template, target, &self.options.articulated)?;
             timings.extend(out.timings.iter().map(|(n, s)| (n.to_string(), *s)));
             fn pick<T: Copy>(mode: Mode, points: &[u32], v: Vec<T>) -> Vec<T> {
@@ -867,22 +881,27 @@ impl Pipeline {
                     Mode::Sparse { .. } => points.iter().map(|&p| v[p as usize]).collect(),
                 }
             }
+            // Only a partial view leaves template points without a counterpart; on a whole
+            // surface every point has one, however far the fit left it.
+            let partial = target.is_partial();
             let coverage = coverage(
                 &out.matches
                     .iter()
                     .zip(&out.has_counterpart)
-                    .filter(|(_, &h)| h)
+                    .filter(|(_, &h)| h || !partial)
                     .map(|(m, _)| m.target)
                     .collect::<Vec<_>>(),
                 target.num_vertices(),
             );
+            let has_counterpart =
+                partial.then(|| pick(self.options.mode, &points, out.has_counterpart));
             return Ok(Correspondence {
                 matches: pick(self.options.mode, &points, out.matches),
                 filter: FilterStats::default(),
                 mean_candidates: 1.0,
                 timings,
                 coverage: Some(coverage),
-                has_counterpart: Some(pick(self.options.mode, &points, out.has_counterpart)),
+                has_counterpart,
             });
         }
         if self.options.method == Method::Refined {
@@ -1167,15 +1186,19 @@ mod tests {
         .is_err()
     }
 
-    /// The ablation switch belongs to the paper's method; with the refined method it is an
-    /// error, not a silently different run.
+    /// The ablation switch belongs to the paper's method; with the articulated (default) and
+    /// refined methods it is an error, not a silently different run.
     #[test]
     fn refined_method_refuses_the_filter_ablation() {
         let mut o = PipelineOptions::default();
-        assert_eq!(o.method, Method::Refined);
-        assert!(o.check().is_ok());
-        o.matching.skeleton_filter = false;
-        assert!(matches!(o.check(), Err(PipelineError::InvalidOption(_))));
+        assert_eq!(o.method, Method::Articulated);
+        for method in [Method::Articulated, Method::Refined] {
+            o.method = method;
+            o.matching.skeleton_filter = true;
+            assert!(o.check().is_ok());
+            o.matching.skeleton_filter = false;
+            assert!(matches!(o.check(), Err(PipelineError::InvalidOption(_))));
+        }
         o.method = Method::Paper;
         assert!(o.check().is_ok());
     }

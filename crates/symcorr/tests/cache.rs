@@ -194,7 +194,7 @@ fn command_line_cache_flags() {
             .arg(joints("s0_arms-down"))
             .arg("--out")
             .arg(d.join(out))
-            .args(["--samples", "100"])
+            .args(["--samples", "100", "--method", "refined"])
             .args(extra)
             .output()
             .unwrap();
@@ -245,7 +245,7 @@ fn command_line_cache_flags() {
             .arg(&fixtures)
             .arg("--pairs")
             .arg(&pairs)
-            .args(["--samples", "100", "--cache-dir"])
+            .args(["--samples", "100", "--method", "refined", "--cache-dir"])
             .arg(&cache)
             .output()
             .unwrap();

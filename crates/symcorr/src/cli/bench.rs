@@ -91,7 +91,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
     json!({
         "dataset": dataset.display().to_string(),
         "mode": match o.mode { symcorr::Mode::Dense => "dense".to_string(), symcorr::Mode::Sparse { samples } => format!("sparse:{samples}") },
-        "method": match o.method { symcorr::Method::Paper => "paper", symcorr::Method::Refined => "refined" },
+        "method": match o.method { symcorr::Method::Paper => "paper", symcorr::Method::Refined => "refined", symcorr::Method::Articulated => "articulated" },
         "skeleton_filter": o.matching.skeleton_filter,
         "candidates": {"nearest": o.matching.candidates.nearest, "threshold": o.matching.candidates.threshold},
         "eigenpairs": o.prepare.eigenpairs,
@@ -204,7 +204,9 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
     if let Some(s) = counts.summary() {
         println!("{s}");
     }
-    let label = if pipeline.options.method == symcorr::Method::Refined {
+    let label = if pipeline.options.method == symcorr::Method::Articulated {
+        "articulated (skinning + ICP)"
+    } else if pipeline.options.method == symcorr::Method::Refined {
         "refined (landmarks + ZoomOut)"
     } else if pipeline.options.matching.skeleton_filter {
         "with skeleton filter"

@@ -67,7 +67,8 @@ pub struct CacheArgs {
     /// them in later runs (for `bench`: in DATASET/meshes/, one HASH.symcorr-eigs per mesh).
     /// A file is used only for exactly the mesh and settings it was written for; a stale or
     /// corrupted one is recomputed and rewritten (with a warning if corrupted). Timings then
-    /// show `eigenpairs_cached` instead of `eigenpairs`.
+    /// show `eigenpairs_cached` instead of `eigenpairs`. Only the methods with spectral data
+    /// (`refined`, `paper`) compute eigenpairs; `articulated` has nothing to cache.
     #[arg(long, conflicts_with = "cache_dir")]
     pub cache: bool,
     /// Like --cache, but every mesh's eigenpairs go into DIR (created if needed), named by a
@@ -130,44 +131,33 @@ impl CacheArgs {
     }
 }
 
-/// `--method`: the paper's pipeline or the refined one.
+/// `--method`: symcorr's articulated alignment (default), the refined spectral method or the
+/// paper's pipeline.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum MethodArg {
+    /// The template skinned onto the target's skeleton, fitted bone by bone, nearest point
+    /// within each segment (the default: the most accurate and the fastest, and the one for
+    /// single-view scans; see the README).
+    #[default]
+    Articulated,
+    /// Skeleton-landmark initial map + segment-constrained ZoomOut (whole surfaces).
+    Refined,
     /// si-HKS candidates, skeleton filter, eq. 8 selection (the paper).
     Paper,
-    /// Skeleton-landmark initial map + segment-constrained ZoomOut (the default: more accurate
-    /// and faster than the paper's pipeline, see the README).
-    #[default]
-    Refined,
-}
-
-/// `--partial`: how the refined method treats the target.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum PartialArg {
-    /// Partial when its boundary is long (a single view).
-    #[default]
-    Auto,
-    /// Always a partial view.
-    Yes,
-    /// Always a whole surface.
-    No,
 }
 
 /// Method options shared by `match` and `bench`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MethodArgs {
-    /// Matching method: `refined` (landmark coordinates and segment-constrained ZoomOut,
-    /// beyond the paper; default) or `paper` (the paper's pipeline, Table 1).
-    #[arg(long, value_enum, default_value_t = MethodArg::Refined)]
+    /// Matching method: `articulated` (skeleton-driven articulated alignment, beyond the
+    /// paper; default; whole bodies and single-view scans, whose unseen template points are
+    /// listed under `no_counterpart`), `refined` (landmark coordinates and segment-constrained
+    /// ZoomOut, beyond the paper) or `paper` (the paper's pipeline, Table 1).
+    #[arg(long, value_enum, default_value_t = MethodArg::Articulated)]
     pub method: MethodArg,
     /// Template points in sparse mode (farthest-point sample).
     #[arg(long, default_value_t = symcorr::DEFAULT_SAMPLES)]
     pub samples: usize,
-    /// Refined method: is the target a partial view (a single-view scan)? `auto` decides by
-    /// the length of its boundary; a partial target is matched by skeleton-driven articulated
-    /// alignment and template points it does not show are reported (`no_counterpart`).
-    #[arg(long, value_enum, default_value_t = PartialArg::Auto)]
-    pub partial: PartialArg,
     /// Ablation: skip the skeleton filter (the paper's method without its contribution).
     #[arg(long)]
     pub no_skeleton_filter: bool,
@@ -228,11 +218,7 @@ impl MethodArgs {
         o.method = match self.method {
             MethodArg::Paper => symcorr::Method::Paper,
             MethodArg::Refined => symcorr::Method::Refined,
-        };
-        o.partial = match self.partial {
-            PartialArg::Auto => symcorr::PartialTarget::Auto,
-            PartialArg::Yes => symcorr::PartialTarget::Yes,
-            PartialArg::No => symcorr::PartialTarget::No,
+            MethodArg::Articulated => symcorr::Method::Articulated,
         };
         o.matching.candidates = CandidateOptions {
             nearest: Some(self.candidates),
