@@ -348,7 +348,7 @@ def peer_cache_key(tpl, tgt, args):
 # --------------------------------------------------------------------------------------------
 
 
-def run_symcorr(binary, dataset, pairs_file, mode, out_dir, method="refined"):
+def run_symcorr(binary, dataset, pairs_file, mode, out_dir, method="articulated"):
     """Run `symcorr bench`; returns (summary dict or None, message)."""
     if binary is None or not Path(binary).is_file():
         return None, f"symcorr binary not found at {binary} (build: cargo build --release -p symcorr)"
@@ -443,8 +443,8 @@ def main():
     ap.add_argument("--limit", type=int, default=0, help="only the first N pairs (0 = all)")
     ap.add_argument("--json", type=Path, help="also write the table and per-pair rows here")
     ap.add_argument("--keep", type=Path, help="keep symcorr's bench output in this folder")
-    ap.add_argument("--symcorr-method", choices=["refined", "paper"], default="refined",
-                    help="symcorr bench --method (default: refined, symcorr's default)")
+    ap.add_argument("--symcorr-method", choices=["articulated", "refined", "paper"], default="articulated",
+                    help="symcorr bench --method (default: articulated, symcorr's default)")
     ap.add_argument("--no-symcorr", action="store_true", help="run the peer only")
     ap.add_argument("--peer-cache", type=Path,
                     help="reuse peer maps (and their measured seconds) for identical meshes and "

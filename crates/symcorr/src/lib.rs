@@ -11,10 +11,23 @@
 //! * [`Pipeline::run`] — one pair: template points (farthest-point sample or every vertex),
 //!   si-HKS candidates, the skeleton filter, eq. 8 selection (symcorr-correspond).
 //!
-//! Two methods share these halves ([`Method`]): [`Method::Refined`], the default (skeleton
-//! landmark coordinates + si-HKS initial map within segment pools, then segment-constrained
-//! ZoomOut; DESIGN.md Algorithm 7, symcorr-correspond's `refine_dense`), and [`Method::Paper`],
-//! the paper's pipeline above. Every mesh first goes through the default repair
+//! Three methods share these halves ([`Method`]):
+//! * [`Method::Articulated`], the default: the template, skinned with its bone-heat weights,
+//!   is posed onto the target's skeleton and fitted bone by bone (ICP within segment pools,
+//!   the head's twist searched); every template vertex then takes the nearest target vertex of
+//!   its pool (symcorr-correspond's `articulated_match`). It needs only the attachment (no
+//!   spectral stage), handles single-view scans ([`PreparedMesh::is_partial`]) and says which
+//!   template points a scan does not show ([`Correspondence::has_counterpart`]).
+//! * [`Method::Refined`]: skeleton landmark coordinates + si-HKS initial map within segment
+//!   pools, then segment-constrained ZoomOut (DESIGN.md Algorithm 7, `refine_dense`).
+//! * [`Method::Paper`], the paper's pipeline above.
+//!
+//! Why the articulated method is the default (58 pairs of generated bodies, dense, README):
+//! exact joints 0.0034 mean error vs 0.0245 for the refined method; single-view scans 0.02 vs
+//! 0.11 (measured on the template's surface). Intrinsic descriptors change wholesale when half
+//! the surface is missing; the skeleton does not.
+//!
+//! Every mesh first goes through the default repair
 //! (`symcorr_mesh::repair`); the stages work on the repaired mesh and every output speaks the
 //! input file's vertex ids ([`PreparedMesh::input_id`]).
 //!
