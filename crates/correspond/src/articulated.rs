@@ -529,7 +529,7 @@ fn twist_search(
     Ok(best.0)
 }
 
-/// Starting twists of [`twist_search`], in degrees: within a head's range of rotation against
+/// Starting twists of the head twist search of [`articulated_match`], in degrees: within a head's range of rotation against
 /// the chest (about ±80°; the starting pose is the chest's). Wider starts let a head whose
 /// back fits about as well as its face turn round: with σ = 3 cm joints, ±180° flipped whole
 /// heads in 13 of 58 pairs.
