@@ -349,6 +349,9 @@ pub struct ArticulatedSide<'a> {
     pub joints: &'a Skeleton,
     /// Per vertex: on the mesh's boundary? (`None`: a closed surface.) Used on the target side.
     pub boundary: Option<&'a [bool]>,
+    /// The mesh's vertex neighbours (edge graph); on the template side they carry the
+    /// non-rigid step (`None`: no non-rigid step).
+    pub neighbors: Option<&'a [Vec<u32>]>,
     /// Total surface area.
     pub area: f64,
 }
@@ -376,7 +379,15 @@ pub struct ArticulatedOptions {
     /// A pair whose target point lies on the target's boundary is rejected (and the template
     /// point has no counterpart) when longer than this.
     pub boundary_gate: f64,
+    /// Rounds of the non-rigid step after the ICP (0: none).
+    pub nonrigid_rounds: usize,
+    /// Smoothness weight λ of the non-rigid displacement field (per edge, against 1 per
+    /// accepted pair).
+    pub nonrigid_smoothing: f64,
 }
+
+/// Jacobi iterations per round of the non-rigid step.
+const NONRIGID_JACOBI: usize = 30;
 
 impl Default for ArticulatedOptions {
     fn default() -> Self {
@@ -390,6 +401,8 @@ impl Default for ArticulatedOptions {
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
             boundary_gate: 0.01,
+            nonrigid_rounds: 3,
+            nonrigid_smoothing: 5.0,
         }
     }
 }
@@ -702,8 +715,56 @@ pub fn articulated_match(
     }
     timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
 
+    // Non-rigid step: what rigid bones blended by bone-heat weights cannot express (another
+    // rig's skinning, soft tissue, body shape) is pulled in by a smooth displacement field:
+    // each accepted pair's offset to its target point, spread over the template's edge graph
+    // (Jacobi iterations of min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²).
     let t = Instant::now();
     let gate = options.gate_end * unit_len;
+    if let Some(nb) = template.neighbors.filter(|nb| nb.len() == n) {
+        for _ in 0..options.nonrigid_rounds {
+            let near = nearest(&posed, &posed_normals, None)?;
+            let mut d = vec![[0.0; 3]; n];
+            let mut r = vec![0.0; n];
+            for (v, &(q, _)) in near.iter().enumerate() {
+                let y = target.positions[q as usize];
+                let dist = norm(sub(posed[v], y));
+                if dist <= gate
+                    && dot(posed_normals[v], target.normals[q as usize])
+                        >= options.min_normal_cosine
+                    && !(on_boundary(q) && dist > boundary_gate)
+                {
+                    d[v] = sub(y, posed[v]);
+                    r[v] = 1.0;
+                }
+            }
+            let lambda = options.nonrigid_smoothing;
+            let mut field = d.clone();
+            for _ in 0..NONRIGID_JACOBI {
+                field = (0..n)
+                    .into_par_iter()
+                    .map(|v| {
+                        let mut acc = scale(d[v], r[v]);
+                        for &u in &nb[v] {
+                            acc = add(acc, scale(field[u as usize], lambda));
+                        }
+                        let wsum = r[v] + lambda * nb[v].len() as f64;
+                        if wsum > 0.0 {
+                            scale(acc, 1.0 / wsum)
+                        } else {
+                            [0.0; 3]
+                        }
+                    })
+                    .collect();
+            }
+            for (x, f) in posed.iter_mut().zip(&field) {
+                *x = add(*x, *f);
+            }
+        }
+    }
+    timings.push(("nonrigid", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
     let near = nearest(&posed, &posed_normals, None)?;
     let mut has_counterpart = Vec::with_capacity(n);
     let matches = near

@@ -73,6 +73,7 @@ fn side<'a>(
 ) -> ArticulatedSide<'a> {
     ArticulatedSide {
         boundary,
+        neighbors: None,
         positions: &mesh.positions,
         normals,
         labels: &att.labels,

@@ -784,13 +784,16 @@ fn articulated(
     };
     let (tn, qn) = (normals(template), normals(target));
     let boundary = target.mesh.boundary_vertices();
+    let neighbors = template.mesh.vertex_neighbors();
     fn side<'a>(
         m: &'a PreparedMesh,
         normals: &'a [[f64; 3]],
         boundary: Option<&'a [bool]>,
+        neighbors: Option<&'a [Vec<u32>]>,
     ) -> ArticulatedSide<'a> {
         ArticulatedSide {
             boundary,
+            neighbors,
             positions: &m.mesh.positions,
             normals,
             labels: &m.attachment.labels,
@@ -799,9 +802,9 @@ fn articulated(
         }
     }
     Ok(articulated_match(
-        &side(template, &tn, None),
+        &side(template, &tn, None, Some(&neighbors)),
         &template.attachment.weights,
-        &side(target, &qn, Some(&boundary)),
+        &side(target, &qn, Some(&boundary), None),
         &graph,
         options,
     )?)
