@@ -27,7 +27,9 @@ use crate::{CorrespondError, SegmentPools};
 use faer::Mat;
 use rayon::prelude::*;
 use symcorr_attach::{BoneWeights, Joint, Segment, Skeleton, BONES};
-use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
+use symcorr_mesh::geometry::{
+    add, closest_on_segment, cross, dot, mat_vec, norm, scale, sub, unit,
+};
 
 /// A 3×3 matrix, row-major.
 pub type Mat3 = [[f64; 3]; 3];
@@ -61,10 +63,6 @@ impl BoneTransform {
     }
 }
 
-fn mat_vec(m: &Mat3, v: [f64; 3]) -> [f64; 3] {
-    [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
-}
-
 fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
     let mut out = [[0.0; 3]; 3];
     for (i, row) in out.iter_mut().enumerate() {
@@ -83,11 +81,6 @@ fn transpose(a: &Mat3) -> Mat3 {
         }
     }
     out
-}
-
-fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
-    let n = norm(v);
-    (n > 1e-12 && n.is_finite()).then(|| scale(v, 1.0 / n))
 }
 
 /// The orthonormal frame (as the columns of a matrix) with first axis along `x` and second
@@ -318,15 +311,8 @@ pub fn outward_normals(
         let Some(&(a, b)) = s.bones().first() else {
             continue;
         };
-        let (a, b) = (joints.position(a), joints.position(b));
-        let ab = sub(b, a);
-        let len2 = dot(ab, ab);
-        let t = if len2 > 0.0 {
-            (dot(sub(x, a), ab) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let out = sub(x, add(a, scale(ab, t)));
+        let (on_bone, _) = closest_on_segment(x, joints.position(a), joints.position(b));
+        let out = sub(x, on_bone);
         balance += dot(*n, out).signum();
     }
     if balance < 0.0 {
@@ -603,6 +589,14 @@ pub fn articulated_match(
     // it, lies beyond what the target shows (the standard rejection of partial ICP).
     let boundary_gate = options.boundary_gate * unit_len;
     let on_boundary = |q: u32| target.boundary.is_some_and(|b| b[q as usize]);
+    // Does the pair (posed template point, its normal) → target vertex q hold at this gate?
+    // Close enough, facing the same way, and not hanging over the target's border.
+    let holds = |x: [f64; 3], n: [f64; 3], q: u32, gate: f64| -> bool {
+        let d = norm(sub(x, target.positions[q as usize]));
+        d <= gate
+            && dot(n, target.normals[q as usize]) >= options.min_normal_cosine
+            && !(on_boundary(q) && d > boundary_gate)
+    };
     let mut timings = Vec::new();
     let t = Instant::now();
     // No sagittal halves on the midline segments: the alignment already puts each side on its
@@ -673,14 +667,10 @@ pub fn articulated_match(
             if !d2.is_finite() {
                 continue; // not in the sample
             }
-            let y = target.positions[q as usize];
-            let d = norm(sub(posed[v], y));
-            if d > gate
-                || dot(posed_normals[v], target.normals[q as usize]) < options.min_normal_cosine
-                || (on_boundary(q) && d > boundary_gate)
-            {
+            if !holds(posed[v], posed_normals[v], q, gate) {
                 continue;
             }
+            let y = target.positions[q as usize];
             for &(b, w) in weights.row(v) {
                 if w > 0.1 {
                     per_bone[b].push((template.positions[v], y, w));
@@ -727,14 +717,8 @@ pub fn articulated_match(
             let mut d = vec![[0.0; 3]; n];
             let mut r = vec![0.0; n];
             for (v, &(q, _)) in near.iter().enumerate() {
-                let y = target.positions[q as usize];
-                let dist = norm(sub(posed[v], y));
-                if dist <= gate
-                    && dot(posed_normals[v], target.normals[q as usize])
-                        >= options.min_normal_cosine
-                    && !(on_boundary(q) && dist > boundary_gate)
-                {
-                    d[v] = sub(y, posed[v]);
+                if holds(posed[v], posed_normals[v], q, gate) {
+                    d[v] = sub(target.positions[q as usize], posed[v]);
                     r[v] = 1.0;
                 }
             }
@@ -772,9 +756,7 @@ pub fn articulated_match(
         .enumerate()
         .map(|(v, &(q, _))| {
             let d = norm(sub(posed[v], target.positions[q as usize]));
-            let seen = d <= gate
-                && dot(posed_normals[v], target.normals[q as usize]) >= options.min_normal_cosine
-                && !(on_boundary(q) && d > boundary_gate);
+            let seen = holds(posed[v], posed_normals[v], q, gate);
             has_counterpart.push(seen);
             crate::Match {
                 template: v as u32,

@@ -54,6 +54,39 @@ pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// `a` scaled to unit length, or `None` if it is (numerically) zero or not finite.
+#[inline]
+pub fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
+    let l = norm(a);
+    (l > 1e-12 && l.is_finite()).then(|| scale(a, 1.0 / l))
+}
+
+/// Closest point to `p` on the segment `a–b`, and its distance.
+///
+/// ```
+/// use symcorr_mesh::geometry::closest_on_segment;
+/// let (q, d) = closest_on_segment([1.0, 2.0, 0.0], [0.0; 3], [4.0, 0.0, 0.0]);
+/// assert_eq!((q, d), ([1.0, 0.0, 0.0], 2.0));
+/// ```
+#[inline]
+pub fn closest_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> ([f64; 3], f64) {
+    let ab = sub(b, a);
+    let l2 = dot(ab, ab);
+    let t = if l2 > 0.0 {
+        (dot(sub(p, a), ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let q = add(a, scale(ab, t));
+    (q, dist(p, q))
+}
+
+/// `M·p` for a row-major 3×3 matrix.
+#[inline]
+pub fn mat_vec(m: &[[f64; 3]; 3], p: [f64; 3]) -> [f64; 3] {
+    [dot(m[0], p), dot(m[1], p), dot(m[2], p)]
+}
+
 impl TriMesh {
     /// Area of every triangle.
     pub fn triangle_areas(&self) -> Vec<f64> {
