@@ -528,10 +528,10 @@ fn twist_search(
     Ok(best.0)
 }
 
-/// Starting twists of the head twist search of [`articulated_match`], in degrees: within a head's range of rotation against
-/// the chest (about ±80°; the starting pose is the chest's). Wider starts let a head whose
-/// back fits about as well as its face turn round: with σ = 3 cm joints, ±180° flipped whole
-/// heads in 13 of 58 pairs.
+/// Starting twists of the head twist search of [`articulated_match`], in degrees: within a
+/// head's range of rotation against the chest (about ±80°; the starting pose is the chest's).
+/// Wider starts let a head whose back fits about as well as its face turn round: with
+/// σ = 3 cm joints, ±180° flipped whole heads in 13 of 58 pairs.
 pub const TWISTS: [f64; 7] = [0.0, 30.0, 60.0, 90.0, -30.0, -60.0, -90.0];
 /// At most this many vertices of the bone score each start of [`twist_search`].
 const TWIST_POINTS: usize = 600;
