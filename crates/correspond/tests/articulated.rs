@@ -82,22 +82,22 @@ fn side<'a>(
     }
 }
 
+/// The mesh's vertex normals turned to point out of the body.
+fn outward(mesh: &TriMesh, att: &symcorr_attach::Attachment) -> Vec<[f64; 3]> {
+    outward_normals(
+        &mesh.positions,
+        mesh.vertex_normals(),
+        &att.labels,
+        &att.joints,
+    )
+}
+
 #[test]
 fn a_skinned_copy_is_matched_to_itself() {
     let (a, b, att_a) = bodies();
     let att_b = attach(&b.mesh, &b.skeleton, &AttachOptions::default()).unwrap();
-    let na = outward_normals(
-        &a.mesh.positions,
-        a.mesh.vertex_normals(),
-        &att_a.labels,
-        &att_a.joints,
-    );
-    let nb = outward_normals(
-        &b.mesh.positions,
-        b.mesh.vertex_normals(),
-        &att_b.labels,
-        &att_b.joints,
-    );
+    let na = outward(&a.mesh, &att_a);
+    let nb = outward(&b.mesh, &att_b);
     let out = articulated_match(
         &side(&a.mesh, &att_a, &na, None),
         &att_a.weights,
@@ -171,12 +171,7 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
     )
     .unwrap();
     let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
-    let na = outward_normals(
-        &a.mesh.positions,
-        a.mesh.vertex_normals(),
-        &att_a.labels,
-        &att_a.joints,
-    );
+    let na = outward(&a.mesh, &att_a);
     // Wound the other way round: outward_normals must turn them.
     let ns = outward_normals(
         &scan.positions,

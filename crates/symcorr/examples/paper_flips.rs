@@ -21,7 +21,7 @@ use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_attach::{Joint, Segment};
 use symcorr_correspond::{
     candidates, evaluate, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
-    EvalGraph, MatchOptions, Side,
+    EvalGraph, MatchOptions,
 };
 
 struct Mesh {
@@ -132,17 +132,6 @@ fn read_labels(path: &Path) -> Vec<Segment> {
         .lines()
         .map(|l| Segment::from_index(l.trim().parse().unwrap()).unwrap())
         .collect()
-}
-
-fn side(m: &PreparedMesh) -> Side<'_> {
-    Side {
-        descriptors: &m.descriptors,
-        labels: &m.attachment.labels,
-        profile: &m.profile,
-        halves: Some(&m.halves),
-        sagittal: Some(&m.sagittal),
-        positions: Some(&m.mesh.positions),
-    }
 }
 
 #[derive(Default, Clone, Copy)]
@@ -491,7 +480,7 @@ fn main() {
             let (ma, mb) = (&meshes[a], &meshes[b]);
             let points = pipeline.points(&ma.p);
             let pairs: Vec<(u32, u32)> = match &rule {
-                None => match_points(&side(&ma.p), &side(&mb.p), &points, &opts)
+                None => match_points(&ma.p.side(), &mb.p.side(), &points, &opts)
                     .unwrap()
                     .matches
                     .iter()

@@ -293,7 +293,10 @@ impl PreparedMesh {
         out
     }
 
-    fn side(&self) -> Side<'_> {
+    /// This mesh as one side of the paper's matching stages (symcorr-correspond's
+    /// `match_points`): descriptors, labels, base-set profile, halves, sagittal coordinates and
+    /// positions.
+    pub fn side(&self) -> Side<'_> {
         Side {
             descriptors: &self.descriptors,
             labels: &self.attachment.labels,
