@@ -154,6 +154,7 @@
 mod articulated;
 mod candidates;
 mod filter;
+mod kdtree;
 mod landmarks;
 mod metrics;
 mod refine;
@@ -172,8 +173,9 @@ pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
 pub use refine::{
-    coverage, nearest_in_pools, refine_dense, zoomout, RefineOptions, RefineSide, RefinedMatches,
-    SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult, DEFAULT_ZOOMOUT_POINTS,
+    adjacent_segments, coverage, nearest_in_pools, refine_dense, zoomout, RefineOptions,
+    RefineSide, RefinedMatches, SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult,
+    DEFAULT_ZOOMOUT_POINTS,
 };
 pub use sample::farthest_point_sample;
 pub use selection::{assign_confidence, base_profile, select, Match};

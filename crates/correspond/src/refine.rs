@@ -30,6 +30,29 @@ pub struct SegmentPools {
     members: Vec<Vec<u32>>,
 }
 
+/// The segments that share a joint with `s` in the skeleton (DESIGN.md's table: e.g. the torso
+/// meets the pelvis at the spine joint, and the head and both clavicles at the shoulder centre).
+///
+/// ```
+/// use symcorr_attach::Segment::*;
+/// use symcorr_correspond::adjacent_segments;
+/// assert_eq!(adjacent_segments(ForearmLeft), vec![UpperArmLeft]);
+/// assert!(adjacent_segments(Torso).contains(&ClavicleRight));
+/// ```
+pub fn adjacent_segments(s: Segment) -> Vec<Segment> {
+    let joints = |x: Segment| {
+        x.bones()
+            .iter()
+            .flat_map(|&(a, b)| [a, b])
+            .collect::<Vec<_>>()
+    };
+    let mine = joints(s);
+    Segment::ALL
+        .into_iter()
+        .filter(|&o| o != s && joints(o).iter().any(|j| mine.contains(j)))
+        .collect()
+}
+
 /// `+1` left segment, `-1` right segment, `0` midline.
 pub(crate) fn segment_side(s: Segment) -> i8 {
     if s.mirror() == s {
@@ -63,6 +86,46 @@ impl SegmentPools {
         target: (&[Segment], Option<&[i8]>),
         graph: &EdgeGraph,
         band: f64,
+    ) -> Result<SegmentPools, CorrespondError> {
+        SegmentPools::build(template, target, graph, band, false)
+    }
+
+    /// Like [`SegmentPools::new`], but a group's pool also holds the target regions of the
+    /// segments adjacent to its own in the skeleton (sharing a joint, [`adjacent_segments`]),
+    /// still never the other side of the body. For a map that is already aligned
+    /// extrinsically, where a label boundary that moved between the two meshes must not cut
+    /// the true vertex out of the pool (a neck vertex the target's attachment gave to a
+    /// clavicle), while left and right stay apart.
+    ///
+    /// ```
+    /// use symcorr_attach::Segment::{ClavicleLeft, ClavicleRight, Torso};
+    /// use symcorr_correspond::SegmentPools;
+    /// use symcorr_mesh::TriMesh;
+    /// use symcorr_spectral::EdgeGraph;
+    /// // Three target vertices far apart (no band reaches across).
+    /// let mesh = TriMesh::new(vec![[0.0, 0.0, 0.0], [9.0, 0.0, 0.0], [0.0, 9.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+    /// let graph = EdgeGraph::new(&mesh);
+    /// let target = [Torso, ClavicleLeft, ClavicleRight];
+    /// let strict = SegmentPools::new((&[ClavicleLeft], None), (&target, None), &graph, 0.1).unwrap();
+    /// assert_eq!(strict.pool_of(0), &[1]);
+    /// let wide = SegmentPools::with_adjacent((&[ClavicleLeft], None), (&target, None), &graph, 0.1).unwrap();
+    /// assert_eq!(wide.pool_of(0), &[0, 1]); // the torso joins; the right clavicle never does
+    /// ```
+    pub fn with_adjacent(
+        template: (&[Segment], Option<&[i8]>),
+        target: (&[Segment], Option<&[i8]>),
+        graph: &EdgeGraph,
+        band: f64,
+    ) -> Result<SegmentPools, CorrespondError> {
+        SegmentPools::build(template, target, graph, band, true)
+    }
+
+    fn build(
+        template: (&[Segment], Option<&[i8]>),
+        target: (&[Segment], Option<&[i8]>),
+        graph: &EdgeGraph,
+        band: f64,
+        adjacent: bool,
     ) -> Result<SegmentPools, CorrespondError> {
         let (tl, th) = template;
         let (ul, uh) = target;
@@ -111,9 +174,18 @@ impl SegmentPools {
             .map(|(v, &s)| vertex_side(s, half_of(uh, v)))
             .collect();
         // Geodesic band around each used segment's region (bounded multi-source Dijkstra).
+        let allowed = |s: Segment| -> Vec<Segment> {
+            let mut a = vec![s];
+            if adjacent {
+                a.extend(adjacent_segments(s));
+            }
+            a
+        };
         let mut used = [false; 17];
         for &(s, _) in &keys {
-            used[s.index()] = true;
+            for a in allowed(s) {
+                used[a.index()] = true;
+            }
         }
         let bands: Vec<Option<Vec<f64>>> = (0..17)
             .into_par_iter()
@@ -128,13 +200,14 @@ impl SegmentPools {
             .map(|&(s, h)| {
                 let side = vertex_side(s, h);
                 let ok_side = |q: usize| side * target_side[q] >= 0;
-                let banded: Vec<u32> = match &bands[s.index()] {
-                    Some(d) => (0..ul.len())
-                        .filter(|&q| d[q].is_finite() && ok_side(q))
-                        .map(|q| q as u32)
-                        .collect(),
-                    None => Vec::new(),
-                };
+                let regions: Vec<&Vec<f64>> = allowed(s)
+                    .into_iter()
+                    .filter_map(|a| bands[a.index()].as_ref())
+                    .collect();
+                let banded: Vec<u32> = (0..ul.len())
+                    .filter(|&q| regions.iter().any(|d| d[q].is_finite()) && ok_side(q))
+                    .map(|q| q as u32)
+                    .collect();
                 // Never an empty pool: the side-compatible vertices, else every vertex.
                 if !banded.is_empty() {
                     return banded;
@@ -175,6 +248,16 @@ impl SegmentPools {
     /// Number of template vertices.
     pub fn num_template(&self) -> usize {
         self.groups.len()
+    }
+
+    /// Target vertices per group.
+    pub(crate) fn pools(&self) -> &[Vec<u32>] {
+        &self.pools
+    }
+
+    /// Template vertices per group.
+    pub(crate) fn members(&self) -> &[Vec<u32>] {
+        &self.members
     }
 
     /// The template vertices of each group for which `keep` holds (a subset for
