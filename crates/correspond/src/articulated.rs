@@ -13,8 +13,7 @@
 //!    and shoulders, every other bone the smallest rotation taking its direction in the
 //!    template onto the target's, composed down the kinematic chain).
 //! 2. **Articulated ICP**: every template vertex is matched to the nearest target vertex of its
-//!    segment pool ([`SegmentPools::with_adjacent`]: its segment and the segments adjacent to it
-//!    in the skeleton, never the other side of the body; one exact k-d tree per pool) in position + normal
+//!    segment pool ([`SegmentPools`]: never the other side of the body) in position + normal
 //!    space; pairs too far apart or facing away are rejected (the template's back side has no
 //!    counterpart on a front view); each bone's transform is re-fitted by weighted Kabsch
 //!    (Arun et al. 1987) to its vertices' pairs plus its two joints as anchors, then the

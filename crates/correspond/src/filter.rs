@@ -167,112 +167,28 @@ pub fn sagittal_band(
     template: &Descriptors,
     target: &Descriptors,
 ) -> BandStats {
-    side_band(
-        cands,
-        points,
-        (template_labels, target_labels),
-        (template_sagittal, target_sagittal),
-        ratio,
-        (is_midline, 0.0),
-        (template, target),
-    )
-}
-
-/// The lateral band (beyond the paper; [`MatchOptions::lateral_ratio`](crate::MatchOptions)):
-/// the rule of [`sagittal_band`] on an *intrinsic* side coordinate ([`lateral_coordinates`]:
-/// geodesic distance to the right shoulder/hip landmarks minus the left ones, over √area), for
-/// the template points on the head and on the limbs (clavicles, arms, thighs, shins, feet)
-/// with `|lat(p)| > LATERAL_MIN` (0.02): a candidate `q` is kept if
-/// `lat(q)·sign(lat(p)) ≥ ratio·|lat(p)|` and `q` has `p`'s segment.
-///
-/// Why: a turned head's sagittal plane (from joints, or from the skull's own symmetry) is
-/// often off by tens of degrees, and the skeleton filter cannot tell an inner-thigh point
-/// from one at the crotch; geodesic distances do not turn with the head and grow steadily
-/// from the midline. On the pelvis, torso and hips the landmarks nearest the hip and shoulder
-/// joints move with the thighs and arms, and the band made things worse there (measured in
-/// the crate docs), so it is not applied there.
-///
-/// Fallback and statistics as for [`sagittal_band`].
-///
-/// ```
-/// use symcorr_attach::Segment::ThighRight;
-/// use symcorr_correspond::{lateral_band, Candidate, Descriptors};
-/// let d = Descriptors::new(2, 1, vec![0.0, 0.1]).unwrap();
-/// // An inner-thigh point (lat −0.2); candidate 0 sits at the crotch (lat −0.03).
-/// let mut c = vec![vec![Candidate { vertex: 0, distance: 0.0 }, Candidate { vertex: 1, distance: 0.1 }]];
-/// let s = lateral_band(&mut c, &[1], (&[ThighRight; 2], &[ThighRight; 2]), (&[-0.03, -0.2], &[-0.03, -0.2]), 0.5, &d, &d);
-/// assert_eq!(c[0].iter().map(|c| c.vertex).collect::<Vec<_>>(), vec![1]);
-/// assert_eq!(s.removed, 1);
-/// ```
-///
-/// Panics if the tables disagree in length (a caller bug: the pipeline builds them together).
-pub fn lateral_band(
-    cands: &mut [Vec<Candidate>],
-    points: &[u32],
-    labels: (&[Segment], &[Segment]),
-    lateral: (&[f64], &[f64]),
-    ratio: f64,
-    template: &Descriptors,
-    target: &Descriptors,
-) -> BandStats {
-    side_band(
-        cands,
-        points,
-        labels,
-        lateral,
-        ratio,
-        (in_lateral_scope, LATERAL_MIN),
-        (template, target),
-    )
-}
-
-/// Template points with `|lat| ≤ LATERAL_MIN` (on or near the midline) are left alone by
-/// [`lateral_band`].
-pub const LATERAL_MIN: f64 = 0.02;
-
-/// The head and the limb segments: where [`lateral_band`] applies.
-fn in_lateral_scope(s: Segment) -> bool {
-    !matches!(
-        s,
-        Segment::Pelvis | Segment::Torso | Segment::HipLeft | Segment::HipRight
-    )
-}
-
-/// The band rule shared by [`sagittal_band`] and [`lateral_band`]: for points whose segment is
-/// in `scope` and whose coordinate exceeds `min` in magnitude, keep candidates of the same
-/// segment at least `ratio` times as far out on the same side; else fall back to the target
-/// vertex of that segment inside the band with the nearest descriptor.
-fn side_band(
-    cands: &mut [Vec<Candidate>],
-    points: &[u32],
-    (template_labels, target_labels): (&[Segment], &[Segment]),
-    (template_coord, target_coord): (&[f64], &[f64]),
-    ratio: f64,
-    (scope, min): (fn(Segment) -> bool, f64),
-    (template, target): (&Descriptors, &Descriptors),
-) -> BandStats {
     assert_eq!(cands.len(), points.len(), "one candidate list per point");
-    assert_eq!(template_labels.len(), template_coord.len());
-    assert_eq!(target_labels.len(), target_coord.len());
+    assert_eq!(template_labels.len(), template_sagittal.len());
+    assert_eq!(target_labels.len(), target_sagittal.len());
     let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); 17];
     for (v, s) in target_labels.iter().enumerate() {
-        if scope(*s) {
+        if is_midline(*s) {
             by_segment[s.index()].push(v as u32);
         }
     }
     let mut stats = BandStats::default();
     for (list, &p) in cands.iter_mut().zip(points) {
         let seg = template_labels[p as usize];
-        if !scope(seg) {
+        if !is_midline(seg) {
             continue;
         }
-        let sp = template_coord[p as usize];
-        if !sp.is_finite() || sp.abs() <= min || sp == 0.0 {
+        let sp = template_sagittal[p as usize];
+        if !sp.is_finite() || sp == 0.0 {
             continue;
         }
         stats.points += 1;
         let inside = |q: u32| {
-            let sq = target_coord[q as usize];
+            let sq = target_sagittal[q as usize];
             target_labels[q as usize] == seg && sq * sp.signum() >= ratio * sp.abs()
         };
         let before = list.len();

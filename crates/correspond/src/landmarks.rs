@@ -191,66 +191,6 @@ pub fn skeleton_landmarks(
         .collect()
 }
 
-/// The intrinsic lateral coordinate of every vertex (beyond the paper, for
-/// [`lateral_band`](crate::lateral_band)): `(g(v, R) − g(v, L)) / √area`, where `g(v, L)` is
-/// the edge-path geodesic distance to the nearer of the surface points nearest the left
-/// shoulder and the left hip joint ([`joint_landmarks`]) and `g(v, R)` the same on the right.
-/// Positive on the subject's left, about 0 on the midline, unchanged when a head turns or a
-/// limb bends (isometry). `NaN` where a landmark cannot be reached (another component).
-///
-/// ```
-/// use symcorr_attach::{Joint, Skeleton};
-/// use symcorr_correspond::lateral_coordinates;
-/// use symcorr_mesh::TriMesh;
-/// // A strip along x: the left shoulder and hip joints sit over x = 2, the right ones x = −2.
-/// let pos: Vec<[f64; 3]> = (0..5).flat_map(|i| [[i as f64 - 2.0, 0.0, 0.0], [i as f64 - 2.0, 1.0, 0.0]]).collect();
-/// let tri = (0..4u32).flat_map(|i| [[2 * i, 2 * i + 2, 2 * i + 1], [2 * i + 1, 2 * i + 2, 2 * i + 3]]).collect();
-/// let mesh = TriMesh::new(pos, tri).unwrap();
-/// let mut sk = Skeleton::from_positions([[0.0; 3]; 20]);
-/// for (j, x) in [(Joint::ShoulderLeft, 2.0), (Joint::HipLeft, 2.0), (Joint::ShoulderRight, -2.0), (Joint::HipRight, -2.0)] {
-///     sk.positions[j.index()] = [x, 0.0, 0.0];
-/// }
-/// let lat = lateral_coordinates(&mesh, &sk).unwrap();
-/// assert!(lat[8] > 0.0 && lat[0] < 0.0 && lat[4].abs() < 1e-12);
-/// ```
-///
-/// Errors: [`CorrespondError::InvalidArgument`] for an empty mesh.
-pub fn lateral_coordinates(
-    mesh: &symcorr_mesh::TriMesh,
-    joints: &Skeleton,
-) -> Result<Vec<f64>, CorrespondError> {
-    if mesh.num_vertices() == 0 {
-        return Err(CorrespondError::InvalidArgument(
-            "lateral coordinates of an empty mesh".into(),
-        ));
-    }
-    let landmarks = joint_landmarks(&mesh.positions, joints);
-    let graph = symcorr_spectral::EdgeGraph::new(mesh);
-    let sources: Vec<u32> = [
-        Joint::ShoulderLeft,
-        Joint::HipLeft,
-        Joint::ShoulderRight,
-        Joint::HipRight,
-    ]
-    .iter()
-    .map(|j| landmarks[j.index()])
-    .collect();
-    let d = graph
-        .distances_many(&sources)
-        .map_err(|e| CorrespondError::InvalidArgument(format!("lateral coordinates: {e}")))?;
-    let unit = mesh.total_area().sqrt();
-    Ok((0..mesh.num_vertices())
-        .map(|v| {
-            let x = (d[2][v].min(d[3][v]) - d[0][v].min(d[1][v])) / unit;
-            if x.is_finite() {
-                x
-            } else {
-                f64::NAN
-            }
-        })
-        .collect())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

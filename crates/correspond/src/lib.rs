@@ -22,7 +22,7 @@
 //! let d = Descriptors::new(2, 1, vec![1.0, 1.0]).unwrap();
 //! let labels = [ThighLeft, ThighRight];
 //! let profile = [0.3, 0.3];
-//! let side = Side { descriptors: &d, labels: &labels, profile: &profile, halves: None, sagittal: None, lateral: None, positions: None };
+//! let side = Side { descriptors: &d, labels: &labels, profile: &profile, halves: None, sagittal: None, positions: None };
 //! let out = match_points(&side, &side, &[0, 1], &MatchOptions::default()).unwrap();
 //! assert_eq!(out.matches[0].target, 0);
 //! assert_eq!(out.matches[1].target, 1);
@@ -108,18 +108,6 @@
 //!   pairs each; λ = 1: 0.0045 exact).
 //! * Large meshes: ICP fits on an even sample of at most [`DEFAULT_ICP_POINTS`] template
 //!   vertices and the twist search on at most 600 head vertices; the final map uses all.
-//! * Pools with the skeleton-adjacent segments ([`SegmentPools::with_adjacent`]) instead of
-//!   the segment alone (58 whole-body pairs, dense, session 4): 0.0026 → 0.0025 mean,
-//!   0.008 % → 0 flips. Every remaining flip had been a neck or upper-chest vertex whose true
-//!   counterpart the target's attachment gave to a clavicle (s0_random-7, chin on chest), so
-//!   the strict pool cut the truth off. Pools widened only for the final map and the non-rigid
-//!   step: the same flips minus two; scans unchanged either way (0.0184–0.0185, 0.05 %).
-//! * Non-rigid gates coarse to fine, 0.06 → 0.03 √area over the 3 rounds (was 0.03 in every
-//!   round): the last 3 flips (a heavier shape's belly 7 cm off, s0_random-5 → s1_random-6)
-//!   go; 12 hardest pairs 0.0066 → 0.0065 mean (0.06 with 5 rounds: 0.0064; 0.10: 0.0064).
-//! * Nearest neighbours: one exact k-d tree per pool over the 6-D position ⊕ normal features
-//!   (crate-private `kdtree`, the same answer as brute force, ties to the smaller id) — the
-//!   bench's seconds per 13.4k pair 2.4 → 0.5.
 //!
 //! # Decisions the design leaves open
 //! * **Candidate rule.** Both rules of §3.1 are offered ([`CandidateOptions`]): the `N` nearest
@@ -179,12 +167,8 @@ pub use articulated::{
     ArticulatedOptions, ArticulatedSide, BoneTransform, Mat3, DEFAULT_ICP_POINTS, TWISTS,
 };
 pub use candidates::{candidates, Candidate, CandidateOptions, Descriptors};
-pub use filter::{
-    lateral_band, sagittal_band, skeleton_filter, BandStats, FilterStats, LATERAL_MIN,
-};
-pub use landmarks::{
-    joint_landmarks, landmark_coordinates, lateral_coordinates, skeleton_landmarks,
-};
+pub use filter::{sagittal_band, skeleton_filter, BandStats, FilterStats};
+pub use landmarks::{joint_landmarks, landmark_coordinates, skeleton_landmarks};
 pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
@@ -228,9 +212,6 @@ pub struct Side<'a> {
     /// [`sagittal_band`]): signed distance to the segment's sagittal plane over the segment's
     /// half-width, `+` on the subject's left, `0` on limb segments.
     pub sagittal: Option<&'a [f64]>,
-    /// Optional intrinsic lateral coordinate per vertex ([`lateral_coordinates`]; see
-    /// [`lateral_band`]).
-    pub lateral: Option<&'a [f64]>,
     /// Optional vertex positions: on the target side they give each match its candidate
     /// spread, from which its confidence is computed ([`assign_confidence`]).
     pub positions: Option<&'a [[f64; 3]]>,
@@ -243,7 +224,6 @@ impl Side<'_> {
             || self.profile.len() != n
             || self.halves.is_some_and(|h| h.len() != n)
             || self.sagittal.is_some_and(|h| h.len() != n)
-            || self.lateral.is_some_and(|h| h.len() != n)
             || self.positions.is_some_and(|h| h.len() != n)
         {
             return Err(CorrespondError::InvalidArgument(format!(
@@ -272,18 +252,10 @@ pub struct MatchOptions {
     /// side at least this fraction of its own (normalised) distance from the plane. `None`
     /// switches it off.
     pub sagittal_ratio: Option<f64>,
-    /// Beyond the paper: the lateral band ([`lateral_band`], when both sides have
-    /// [`Side::lateral`] and the filter is on): a head or limb point's candidates must lie on
-    /// its side of the body, intrinsically, at least this fraction as far out. `None` switches
-    /// it off.
-    pub lateral_ratio: Option<f64>,
 }
 
 /// Default [`MatchOptions::sagittal_ratio`] (measured: see the crate docs).
 pub const DEFAULT_SAGITTAL_RATIO: f64 = 0.5;
-
-/// Default [`MatchOptions::lateral_ratio`] (measured: see the crate docs).
-pub const DEFAULT_LATERAL_RATIO: f64 = 0.5;
 
 impl Default for MatchOptions {
     fn default() -> Self {
@@ -292,7 +264,6 @@ impl Default for MatchOptions {
             skeleton_filter: true,
             midline_halves: true,
             sagittal_ratio: Some(DEFAULT_SAGITTAL_RATIO),
-            lateral_ratio: Some(DEFAULT_LATERAL_RATIO),
         }
     }
 }
@@ -306,8 +277,6 @@ pub struct PointMatches {
     pub filter: FilterStats,
     /// What the sagittal band did (all zero when it was off).
     pub band: BandStats,
-    /// What the lateral band did (all zero when it was off).
-    pub lateral: BandStats,
     /// Mean number of candidates per point before the filter.
     pub mean_candidates: f64,
     /// Seconds per stage: `candidates`, `skeleton_filter`, `selection`.
@@ -371,23 +340,6 @@ pub fn match_points(
         ),
         _ => BandStats::default(),
     };
-    let lateral = match (
-        options.skeleton_filter,
-        options.lateral_ratio,
-        template.lateral,
-        target.lateral,
-    ) {
-        (true, Some(ratio), Some(a), Some(b)) => lateral_band(
-            &mut cands,
-            points,
-            (template.labels, target.labels),
-            (a, b),
-            ratio,
-            template.descriptors,
-            target.descriptors,
-        ),
-        _ => BandStats::default(),
-    };
     timings.push(("skeleton_filter", t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let mut matches = select(&cands, points, template.profile, target.profile);
@@ -418,7 +370,6 @@ pub fn match_points(
         matches,
         filter,
         band,
-        lateral,
         mean_candidates,
         timings,
     })
@@ -445,7 +396,6 @@ mod tests {
             profile: &tp,
             halves: None,
             sagittal: None,
-            lateral: None,
             positions: None,
         };
         let us = Side {
@@ -454,7 +404,6 @@ mod tests {
             profile: &up,
             halves: None,
             sagittal: None,
-            lateral: None,
             positions: None,
         };
         let off = MatchOptions {
@@ -484,7 +433,6 @@ mod tests {
             profile: &[0.5],
             halves: Some(&[1]),
             sagittal: Some(&[0.7]),
-            lateral: None,
             positions: None,
         };
         let us = Side {
@@ -493,7 +441,6 @@ mod tests {
             profile: &[0.5, 0.6],
             halves: Some(&[0, 1]),
             sagittal: Some(&[0.0, 0.7]),
-            lateral: None,
             positions: None,
         };
         let on = match_points(&ts, &us, &[0], &MatchOptions::default()).unwrap();
@@ -515,51 +462,6 @@ mod tests {
         assert_eq!(out.matches[0].target, 0);
     }
 
-    /// An inner-thigh point whose best eq. 8 candidate sits at the crotch, intrinsically near
-    /// the midline: the lateral band drops it; without the band (or with the ablation) it wins.
-    #[test]
-    fn lateral_band_keeps_limb_points_away_from_the_midline() {
-        let t = Descriptors::new(1, 1, vec![0.0]).unwrap();
-        let u = Descriptors::new(2, 1, vec![0.01, 0.02]).unwrap();
-        let ts = Side {
-            descriptors: &t,
-            labels: &[ThighRight],
-            profile: &[0.5],
-            halves: None,
-            sagittal: None,
-            lateral: Some(&[-0.2]),
-            positions: None,
-        };
-        let us = Side {
-            descriptors: &u,
-            labels: &[ThighRight, ThighRight],
-            profile: &[0.5, 0.6],
-            halves: None,
-            sagittal: None,
-            lateral: Some(&[-0.03, -0.21]),
-            positions: None,
-        };
-        let on = match_points(&ts, &us, &[0], &MatchOptions::default()).unwrap();
-        assert_eq!(on.matches[0].target, 1);
-        assert_eq!((on.lateral.points, on.lateral.removed), (1, 1));
-        let off = MatchOptions {
-            lateral_ratio: None,
-            ..MatchOptions::default()
-        };
-        assert_eq!(
-            match_points(&ts, &us, &[0], &off).unwrap().matches[0].target,
-            0
-        );
-        // A point near the midline (|lat| ≤ LATERAL_MIN) is left alone.
-        let near = Side {
-            lateral: Some(&[-0.01]),
-            ..ts
-        };
-        let out = match_points(&near, &us, &[0], &MatchOptions::default()).unwrap();
-        assert_eq!(out.matches[0].target, 0);
-        assert_eq!(out.lateral, BandStats::default());
-    }
-
     #[test]
     fn mismatched_tables_are_errors() {
         let d = Descriptors::new(2, 1, vec![0.0, 1.0]).unwrap();
@@ -569,7 +471,6 @@ mod tests {
             profile: &[0.0, 0.0],
             halves: None,
             sagittal: None,
-            lateral: None,
             positions: None,
         };
         assert!(match_points(&s, &s, &[0], &MatchOptions::default()).is_err());

@@ -6,9 +6,9 @@ use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Attachment, Joint, Segment, Skeleton};
 use symcorr_correspond::{
     articulated_match, base_profile, coverage, farthest_point_sample, landmark_coordinates,
-    lateral_coordinates, match_points, outward_normals, refine_dense, refine_symmetry_plane,
-    skeleton_landmarks, ArticulatedMatches, ArticulatedOptions, ArticulatedSide, Descriptors,
-    FilterStats, Match, MatchOptions, RefineOptions, RefineSide, Side, SpectralBasis,
+    match_points, outward_normals, refine_dense, refine_symmetry_plane, skeleton_landmarks,
+    ArticulatedMatches, ArticulatedOptions, ArticulatedSide, Descriptors, FilterStats, Match,
+    MatchOptions, RefineOptions, RefineSide, Side, SpectralBasis,
 };
 use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
 use symcorr_spectral::{
@@ -156,9 +156,6 @@ pub struct PreparedMesh {
     pub halves: Vec<i8>,
     /// Sagittal coordinate per vertex of the midline segments ([`midline_sagittal`]).
     pub sagittal: Vec<f64>,
-    /// Intrinsic lateral coordinate per vertex (symcorr-correspond's `lateral_coordinates`:
-    /// geodesic distance to the right shoulder/hip landmarks minus the left ones, over √area).
-    pub lateral: Vec<f64>,
     /// What the refined method needs (with [`PrepareOptions::refine_data`]).
     pub refine: Option<RefineData>,
     /// Total length of the mesh's boundary edges (0 for a closed surface): a single-view scan
@@ -220,9 +217,6 @@ impl PreparedMesh {
             options.midline_margin * area.sqrt(),
         );
         let sagittal = midline_sagittal(&mesh, &attachment.labels, &attachment.joints);
-        let t = Instant::now();
-        let lateral = lateral_coordinates(&mesh, &attachment.joints)?;
-        timings.push(("lateral_coordinates".into(), t.elapsed().as_secs_f64()));
         let refine = match sp.refine {
             Some(r) => Some(RefineData::new(&mesh, &attachment, r, &mut timings)?),
             None => None,
@@ -232,7 +226,6 @@ impl PreparedMesh {
             boundary_length,
             halves,
             sagittal,
-            lateral,
             refine,
             area,
             mesh,
@@ -310,7 +303,6 @@ impl PreparedMesh {
             profile: &self.profile,
             halves: Some(&self.halves),
             sagittal: Some(&self.sagittal),
-            lateral: Some(&self.lateral),
             positions: Some(&self.mesh.positions),
         }
     }
