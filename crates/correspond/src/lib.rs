@@ -139,6 +139,17 @@
 //!   mean error cost of 0.0530 → 0.0542 (ratio 0.2: 0.491 %, 0.0534; 0.35: 0.403 %, 0.0539).
 //!   Limb candidates restricted to the point's position along its bone chain (± 0.15 or
 //!   0.25 of the chain) did not remove the crotch flips the band cannot reach: not kept.
+//!   An *intrinsic lateral band* (session 4, not kept): on the head and the limbs, candidates
+//!   on the point's side of `lat(v) = (g(v, right shoulder/hip) − g(v, left …)) / √area` at
+//!   least `ratio·|lat(p)|` out, with the same fallback as the sagittal band. 58 pairs,
+//!   sparse, exact joints: flips 11 → 2 (ratio 0.5, landmarks = vertex nearest each joint;
+//!   head 7 → 1, thigh 3 → 0), mean 0.0437 → 0.0438; but σ = 3 cm joints 0.0524 / 0.25 % →
+//!   0.0573 / 0.28 % (ratio 0: 0.0551 / 0.34 %; 0.25: 0.0559 / 0.30 %). Shoulder and hip
+//!   *rings* as landmarks: exact 5 flips, 0.0435; noisy 0.0570 / 0.28 %. Without the
+//!   fallback (a point whose candidates all fail keeps them): exact 0.0436 / 10 flips, noisy
+//!   0.0526 / 0.24 % — the flips it removed were all fallbacks, and the fallback is what costs
+//!   the noisy mean. Applied to the pelvis, torso and hips too: 27 flips (landmarks near the
+//!   groin move with the thighs).
 //!   Whole benchmark with the skull plane of `symcorr::midline_halves` (release binary,
 //!   58 pairs each, `symcorr bench --method paper`): exact joints sparse 0.0444 / 0.172 % →
 //!   0.0437 / 0.02 %, dense 0.0352 / 0.184 % → 0.0344 / 0.04 %; σ = 3 cm sparse 0.0532 /
