@@ -146,7 +146,7 @@
 //!   head 7 → 1, thigh 3 → 0), mean 0.0437 → 0.0438; but σ = 3 cm joints 0.0524 / 0.25 % →
 //!   0.0573 / 0.28 % (ratio 0: 0.0551 / 0.34 %; 0.25: 0.0559 / 0.30 %). Shoulder and hip
 //!   *rings* as landmarks: exact 5 flips, 0.0435; noisy 0.0570 / 0.28 %. Without the
-//!   fallback (a point whose candidates all fail keeps them): exact 0.0436 / 10 flips, noisy
+//!   fallback (a point whose candidates all fail keeps them): exact 0.0436 / 11 flips, noisy
 //!   0.0526 / 0.24 % — the flips it removed were all fallbacks, and the fallback is what costs
 //!   the noisy mean. Applied to the pelvis, torso and hips too: 27 flips (landmarks near the
 //!   groin move with the thighs).

@@ -23,7 +23,7 @@
 //! * [`Method::Paper`], the paper's pipeline above.
 //!
 //! Why the articulated method is the default (58 pairs of generated bodies, dense, README):
-//! exact joints 0.0026 mean error vs 0.025 for the refined method; single-view scans 0.018 vs
+//! exact joints 0.0025 mean error and no flip vs 0.025 for the refined method; single-view scans 0.018 vs
 //! 0.11 (measured on the template's surface). Intrinsic descriptors change wholesale when half
 //! the surface is missing; the skeleton does not.
 //!
