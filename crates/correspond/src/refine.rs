@@ -825,6 +825,52 @@ mod tests {
     use symcorr_spectral::{eigenpairs, EigenOptions, Laplacian};
     use Segment::*;
 
+    /// Every segment's adjacent pool holds its own and its skeleton neighbours' regions and
+    /// never a vertex of the other side: 17 separate triangles, one per segment, 100 apart.
+    #[test]
+    fn adjacent_pools_never_cross_sides() {
+        let positions: Vec<[f64; 3]> = (0..17)
+            .flat_map(|i| {
+                let x = 100.0 * i as f64;
+                [[x, 0.0, 0.0], [x + 1.0, 0.0, 0.0], [x, 1.0, 0.0]]
+            })
+            .collect();
+        let triangles = (0..17u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let mesh = symcorr_mesh::TriMesh::new(positions, triangles).unwrap();
+        let graph = EdgeGraph::new(&mesh);
+        let target: Vec<Segment> = Segment::ALL.iter().flat_map(|&s| [s; 3]).collect();
+        let template = Segment::ALL;
+        let pools =
+            SegmentPools::with_adjacent((&template, None), (&target, None), &graph, 0.5).unwrap();
+        for (p, &s) in template.iter().enumerate() {
+            let got: Vec<Segment> = pools
+                .pool_of(p as u32)
+                .iter()
+                .map(|&q| target[q as usize])
+                .collect();
+            assert!(got.contains(&s), "{s:?}");
+            for &o in &got {
+                assert!(
+                    segment_side(o) * segment_side(s) >= 0,
+                    "{s:?} pool holds {o:?}"
+                );
+                assert!(
+                    o == s || adjacent_segments(s).contains(&o),
+                    "{s:?} pool holds {o:?}"
+                );
+            }
+            for o in adjacent_segments(s) {
+                if segment_side(o) * segment_side(s) >= 0 {
+                    assert!(got.contains(&o), "{s:?} pool lacks {o:?}");
+                }
+            }
+        }
+        // The torso's neighbours: pelvis, head and both clavicles.
+        let mut torso = adjacent_segments(Torso);
+        torso.sort_by_key(|s| s.index());
+        assert_eq!(torso, vec![Pelvis, Head, ClavicleLeft, ClavicleRight]);
+    }
+
     fn lcg(seed: &mut u64) -> u64 {
         *seed = seed
             .wrapping_mul(6364136223846793005)
