@@ -111,7 +111,7 @@ pub(crate) fn apply(
 }
 
 /// The side of a segment: `1` left, `-1` right, `0` midline.
-fn side(s: Segment) -> i32 {
+pub(crate) fn side(s: Segment) -> i32 {
     match s.mirror().index().cmp(&s.index()) {
         std::cmp::Ordering::Greater => 1,
         std::cmp::Ordering::Less => -1,

@@ -45,6 +45,7 @@
 
 pub mod assets;
 pub mod body;
+pub mod convention;
 pub mod dataset;
 mod error;
 pub mod fixtures;

@@ -68,6 +68,13 @@ impl NoiseArgs {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Fit symcorr-attach's MakeHuman boundary convention and write it as Rust source
+    /// (tools/synth/src/convention.rs says on which bodies).
+    Convention {
+        /// Output file.
+        #[arg(long, default_value = "crates/attach/src/convention_makehuman.rs")]
+        out: PathBuf,
+    },
     /// Write a benchmark dataset folder (meshes/, joints/, labels/, mirror.txt, pairs.txt).
     Dataset {
         /// Output folder.
@@ -379,6 +386,20 @@ fn run(cli: Cli) -> Result<()> {
             write_sequence(&out, &body, &poses, fps, &view.camera()?, &view.realism()?)?;
         }
         Cmd::Fixtures { out } => fixtures::write_fixtures(&model, Path::new(&out))?,
+        Cmd::Convention { out } => {
+            let c = symcorr_synth::convention::fit_makehuman(&model)?;
+            std::fs::write(&out, symcorr_synth::convention::rust_table(&c)).map_err(|e| {
+                SynthError::Io {
+                    path: out.clone(),
+                    source: e,
+                }
+            })?;
+            eprintln!(
+                "{} boundary rules written to {}",
+                c.rules.len(),
+                out.display()
+            );
+        }
     }
     Ok(())
 }

@@ -1,4 +1,6 @@
-//! Issue 5 acceptance: symcorr-attach's segment labels against the rig's reference labels
+//! Issue 5 acceptance: symcorr-attach's segment labels, with the MakeHuman boundary convention
+//! ([`BoundaryConvention::makehuman`], fitted on the rest pose of three shapes, only one of
+//! them here), against the rig's reference labels
 //! ([`symcorr_synth::mapping::reference_labels`]) on bodies generated here (20 poses × 2 shapes,
 //! exact and noisy joints) and on the committed virtual-Kinect scans.
 //!
@@ -17,7 +19,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use symcorr_attach::{attach, AttachOptions, Segment, Skeleton};
+use symcorr_attach::{attach, AttachOptions, BoundaryConvention, Segment, Skeleton};
 use symcorr_kinect::scan::{scan_mesh, ScanOptions};
 use symcorr_mesh::TriMesh;
 use symcorr_synth::dataset::resolve_pose;
@@ -203,6 +205,15 @@ fn dump(dir: &Path, name: &str, m: &TriMesh, joints: &Skeleton, a: &symcorr_atta
         .map(|t| format!("{} {} {}\n", t[0], t[1], t[2]))
         .collect();
     std::fs::write(dir.join(format!("{name}.tris.txt")), tris).unwrap();
+}
+
+/// Attachment with the MakeHuman boundary convention (symcorr-attach's `BoundaryConvention`),
+/// the convention these reference labels follow.
+fn rig_like() -> AttachOptions {
+    AttachOptions {
+        convention: Some(BoundaryConvention::makehuman()),
+        ..AttachOptions::default()
+    }
 }
 
 fn vertex_areas(m: &TriMesh) -> Vec<f64> {
@@ -439,7 +450,7 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
                 Some(n) => apply_joint_noise(&b.joints, &b.mesh, n, i as u64),
                 None => b.joints.clone(),
             };
-            let a = attach(&b.mesh, &joints, &AttachOptions::default()).unwrap();
+            let a = attach(&b.mesh, &joints, &rig_like()).unwrap();
             if verbose() {
                 eprintln!("{}: mirror check {:?}", b.name, a.diagnostics.mirror);
             }
@@ -451,29 +462,28 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
         .collect()
 }
 
-// Measured (2 shapes × 20 poses, attach defaults, 2026-11-23, after the trunk-perpendicular
-// sagittal plane and the tangent-plane test of bone heat): exact joints strict mean 0.859 / worst
-// 0.828, boundary-tolerant (3 cm) mean 0.914 / worst 0.884, mirrored area 0, anatomical
-// cross-side area ≤ 0.0018 (≤ 0.0003 beyond 3 cm: s0_random-7, whose linear-blend-skinned neck
-// carries vertices 1.5–3 cm right of the rest midline to 9 cm left of the shoulder centre, where
-// the left clavicle is the nearest bone); noisy joints strict mean 0.816 / worst 0.757, tolerant
-// 0.879 / 0.827, mirrored ≤ 0.0003 (one groin vertex of s1_random-7, whose right hip joint is
-// 10 cm off) and no cross-side area beyond 3 cm of the midline (before the side-first argmax and
-// the twin-root rule of the joint planes: 0.0019 and 0.0007). Issue 5's targets are ≥ 0.95
-// (exact) and ≥ 0.90 (noisy) strict agreement and zero mirrored area: the agreement targets and
-// zero mirrored area with noisy joints are NOT reached. The reference
-// labels follow the MakeHuman rig's skinning conventions (small front-only clavicles, a pelvis
-// band above the Kinect spine joint, buttocks in the hips); the residual confusion is printed
-// with ATTACH_EVAL_VERBOSE=1 and listed in symcorr-attach's docs. The assertions guard the
-// measured levels (a little below them).
+// Measured (2 shapes × 20 poses, 2026-12-01) with the MakeHuman boundary convention
+// ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23): exact joints
+// strict mean 0.910 / worst 0.871 (0.859 / 0.828), 0.909 on the 39 bodies outside the
+// convention's training set; boundary-tolerant (3 cm) mean 0.946 / worst 0.912 (0.914 / 0.884);
+// mirrored area 0 (0); anatomical cross-side area ≤ 0.0004 (≤ 0.0018), none beyond 3 cm.
+// Noisy joints strict mean 0.844 / worst 0.782 (0.816 / 0.757), tolerant 0.902 / 0.842
+// (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
+// area beyond 3 cm of the midline. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
+// strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
+// noisy joints are NOT reached. The remaining confusion is printed with ATTACH_EVAL_VERBOSE=1
+// and listed in symcorr-attach's docs. The assertions guard the measured levels (a little below
+// them).
 
 #[test]
 fn exact_joints_40_bodies() {
     let s = run_bodies(None);
     let r = summary("exact", &s);
-    assert!(r.mean >= 0.855, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.82, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.91, "mean tolerant agreement {}", r.tmean);
+    // Body 0 (the base shape at rest) is one of the convention's training bodies.
+    summary("exact, held out of the convention's training", &s[1..]);
+    assert!(r.mean >= 0.905, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.865, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.94, "mean tolerant agreement {}", r.tmean);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert!(r.cross_anat <= 0.0025, "cross-side area {}", r.cross_anat);
     assert!(
@@ -494,9 +504,9 @@ fn noisy_joints_40_bodies() {
     };
     let s = run_bodies(Some(noise));
     let r = summary("noisy", &s);
-    assert!(r.mean >= 0.81, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.75, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.87, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mean >= 0.84, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.775, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.895, "mean tolerant agreement {}", r.tmean);
     assert!(r.mirrored <= 0.0025, "mirrored area {}", r.mirrored);
     assert!(r.cross_anat <= 0.005, "cross-side area {}", r.cross_anat);
     assert!(
@@ -504,6 +514,24 @@ fn noisy_joints_40_bodies() {
         "cross-side area beyond 3 cm {}",
         r.cross_far
     );
+}
+
+/// The committed MakeHuman boundary convention (symcorr-attach's `convention_makehuman.rs`) is
+/// exactly what `symcorr-synth convention` fits.
+#[test]
+fn makehuman_convention_table_is_reproducible() {
+    let fitted = symcorr_synth::convention::fit_makehuman(model()).unwrap();
+    let committed = BoundaryConvention::makehuman();
+    assert_eq!(fitted.rules.len(), committed.rules.len());
+    for (f, c) in fitted.rules.iter().zip(&committed.rules) {
+        assert_eq!((f.a, f.b, f.joint), (c.a, c.b, c.joint));
+        for k in 0..4 {
+            assert!(
+                (f.plane[k] - c.plane[k]).abs() <= 1e-9 * (1.0 + c.plane[k].abs()),
+                "{f:?} vs {c:?}"
+            );
+        }
+    }
 }
 
 /// The scan folder's depth, vertex ids and joints → scan mesh, reference label per scan vertex.
@@ -532,20 +560,21 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured: strict 0.870 (ideal scan) / 0.851 (Kinect realism), tolerant 0.946 / 0.920, no
-// mirrored or cross-side area. Issue 5's target is ≥ 0.90 strict agreement on the visible surface: not reached
+// Measured with the MakeHuman convention: strict 0.894 (ideal scan) / 0.864 (Kinect realism),
+// tolerant 0.941 / 0.917, no mirrored or cross-side area (joint planes: 0.870 / 0.851,
+// 0.946 / 0.920). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: not reached
 // (same conventions gap as above); the assertions guard the measured level.
 #[test]
 fn virtual_kinect_scans() {
     let mut s = Vec::new();
     for dir in ["scan", "scan_kinect"] {
         let (mesh, joints, want) = scan_case(dir);
-        let a = attach(&mesh, &joints, &AttachOptions::default()).unwrap();
+        let a = attach(&mesh, &joints, &rig_like()).unwrap();
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
     let r = summary("scans", &s);
-    assert!(r.worst >= 0.845, "worst strict agreement {}", r.worst);
-    assert!(r.tworst >= 0.915, "worst tolerant agreement {}", r.tworst);
+    assert!(r.worst >= 0.855, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.91, "worst tolerant agreement {}", r.tworst);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }

@@ -42,6 +42,20 @@ pub struct LabelArgs {
     /// Refuse (exit 1) instead of fixing a skeleton whose left and right are swapped.
     #[arg(long)]
     pub refuse_mirrored: bool,
+    /// Where neighbouring segments end: `joint-planes` (the plane through the shared joint
+    /// bisecting the two bones, what `match` uses) or `makehuman` (planes learned from the
+    /// MakeHuman rig's skinning: small clavicles, buttocks in the hips, armpits in the torso).
+    #[arg(long, value_enum, default_value = "joint-planes")]
+    pub boundaries: Boundaries,
+}
+
+/// `symcorr label --boundaries`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Boundaries {
+    /// Joint planes (symcorr-attach's default).
+    JointPlanes,
+    /// `symcorr_attach::BoundaryConvention::makehuman()`.
+    Makehuman,
 }
 
 /// Runs `symcorr label`.
@@ -56,6 +70,8 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
         } else {
             symcorr_attach::MirrorPolicy::Fix
         },
+        convention: (a.boundaries == Boundaries::Makehuman)
+            .then(symcorr_attach::BoundaryConvention::makehuman),
         ..AttachOptions::default()
     };
     let att = attach(&mesh, &skeleton, &options).map_err(|e| {
@@ -165,6 +181,7 @@ mod tests {
             glb: Some(glb.clone()),
             weights: true,
             refuse_mirrored: false,
+            boundaries: Boundaries::JointPlanes,
         })
         .unwrap();
         let v: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
@@ -180,6 +197,30 @@ mod tests {
             assert_eq!(*c, palette::PALETTE[l.as_u64().unwrap() as usize]);
         }
         assert!(symcorr_mesh::io::read(&glb).is_ok());
+        // --boundaries makehuman: the same file layout, boundaries moved.
+        let rig = dir.path().join("rig.json");
+        run(LabelArgs {
+            mesh: mesh_path.clone(),
+            joints: joints_path.clone(),
+            out: rig.clone(),
+            frame: None,
+            joints_format: None,
+            ply: None,
+            glb: None,
+            weights: false,
+            refuse_mirrored: false,
+            boundaries: Boundaries::Makehuman,
+        })
+        .unwrap();
+        let r: Value = serde_json::from_str(&std::fs::read_to_string(&rig).unwrap()).unwrap();
+        let moved = r["labels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(labels)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(moved > 0 && moved * 4 < labels.len(), "{moved}");
         // A frame the file does not have is a user error, and nothing is written.
         let out2 = dir.path().join("none.json");
         let e = run(LabelArgs {
@@ -192,6 +233,7 @@ mod tests {
             glb: None,
             weights: false,
             refuse_mirrored: false,
+            boundaries: Boundaries::JointPlanes,
         })
         .err()
         .unwrap();
@@ -210,6 +252,7 @@ mod tests {
                 glb: None,
                 weights: false,
                 refuse_mirrored: false,
+                boundaries: Boundaries::JointPlanes,
             })
             .err()
             .unwrap();
