@@ -61,18 +61,18 @@
 //!    [`BoundaryConvention`] replaces each joint plane by a plane learned from bodies labelled
 //!    in a rig's convention, in a frame that moves with the skeleton (the joint, the bisector
 //!    normal, the torso's facing direction; trunk length as unit). Sides stay bone heat's: the
-//!    two left/right twin planes are never learned, no rule moves a vertex across the body, and
-//!    the midline guard runs again afterwards. [`BoundaryConvention::fit`] learns one from any
-//!    labelled bodies; [`BoundaryConvention::makehuman`] is fitted on the MakeHuman rig's
-//!    skinning (tools/synth `convention`: rest pose of three shapes). Against those reference
-//!    labels on 40 generated bodies (20 poses × 2 shapes, one shape not trained on) it raises
-//!    area agreement from 0.859 to 0.910 (exact joints), 0.816 to 0.844 (σ = 3 cm joints) and
-//!    0.870 / 0.851 to 0.894 / 0.864 (virtual-Kinect scans), with mirrored area unchanged
-//!    (0 exact, ≤ 0.0003 noisy). It is off by default because correspondence prefers the
-//!    bisectors: with it the paper pipeline's sparse flips on 58 exact-joint pairs rose from
-//!    11 to 21 of 47.6k (mean error 0.0437 → 0.0438), and the articulated method was unchanged
-//!    within noise (dense 0.0025 → 0.0026 exact, 0.0124 → 0.0126 noisy, 0.0185 → 0.0189 scans;
-//!    flips 0 → 0, 0.0014 % → 0.001 %, 0.053 % → 0.052 %).
+//!    two left/right twin planes are never learned, no rule moves a vertex across the body, a
+//!    midline vertex takes a side label only outside a band whose width follows the joints'
+//!    noise (measured as the skeleton's left/right asymmetry, [`Diagnostics::joint_asymmetry`]),
+//!    and the midline guard runs again afterwards. [`BoundaryConvention::fit`] learns a
+//!    convention from any labelled bodies; [`BoundaryConvention::makehuman`] is fitted on the
+//!    MakeHuman rig's skinning (tools/synth `convention`: rest pose of three shapes). Against
+//!    those reference labels on 40 generated bodies (20 poses × 2 shapes, one shape not trained
+//!    on) it raises area agreement from 0.859 to 0.924 (exact joints), 0.816 to 0.844
+//!    (σ = 3 cm joints) and 0.870 / 0.851 to 0.902 / 0.872 (virtual-Kinect scans, ideal /
+//!    Kinect realism), with mirrored area unchanged (0 exact, ≤ 0.0003 noisy). It is off by
+//!    default because the correspondence pipeline measured no gain from it (see
+//!    [`BoundaryConvention`]).
 //!
 //! # Left/right: where cross-side labels came from
 //! A label of the other side than the vertex's anatomical side is what lets a correspondence
@@ -189,7 +189,10 @@ mod refine;
 mod repair;
 mod skeleton;
 
-pub use convention::{boundaries, BoundaryConvention, BoundaryRule, LabelledBody};
+pub use convention::{
+    boundaries, BoundaryConvention, BoundaryRule, LabelledBody, ASYMMETRY_FACTOR, MIN_SIDE_BAND,
+    SIDE_MARGIN,
+};
 pub use error::AttachError;
 pub use skeleton::{Joint, Segment, Skeleton, BONES};
 
@@ -441,6 +444,12 @@ pub struct Diagnostics {
     pub nearest_bone_vertices: usize,
     /// Skeleton height used for relative thresholds (mesh units).
     pub skeleton_height: f64,
+    /// Left/right asymmetry of the joints as given (after alignment), where a body is symmetric
+    /// in every pose: root mean square of the hip centre's offset from the hips' midpoint and
+    /// of the left − right length differences of the hip, thigh, shin, upper-arm and forearm
+    /// bones (mesh units). About the joints' noise level: 0 for exact joints, 2–10 cm for
+    /// σ = 3 cm noise. `None` without the joints it needs.
+    pub joint_asymmetry: Option<f64>,
     /// Wall-clock seconds per stage: `align`, `mirror`, `refine`, `heat`, `labels` (argmax,
     /// joint planes, midline guard).
     pub timings_s: Vec<(&'static str, f64)>,
@@ -579,6 +588,8 @@ pub fn attach(
         }
     }
     lap("mirror", &mut clock);
+    // Before refinement, which evens out left/right bone lengths.
+    let asymmetry = planes::joint_asymmetry(&positions, &usable);
     // 4. Refinement.
     let mut joint_moves = Vec::new();
     let mut refinement_skipped = Vec::new();
@@ -622,7 +633,7 @@ pub fn attach(
             &mut labels,
         );
         if let Some(conv) = &options.convention {
-            let band = options.midline_band * height;
+            let band = convention::side_band(asymmetry, height, options.midline_band);
             convention::apply(
                 conv,
                 &mesh.positions,
@@ -663,6 +674,7 @@ pub fn attach(
             components: heat.components,
             nearest_bone_vertices: heat.nearest_bone_vertices,
             skeleton_height: height,
+            joint_asymmetry: asymmetry,
             timings_s,
         },
     })

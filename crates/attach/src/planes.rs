@@ -13,7 +13,7 @@
 
 use crate::geom::unit;
 use crate::{Joint, Segment};
-use symcorr_mesh::geometry::{dot, scale, sub};
+use symcorr_mesh::geometry::{add, dot, norm, scale, sub};
 
 /// One boundary: segments `a` and `b` meet at `joint`; `normal` points into `b`'s side.
 #[derive(Debug, Clone, Copy)]
@@ -119,6 +119,38 @@ pub(crate) fn side(s: Segment) -> i32 {
     }
 }
 
+/// The skeleton's left/right asymmetry where a body is symmetric whatever its pose: the hip
+/// centre's offset from the hips' midpoint along the hip line, and the length differences of
+/// the hip, thigh, shin, upper-arm and forearm bones of the two sides. Returns the root mean
+/// square of the available measures (mesh units), an estimate of the joints' noise; `None`
+/// if no measure is available.
+pub(crate) fn joint_asymmetry(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<f64> {
+    use Joint as J;
+    let ok = |js: &[Joint]| js.iter().all(|j| usable[j.index()]);
+    let at = |j: Joint| p[j.index()];
+    let len = |a: Joint, b: Joint| norm(sub(at(a), at(b)));
+    let mut m = Vec::new();
+    if ok(&[J::HipCenter, J::HipLeft, J::HipRight]) {
+        if let Some(u) = unit(sub(at(J::HipLeft), at(J::HipRight))) {
+            let mid = scale(add(at(J::HipLeft), at(J::HipRight)), 0.5);
+            m.push(dot(sub(at(J::HipCenter), mid), u));
+        }
+    }
+    for (a, b) in [
+        (J::HipCenter, J::HipLeft),
+        (J::HipLeft, J::KneeLeft),
+        (J::KneeLeft, J::AnkleLeft),
+        (J::ShoulderLeft, J::ElbowLeft),
+        (J::ElbowLeft, J::WristLeft),
+    ] {
+        let (ra, rb) = (a.mirror(), b.mirror());
+        if ok(&[a, b, ra, rb]) {
+            m.push(len(a, b) - len(ra, rb));
+        }
+    }
+    (!m.is_empty()).then(|| (m.iter().map(|x| x * x).sum::<f64>() / m.len() as f64).sqrt())
+}
+
 /// True if two side segments lie on the same side of the body.
 pub(crate) fn same_side(a: Segment, b: Segment) -> bool {
     side(a) == side(b)
@@ -198,6 +230,27 @@ mod tests {
 
     fn plane(planes: &[JointPlane], a: Segment, b: Segment) -> JointPlane {
         *planes.iter().find(|p| p.a == a && p.b == b).unwrap()
+    }
+
+    #[test]
+    fn a_symmetric_skeleton_has_no_asymmetry_and_a_noisy_one_does() {
+        let sk = t_pose(1.0);
+        let a = joint_asymmetry(&sk.positions, &[true; 20]).unwrap();
+        assert!(a < 1e-12, "{a}");
+        // The left leg below the hip moved 4 cm along the thigh: the left thigh is 4 cm longer,
+        // every other measure unchanged, so the RMS of the six measures is 4/√6 cm.
+        let mut p = sk.positions;
+        let (hip, knee) = (p[Joint::HipLeft.index()], p[Joint::KneeLeft.index()]);
+        let d = scale(crate::geom::unit(sub(knee, hip)).unwrap(), 0.04);
+        for j in [Joint::KneeLeft, Joint::AnkleLeft, Joint::FootLeft] {
+            p[j.index()] = add(p[j.index()], d);
+        }
+        let b = joint_asymmetry(&p, &[true; 20]).unwrap();
+        assert!((b - 0.04 / 6.0f64.sqrt()).abs() < 1e-9, "{b}");
+        // Nothing measurable without the hips and limbs.
+        let mut usable = [false; 20];
+        usable[Joint::HipCenter.index()] = true;
+        assert!(joint_asymmetry(&p, &usable).is_none());
     }
 
     #[test]

@@ -464,9 +464,9 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
 
 // Measured (2 shapes × 20 poses, 2026-12-01) with the MakeHuman boundary convention
 // ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23): exact joints
-// strict mean 0.910 / worst 0.871 (0.859 / 0.828), 0.909 on the 39 bodies outside the
-// convention's training set; boundary-tolerant (3 cm) mean 0.946 / worst 0.912 (0.914 / 0.884);
-// mirrored area 0 (0); anatomical cross-side area ≤ 0.0004 (≤ 0.0018), none beyond 3 cm.
+// strict mean 0.924 / worst 0.877 (0.859 / 0.828), 0.923 on the 39 bodies outside the
+// convention's training set; boundary-tolerant (3 cm) mean 0.962 / worst 0.921 (0.914 / 0.884);
+// mirrored area 0 (0); anatomical cross-side area ≤ 0.0006 (≤ 0.0018), none beyond 3 cm.
 // Noisy joints strict mean 0.844 / worst 0.782 (0.816 / 0.757), tolerant 0.902 / 0.842
 // (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
 // area beyond 3 cm of the midline. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
@@ -481,9 +481,9 @@ fn exact_joints_40_bodies() {
     let r = summary("exact", &s);
     // Body 0 (the base shape at rest) is one of the convention's training bodies.
     summary("exact, held out of the convention's training", &s[1..]);
-    assert!(r.mean >= 0.905, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.865, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.94, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mean >= 0.92, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.87, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.955, "mean tolerant agreement {}", r.tmean);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert!(r.cross_anat <= 0.0025, "cross-side area {}", r.cross_anat);
     assert!(
@@ -560,10 +560,10 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured with the MakeHuman convention: strict 0.894 (ideal scan) / 0.864 (Kinect realism),
-// tolerant 0.941 / 0.917, no mirrored or cross-side area (joint planes: 0.870 / 0.851,
-// 0.946 / 0.920). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: not reached
-// (same conventions gap as above); the assertions guard the measured level.
+// Measured with the MakeHuman convention: strict 0.902 (ideal scan) / 0.872 (Kinect realism),
+// tolerant 0.951 / 0.927, no mirrored or cross-side area (joint planes: 0.870 / 0.851,
+// 0.946 / 0.920). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
+// the ideal scan, not on the one with Kinect realism; the assertions guard the measured level.
 #[test]
 fn virtual_kinect_scans() {
     let mut s = Vec::new();
@@ -573,8 +573,8 @@ fn virtual_kinect_scans() {
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
     let r = summary("scans", &s);
-    assert!(r.worst >= 0.855, "worst strict agreement {}", r.worst);
-    assert!(r.tworst >= 0.91, "worst tolerant agreement {}", r.tworst);
+    assert!(r.worst >= 0.865, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.92, "worst tolerant agreement {}", r.tworst);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }
