@@ -207,6 +207,9 @@ fn bench_writes_summary_pair_files_and_plot() {
     }
     assert_eq!(s["table1_row"].as_array().unwrap().len(), 10);
     assert_eq!(s["pairs"].as_array().unwrap().len(), 1);
+    // The default (articulated) method uses no spectral settings: they are null, not defaults.
+    assert_eq!(s["method"], "articulated");
+    assert!(s["eigenpairs"].is_null() && s["base_radius"].is_null() && s["candidates"].is_null());
     let w5 = s["within_0.05"].as_f64().unwrap();
     let w10 = s["within_0.10"].as_f64().unwrap();
     assert!(w5 <= w10 && w10 <= 1.0);

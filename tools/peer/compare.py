@@ -512,6 +512,7 @@ def main():
 
     # The peer, pair by pair.
     peer_maps, peer_secs, peer_breakdown = {}, {}, {}
+    peer_pair_secs, peer_from_cache = {}, {}  # per (tool, template, target); per (template, target)
     warnings.filterwarnings("ignore", category=DeprecationWarning)
     cached_pairs = 0
     load_before = os.getloadavg()
@@ -526,6 +527,7 @@ def main():
                 res = {nm: (z[f"p2p{j}"], meta[nm]["seconds"], meta[nm]["breakdown"])
                        for j, nm in enumerate(meta["order"])}
                 cached_pairs += 1
+        peer_from_cache[(a, b)] = res is not None
         if res is None:
             res = run_peer(meshes[a], meshes[b], args)
             if args.peer_cache:
@@ -537,11 +539,13 @@ def main():
         for name, (p2p, secs, brk) in res.items():
             peer_maps[(name, a, b)] = p2p
             peer_secs.setdefault(name, []).append(secs)
+            peer_pair_secs[(name, a, b)] = secs
             peer_breakdown.setdefault(name, []).append(brk)
         print(f"[{i + 1}/{len(pairs)}] peer {a} -> {b}: "
               + ", ".join(f"{k} {v[1]:.1f} s ("
                           + ", ".join(f"{s} {x:.1f}" for s, x in v[2].items()) + ")"
-                          for k, v in res.items()), flush=True)
+                          for k, v in res.items())
+              + (" (from --peer-cache)" if peer_from_cache[(a, b)] else ""), flush=True)
     load_after = os.getloadavg()
 
     # Scoring, grouped by target so one target's geodesic rows are cached at a time.
@@ -583,6 +587,11 @@ def main():
                 flips[t].append(f)
                 row[t] = {"mean_error": float(e.mean()) if len(e) else None,
                           "flip_rate": None if f is None or np.all(np.isnan(f)) else float(np.nanmean(f))}
+                if t != "symcorr":
+                    # Seconds of this pair's peer run, and whether it came from --peer-cache
+                    # (then the seconds are those measured when it was computed).
+                    row[t]["seconds"] = peer_pair_secs[(t, a, b)]
+                    row[t]["from_cache"] = peer_from_cache[(a, b)]
             per_pair.append(row)
         del geo
 
@@ -644,6 +653,8 @@ def main():
     if args.json:
         args.json.write_text(json.dumps({"dataset": str(dataset), "machine": info, "rows": rows,
                                          "pairs": per_pair, "symcorr_status": sym_msg,
+                                         # per tool, in pairs.txt order (each pair row of
+                                         # "pairs" also has its own "seconds")
                                          "peer_seconds": peer_secs,
                                          "peer_breakdown_s": peer_breakdown}, indent=2))
     if tmp and not args.keep:

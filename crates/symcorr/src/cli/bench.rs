@@ -88,14 +88,16 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
         })
         .collect();
     let o = &pipeline.options;
+    // The articulated method uses no spectral data and no candidates: those settings are null.
+    let spectral = o.method != symcorr::Method::Articulated;
     json!({
         "dataset": dataset.display().to_string(),
         "mode": match o.mode { symcorr::Mode::Dense => "dense".to_string(), symcorr::Mode::Sparse { samples } => format!("sparse:{samples}") },
         "method": match o.method { symcorr::Method::Paper => "paper", symcorr::Method::Refined => "refined", symcorr::Method::Articulated => "articulated" },
         "skeleton_filter": o.matching.skeleton_filter,
-        "candidates": {"nearest": o.matching.candidates.nearest, "threshold": o.matching.candidates.threshold},
-        "eigenpairs": o.prepare.eigenpairs,
-        "base_radius": o.prepare.base_radius,
+        "candidates": spectral.then(|| json!({"nearest": o.matching.candidates.nearest, "threshold": o.matching.candidates.threshold})),
+        "eigenpairs": spectral.then_some(o.prepare.eigenpairs),
+        "base_radius": spectral.then_some(o.prepare.base_radius),
         "mean_error": report.mean_error(),
         "flip_rate": report.flip_rate(),
         "within_0.05": report.within(0.05),
