@@ -1,7 +1,8 @@
-//! Prints attachment stage timings on a synth body: `cargo run --release -p symcorr-attach
+//! Prints attachment stage timings on a synth body, joint planes and the learned MakeHuman
+//! convention side by side: `cargo run --release -p symcorr-attach
 //! --example attach_timing [MESH.ply JOINTS.json]`.
 
-use symcorr_attach::{attach, AttachOptions, Joint, Skeleton};
+use symcorr_attach::{attach, AttachOptions, BoundaryConvention, Joint, Skeleton};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -26,28 +27,43 @@ fn main() {
             sk.positions[j.index()] = std::array::from_fn(|k| a[k].as_f64().unwrap_or(f64::NAN));
         }
     }
-    for _ in 0..5 {
-        let t = std::time::Instant::now();
-        match attach(&mesh, &sk, &AttachOptions::default()) {
-            Ok(a) => {
-                for m in &a.diagnostics.joint_moves {
+    // Side by side in one run: the default joint planes and the learned MakeHuman convention.
+    let variants = [
+        ("joint planes", AttachOptions::default()),
+        (
+            "makehuman convention",
+            AttachOptions {
+                convention: Some(BoundaryConvention::makehuman()),
+                ..AttachOptions::default()
+            },
+        ),
+    ];
+    for rep in 0..5 {
+        for (name, options) in &variants {
+            let t = std::time::Instant::now();
+            match attach(&mesh, &sk, options) {
+                Ok(a) => {
+                    if rep == 0 && name == &"joint planes" {
+                        for m in &a.diagnostics.joint_moves {
+                            println!(
+                                "{:?} {:?} -> {:?} {:.4} {}",
+                                m.joint,
+                                m.from,
+                                m.to,
+                                m.distance(),
+                                m.reason
+                            );
+                        }
+                    }
                     println!(
-                        "{:?} {:?} -> {:?} {:.4} {}",
-                        m.joint,
-                        m.from,
-                        m.to,
-                        m.distance(),
-                        m.reason
+                        "{name}: {} vertices: {:.3} s total, stages {:?}",
+                        mesh.num_vertices(),
+                        t.elapsed().as_secs_f64(),
+                        a.diagnostics.timings_s
                     );
                 }
-                println!(
-                    "{} vertices: {:.3} s total, stages {:?}",
-                    mesh.num_vertices(),
-                    t.elapsed().as_secs_f64(),
-                    a.diagnostics.timings_s
-                );
+                Err(e) => return eprintln!("{e}"),
             }
-            Err(e) => return eprintln!("{e}"),
         }
     }
 }
