@@ -7,12 +7,15 @@
 //! armpit to the torso. A [`BoundaryConvention`] holds one plane per boundary, expressed in a
 //! frame built from the skeleton alone, so that it moves with the pose and scales with the body:
 //!
-//! * origin: the joint `J` the two segments share (for the armpit and buttock pairs, which
-//!   share none, the shoulder and hip joint);
+//! * origin: the joint `J` the two segments share (for the pairs that meet on the surface
+//!   without sharing one — armpits: torso / upper arm, buttocks: pelvis / thigh, and torso /
+//!   hip — the shoulder and hip joint);
 //! * `e1`: the joint plane's normal, `unit(d̂_B − d̂_A)` (`d_A`, `d_B` point from `J` along the
 //!   two bones; for a segment without a bone at `J`, towards its bone's midpoint);
 //! * `e2`: the torso's facing direction (`left × up`, up = hip centre → shoulder centre, left =
-//!   right → left shoulders and hips) made perpendicular to `e1`; `e3 = e1 × e2`;
+//!   right → left shoulders and hips), carried along with the limb by the smallest rotation
+//!   from the rest direction (down for limbs, up for the midline) to `e1`, and made
+//!   perpendicular to `e1`; `e3 = e1 × e2`;
 //! * unit length: the trunk (hip centre → shoulder centre).
 //!
 //! With `u` the coordinates of `x − J` in that frame, a vertex labelled `A` or `B` becomes `B`
@@ -43,9 +46,9 @@
 //! the worst fit was 12 cm off on asymmetric poses and noisy mirrored area rose to 0.7 %.
 
 use crate::geom::unit;
-use crate::planes::side;
-use crate::{attach, AttachError, AttachOptions, Joint, Segment, Skeleton};
-use symcorr_mesh::geometry::{cross, dot, norm, scale, sub};
+use crate::planes::{segment_direction, shared_joint, side, JointPlane};
+use crate::{attach_with_usable, AttachError, AttachOptions, Joint, Segment, Skeleton};
+use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
 use symcorr_mesh::TriMesh;
 
 /// The side band grows with the skeleton's measured left/right asymmetry
@@ -106,6 +109,9 @@ pub struct BoundaryRule {
 /// };
 /// let a = attach(&mesh, &skeleton, &rig_like).unwrap();
 /// assert_eq!(a.labels.len(), mesh.num_vertices());
+/// // How many labels the convention moved away from the joint planes' boundaries.
+/// let moved = a.diagnostics.convention_changes.unwrap();
+/// assert!(moved > 0 && moved < mesh.num_vertices() / 4);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoundaryConvention {
@@ -153,64 +159,6 @@ pub fn boundaries() -> Vec<(Segment, Segment, Joint)> {
     out
 }
 
-fn shared_joint(a: Segment, b: Segment) -> Option<Joint> {
-    a.bones().iter().find_map(|&(u, v)| {
-        b.bones()
-            .iter()
-            .find_map(|&(r, s)| [u, v].into_iter().find(|&x| x == r || x == s))
-    })
-}
-
-/// Direction from `j` along segment `s`: its bone touching `j`, else towards its first bone's
-/// midpoint. `None` if a joint it needs is unusable.
-fn direction(s: Segment, j: Joint, p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[f64; 3]> {
-    let ok = |x: Joint| usable[x.index()];
-    if !ok(j) {
-        return None;
-    }
-    if let Some(&(u, v)) = s.bones().iter().find(|b| b.0 == j || b.1 == j) {
-        let other = if u == j { v } else { u };
-        return if ok(other) {
-            unit(sub(p[other.index()], p[j.index()]))
-        } else {
-            None
-        };
-    }
-    let &(u, v) = s.bones().first()?;
-    if !(ok(u) && ok(v)) {
-        return None;
-    }
-    let mid = scale(symcorr_mesh::geometry::add(p[u.index()], p[v.index()]), 0.5);
-    unit(sub(mid, p[j.index()]))
-}
-
-/// The torso frame `(up, left, facing)`; `None` if the torso joints are unusable or degenerate.
-pub(crate) fn torso_frame(
-    p: &[[f64; 3]; 20],
-    usable: &[bool; 20],
-) -> Option<([f64; 3], [f64; 3], [f64; 3])> {
-    use Joint as J;
-    let need = [
-        J::HipCenter,
-        J::ShoulderCenter,
-        J::ShoulderLeft,
-        J::ShoulderRight,
-        J::HipLeft,
-        J::HipRight,
-    ];
-    if need.iter().any(|j| !usable[j.index()]) {
-        return None;
-    }
-    let at = |j: Joint| p[j.index()];
-    let up = unit(sub(at(J::ShoulderCenter), at(J::HipCenter)))?;
-    let l = symcorr_mesh::geometry::add(
-        sub(at(J::ShoulderLeft), at(J::ShoulderRight)),
-        sub(at(J::HipLeft), at(J::HipRight)),
-    );
-    let left = unit(sub(l, scale(up, dot(l, up))))?;
-    Some((up, left, cross(left, up)))
-}
-
 /// The frame of one boundary: origin, three axes, unit length.
 struct Frame {
     origin: [f64; 3],
@@ -226,16 +174,30 @@ impl Frame {
         p: &[[f64; 3]; 20],
         usable: &[bool; 20],
     ) -> Option<Frame> {
-        let (_, _, facing) = torso_frame(p, usable)?;
+        let [up, _, facing] = crate::refine::torso_frame(p, usable)?;
         let length = norm(sub(
             p[Joint::ShoulderCenter.index()],
             p[Joint::HipCenter.index()],
         ));
         let e1 = unit(sub(
-            direction(b, j, p, usable)?,
-            direction(a, j, p, usable)?,
+            segment_direction(b, j, p, usable)?,
+            segment_direction(a, j, p, usable)?,
         ))?;
-        let e2 = unit(sub(facing, scale(e1, dot(facing, e1))))?;
+        // The reference for e2: the torso's facing direction carried to e1 by the smallest
+        // rotation from the segment pair's rest direction (limbs hang down, −up; the midline
+        // points up), so the frame of a forearm reaching forward turns with it instead of
+        // being spun by noise where facing ∥ e1. Near the opposite direction (an arm straight
+        // overhead) that rotation is undefined: facing projected as is.
+        let rest = if side(a) != 0 || side(b) != 0 {
+            scale(up, -1.0)
+        } else {
+            up
+        };
+        let reference = match rotate_between(rest, e1, facing) {
+            Some(r) => r,
+            None => facing,
+        };
+        let e2 = unit(sub(reference, scale(e1, dot(reference, e1))))?;
         let e3 = cross(e1, e2);
         (length > 0.0).then_some(Frame {
             origin: p[j.index()],
@@ -248,6 +210,21 @@ impl Frame {
         let d = sub(x, self.origin);
         self.axes.map(|e| dot(d, e) / self.length)
     }
+}
+
+/// `v` rotated by the smallest rotation taking unit `from` to unit `to` (Rodrigues);
+/// `None` when they are (nearly) opposite and the rotation is undefined.
+fn rotate_between(from: [f64; 3], to: [f64; 3], v: [f64; 3]) -> Option<[f64; 3]> {
+    let c = dot(from, to);
+    if !(c > -0.9) {
+        return None;
+    }
+    let k = cross(from, to);
+    // R v = c v + k × v + k (k·v) / (1 + c)
+    Some(add(
+        add(scale(v, c), cross(k, v)),
+        scale(k, dot(k, v) / (1.0 + c)),
+    ))
 }
 
 fn evaluate(plane: &[f64; 4], u: [f64; 3]) -> f64 {
@@ -294,9 +271,8 @@ impl BoundaryConvention {
                     body.mesh.num_vertices()
                 )));
             }
-            let att = attach(body.mesh, body.skeleton, &plain)?;
-            let usable = att.joints.confidence.map(|c| c > 0.0);
-            let area = vertex_areas(body.mesh);
+            let (att, usable) = attach_with_usable(body.mesh, body.skeleton, &plain)?;
+            let area = body.mesh.vertex_areas();
             let mean_area = area.iter().sum::<f64>() / area.len().max(1) as f64;
             for (k, &(a, b, j)) in pairs.iter().enumerate() {
                 let Some(frame) = Frame::new(a, b, j, &att.joints.positions, &usable) else {
@@ -339,25 +315,16 @@ struct Samples {
     w: Vec<f64>,
 }
 
-/// Vertex areas (a third of each incident triangle's area).
-pub(crate) fn vertex_areas(m: &TriMesh) -> Vec<f64> {
-    let mut a = vec![0.0; m.num_vertices()];
-    for (t, ar) in m.triangle_areas().iter().enumerate() {
-        for &v in &m.triangles[t] {
-            a[v as usize] += ar / 3.0;
-        }
-    }
-    a
-}
-
 /// Ridge on the tilt coefficients (not the offset), relative to the summed sample weight of a
 /// mean-area vertex.
 const RIDGE: f64 = 0.01;
 
 /// Weighted logistic regression `P(y) = σ(w·x + c)` by Newton's method with a ridge on `w`.
-/// `None` if the Newton system becomes singular or the result is not finite.
+/// `None` if the Newton system becomes singular, 100 steps do not converge, or the result is
+/// not finite.
 fn logistic_regression(x: &[[f64; 3]], y: &[bool], s: &[f64]) -> Option<[f64; 4]> {
     let mut beta = [0.0f64; 4];
+    let mut converged = false;
     for _ in 0..100 {
         let mut g = [0.0f64; 4];
         let mut h = [[0.0f64; 4]; 4];
@@ -385,10 +352,11 @@ fn logistic_regression(x: &[[f64; 3]], y: &[bool], s: &[f64]) -> Option<[f64; 4]
             change = change.max(step[k].abs());
         }
         if change < 1e-10 {
+            converged = true;
             break;
         }
     }
-    beta.iter().all(|b| b.is_finite()).then_some(beta)
+    (converged && beta.iter().all(|b| b.is_finite())).then_some(beta)
 }
 
 /// Solves the 4×4 system `a·x = b` by Gaussian elimination with partial pivoting.
@@ -417,23 +385,45 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
     Some(x)
 }
 
-/// Applies `convention` to `labels` (see the module docs). `weights(v)` are vertex `v`'s
-/// bone-heat weights per segment; `band` is the midline guard's half-width (mesh units).
-/// Returns the number of labels changed.
+/// Applies `convention` to `labels` (see the module docs). `planes` are the joint planes (for
+/// the left/right planes); `weights(v)` are vertex `v`'s bone-heat weights per segment; `band`
+/// is the side band's half-width (mesh units, [`side_band`]). Returns the number of labels
+/// changed.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn apply(
     convention: &BoundaryConvention,
     positions: &[[f64; 3]],
     p: &[[f64; 3]; 20],
     usable: &[bool; 20],
+    planes: &[JointPlane],
     band: f64,
     weights: &dyn Fn(usize) -> [f64; 17],
     labels: &mut [Segment],
 ) -> usize {
-    let Some((_, left, _)) = torso_frame(p, usable) else {
+    let Some([_, left, _]) = crate::refine::torso_frame(p, usable) else {
         return 0;
     };
     let before = labels.to_vec();
     let hc = p[Joint::HipCenter.index()];
+    // Signed distance (+ = the subject's left) to the left/right plane of the limb chain a side
+    // segment belongs to: the hips' plane for the legs, the clavicles' for the arms — the
+    // planes the midline guard uses (their normals point into the right twin). The torso
+    // frame's sagittal plane through the hip centre if that plane is missing.
+    let twin = |l: Segment| {
+        planes
+            .iter()
+            .find(|pl| pl.a == l && pl.b == l.mirror())
+            .map_or((hc, left), |pl| (pl.origin(p), scale(pl.normal, -1.0)))
+    };
+    let (hips, clavicles) = (twin(Segment::HipLeft), twin(Segment::ClavicleLeft));
+    let lateral = |x: [f64; 3], s: Segment| {
+        let (o, n) = if crate::planes::is_arm(s) {
+            clavicles
+        } else {
+            hips
+        };
+        dot(sub(x, o), n)
+    };
     // Bone heat's side: +1 left, −1 right, by the summed weights of each side's segments.
     let heat_side = |v: usize| -> (f64, f64) {
         let w = weights(v);
@@ -472,7 +462,7 @@ pub(crate) fn apply(
                         continue;
                     }
                     if was == 0 {
-                        let sd = dot(sub(x, hc), left);
+                        let sd = lateral(x, new);
                         let (l, r) = heat_side(v);
                         let heat = if l > r {
                             1
@@ -482,7 +472,7 @@ pub(crate) fn apply(
                             0
                         };
                         let clear = (l - r).abs() > SIDE_MARGIN * (l + r);
-                        if heat != s || !clear || sd * f64::from(s) < band {
+                        if heat != s || !clear || !(sd * f64::from(s) >= band) {
                             continue;
                         }
                     }
@@ -542,6 +532,20 @@ mod tests {
     }
 
     #[test]
+    fn rotate_between_is_the_smallest_rotation() {
+        let (x, y, z) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+        // −y → x is a quarter turn about z: z stays, x goes to y.
+        let r = |v| rotate_between(scale(y, -1.0), x, v).unwrap();
+        let close = |a: [f64; 3], b: [f64; 3]| norm(sub(a, b)) < 1e-12;
+        assert!(close(r(scale(y, -1.0)), x));
+        assert!(close(r(z), z));
+        assert!(close(r(x), y));
+        // Identity when from == to; undefined when opposite.
+        assert!(close(rotate_between(z, z, x).unwrap(), x));
+        assert!(rotate_between(z, scale(z, -1.0), x).is_none());
+    }
+
+    #[test]
     fn solve4_matches_a_known_solution() {
         let a = [
             [4.0, 1.0, 0.0, 0.5],
@@ -598,37 +602,57 @@ mod tests {
         let sk = t_pose(1.0);
         let usable = [true; 20];
         let p = sk.positions;
+        let planes = crate::planes::joint_planes(&p, &usable);
         let hc = p[Joint::HipCenter.index()];
-        // A rule that claims everything for hip_left (offset +10).
+        // Two rules: the first gives every pelvis/hip_right vertex to the pelvis (offset −10),
+        // the second claims every pelvis/hip_left vertex for hip_left (offset +10).
         let conv = BoundaryConvention {
-            rules: vec![BoundaryRule {
-                a: S::Pelvis,
-                b: S::HipLeft,
-                joint: Joint::HipLeft,
-                plane: [0.0, 0.0, 0.0, 10.0],
-            }],
+            rules: vec![
+                BoundaryRule {
+                    a: S::Pelvis,
+                    b: S::HipRight,
+                    joint: Joint::HipRight,
+                    plane: [0.0, 0.0, 0.0, -10.0],
+                },
+                BoundaryRule {
+                    a: S::Pelvis,
+                    b: S::HipLeft,
+                    joint: Joint::HipLeft,
+                    plane: [0.0, 0.0, 0.0, 10.0],
+                },
+            ],
         };
-        // +x is the subject's left in t_pose. Vertices: pelvis well left (→ hip_left), pelvis
-        // on the right (stays), pelvis on the midline (stays), hip_right (never hip_left).
+        // +x is the subject's left in t_pose. Vertices:
+        // 0 pelvis well left, bone heat clearly left → hip_left;
+        // 1 pelvis on the right → stays (the other side);
+        // 2 pelvis on the midline, inside the band → stays;
+        // 3 hip_right → pelvis by rule 1, and never hip_left by rule 2 (it was a right label);
+        // 4 pelvis well left but bone heat 0.6 / 0.4 → stays (no clear side).
         let xs = [
             [hc[0] + 0.08, hc[1], 0.0],
             [hc[0] - 0.08, hc[1], 0.0],
             [hc[0] + 0.001, hc[1], 0.0],
-            [hc[0] - 0.08, hc[1] - 0.05, 0.0],
+            [hc[0] + 0.08, hc[1] - 0.05, 0.0],
+            [hc[0] + 0.08, hc[1] + 0.01, 0.0],
         ];
-        let mut labels = [S::Pelvis, S::Pelvis, S::Pelvis, S::HipRight];
+        let mut labels = [S::Pelvis, S::Pelvis, S::Pelvis, S::HipRight, S::Pelvis];
         let w = |v: usize| {
             let mut s = [0.0; 17];
-            // Bone heat's side follows x.
-            if xs[v][0] > hc[0] {
+            if v == 4 {
+                s[S::HipLeft.index()] = 0.6;
+                s[S::HipRight.index()] = 0.4;
+            } else if xs[v][0] > hc[0] {
                 s[S::HipLeft.index()] = 1.0;
             } else {
                 s[S::HipRight.index()] = 1.0;
             }
             s
         };
-        let changed = apply(&conv, &xs, &p, &usable, 0.03, &w, &mut labels);
-        assert_eq!(changed, 1);
-        assert_eq!(labels, [S::HipLeft, S::Pelvis, S::Pelvis, S::HipRight]);
+        let changed = apply(&conv, &xs, &p, &usable, &planes, 0.03, &w, &mut labels);
+        assert_eq!(
+            labels,
+            [S::HipLeft, S::Pelvis, S::Pelvis, S::Pelvis, S::Pelvis]
+        );
+        assert_eq!(changed, 2);
     }
 }

@@ -62,14 +62,16 @@
 //!    in a rig's convention, in a frame that moves with the skeleton (the joint, the bisector
 //!    normal, the torso's facing direction; trunk length as unit). Sides stay bone heat's: the
 //!    two left/right twin planes are never learned, no rule moves a vertex across the body, a
-//!    midline vertex takes a side label only outside a band whose width follows the joints'
-//!    noise (measured as the skeleton's left/right asymmetry, [`Diagnostics::joint_asymmetry`]),
-//!    and the midline guard runs again afterwards. [`BoundaryConvention::fit`] learns a
+//!    midline vertex takes a side label only with a clear bone-heat side and outside a band
+//!    around the left/right plane whose width follows the joints' noise (measured as the
+//!    skeleton's left/right asymmetry, [`Diagnostics::joint_asymmetry`]), and the midline
+//!    guard runs again afterwards with that band ([`Diagnostics::convention_changes`] counts
+//!    what moved). [`BoundaryConvention::fit`] learns a
 //!    convention from any labelled bodies; [`BoundaryConvention::makehuman`] is fitted on the
 //!    MakeHuman rig's skinning (tools/synth `convention`: rest pose of three shapes). Against
 //!    those reference labels on 40 generated bodies (20 poses × 2 shapes, one shape not trained
-//!    on) it raises area agreement from 0.859 to 0.924 (exact joints), 0.816 to 0.844
-//!    (σ = 3 cm joints) and 0.870 / 0.851 to 0.902 / 0.872 (virtual-Kinect scans, ideal /
+//!    on) it raises area agreement from 0.859 to 0.927 (exact joints), 0.816 to 0.845
+//!    (σ = 3 cm joints) and 0.870 / 0.851 to 0.922 / 0.894 (virtual-Kinect scans, ideal /
 //!    Kinect realism), with mirrored area unchanged (0 exact, ≤ 0.0003 noisy). It is off by
 //!    default because the correspondence pipeline measured no gain from it (see
 //!    [`BoundaryConvention`]).
@@ -234,7 +236,10 @@ pub struct AttachOptions {
     /// crate docs) instead of the bone-heat argmax. Default `true`.
     pub joint_planes: bool,
     /// Half-width of the midline guard band, as a fraction of the skeleton's height (see the
-    /// crate docs); 0 disables it. Only used with [`AttachOptions::joint_planes`].
+    /// crate docs); 0 disables it. With a [`AttachOptions::convention`] it is also the widest
+    /// side band of the convention's rules and of the guard that runs after them (narrower
+    /// for less noisy joints, see [`MIN_SIDE_BAND`]). Only used with
+    /// [`AttachOptions::joint_planes`].
     pub midline_band: f64,
     /// Segment boundaries learned from a rig's skinning ([`BoundaryConvention`]), applied after
     /// the joint planes and the midline guard; `None` keeps the joint planes' bisectors.
@@ -450,6 +455,9 @@ pub struct Diagnostics {
     /// bones (mesh units). About the joints' noise level: 0 for exact joints, 2–10 cm for
     /// σ = 3 cm noise. `None` without the joints it needs.
     pub joint_asymmetry: Option<f64>,
+    /// Labels the boundary convention changed (its rules, then the midline guard once more);
+    /// `None` without [`AttachOptions::convention`].
+    pub convention_changes: Option<usize>,
     /// Wall-clock seconds per stage: `align`, `mirror`, `refine`, `heat`, `labels` (argmax,
     /// joint planes, midline guard).
     pub timings_s: Vec<(&'static str, f64)>,
@@ -534,6 +542,16 @@ pub fn attach(
     skeleton: &Skeleton,
     options: &AttachOptions,
 ) -> Result<Attachment, AttachError> {
+    attach_with_usable(mesh, skeleton, options).map(|(a, _)| a)
+}
+
+/// [`attach`], also returning which joints were usable (finite and tracked, or repaired) —
+/// what the bones and frames were built from.
+pub(crate) fn attach_with_usable(
+    mesh: &TriMesh,
+    skeleton: &Skeleton,
+    options: &AttachOptions,
+) -> Result<(Attachment, [bool; 20]), AttachError> {
     check_options(options)?;
     if mesh.num_vertices() == 0 || mesh.num_triangles() == 0 {
         return Err(AttachError::EmptyMesh {
@@ -620,6 +638,7 @@ pub fn attach(
     let mut labels: Vec<Segment> = (0..mesh.num_vertices())
         .map(|v| side_first_argmax(&heat.weights.segment_weights(v)))
         .collect();
+    let mut convention_changes = None;
     if options.joint_planes {
         let planes = planes::joint_planes(&positions, &usable);
         let heat_labels = labels.clone();
@@ -634,16 +653,19 @@ pub fn attach(
         );
         if let Some(conv) = &options.convention {
             let band = convention::side_band(asymmetry, height, options.midline_band);
-            convention::apply(
+            let moved = convention::apply(
                 conv,
                 &mesh.positions,
                 &positions,
                 &usable,
+                &planes,
                 band,
                 &|v| heat.weights.segment_weights(v),
                 &mut labels,
             );
-            planes::midline_guard(&mesh.positions, &positions, &planes, band, &mut labels);
+            let guarded =
+                planes::midline_guard(&mesh.positions, &positions, &planes, band, &mut labels);
+            convention_changes = Some(moved + guarded);
         }
     }
     lap("labels", &mut clock);
@@ -660,7 +682,7 @@ pub fn attach(
             .any(|&(k, r)| k == j.mirror_if(mirror.swapped) && r == JointRepair::Interpolated)
             || skeleton.interpolated[j.mirror_if(mirror.swapped).index()];
     }
-    Ok(Attachment {
+    let attachment = Attachment {
         labels,
         weights: heat.weights,
         joints,
@@ -675,9 +697,11 @@ pub fn attach(
             nearest_bone_vertices: heat.nearest_bone_vertices,
             skeleton_height: height,
             joint_asymmetry: asymmetry,
+            convention_changes,
             timings_s,
         },
-    })
+    };
+    Ok((attachment, usable))
 }
 
 /// The segment with the largest weight, except that the side is decided first: if the best
@@ -736,6 +760,27 @@ fn check_options(o: &AttachOptions) -> Result<(), AttachError> {
     }
     if !(o.midline_band.is_finite() && o.midline_band >= 0.0) {
         return bad("midline_band", o.midline_band);
+    }
+    if let Some(c) = &o.convention {
+        if !o.joint_planes {
+            return Err(AttachError::InvalidOption(
+                "a boundary convention replaces joint planes: it needs joint_planes = true".into(),
+            ));
+        }
+        if let Some(r) = c
+            .rules
+            .iter()
+            .find(|r| r.a == r.b || r.a.mirror() == r.b || !r.plane.iter().all(|x| x.is_finite()))
+        {
+            return Err(AttachError::InvalidOption(format!(
+                "boundary rule {} / {} at {}: the segments must differ and not be left/right \
+                 twins, and the plane must be finite ({:?})",
+                r.a.name(),
+                r.b.name(),
+                r.joint.name(),
+                r.plane
+            )));
+        }
     }
     if let Some(&r) = o
         .segment_reach

@@ -24,15 +24,49 @@ pub(crate) struct JointPlane {
     pub normal: [f64; 3],
 }
 
-/// Unit direction of segment `s`'s bone at joint `j`, pointing away from `j` (the bone of the
-/// segment that touches `j`).
-fn away_from(s: Segment, j: Joint, p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[f64; 3]> {
-    let &(u, v) = s.bones().iter().find(|b| b.0 == j || b.1 == j)?;
-    if !(usable[u.index()] && usable[v.index()]) {
+impl JointPlane {
+    /// The point the plane passes through: its joint.
+    pub(crate) fn origin(&self, p: &[[f64; 3]; 20]) -> [f64; 3] {
+        p[self.joint.index()]
+    }
+}
+
+/// Unit direction from joint `j` along segment `s`: its bone touching `j` (pointing away from
+/// `j`), else towards its first bone's midpoint (segments that meet on the surface without
+/// sharing a joint, e.g. torso and upper arm). `None` if a joint it needs is unusable.
+pub(crate) fn segment_direction(
+    s: Segment,
+    j: Joint,
+    p: &[[f64; 3]; 20],
+    usable: &[bool; 20],
+) -> Option<[f64; 3]> {
+    let ok = |x: Joint| usable[x.index()];
+    if !ok(j) {
         return None;
     }
-    let other = if u == j { v } else { u };
-    unit(sub(p[other.index()], p[j.index()]))
+    if let Some(&(u, v)) = s.bones().iter().find(|b| b.0 == j || b.1 == j) {
+        let other = if u == j { v } else { u };
+        return if ok(other) {
+            unit(sub(p[other.index()], p[j.index()]))
+        } else {
+            None
+        };
+    }
+    let &(u, v) = s.bones().first()?;
+    if !(ok(u) && ok(v)) {
+        return None;
+    }
+    let mid = scale(add(p[u.index()], p[v.index()]), 0.5);
+    unit(sub(mid, p[j.index()]))
+}
+
+/// The skeleton joint two segments share, if any (the first found along `a`'s bones).
+pub(crate) fn shared_joint(a: Segment, b: Segment) -> Option<Joint> {
+    a.bones().iter().find_map(|&(u, v)| {
+        b.bones()
+            .iter()
+            .find_map(|&(r, s)| [u, v].into_iter().find(|&x| x == r || x == s))
+    })
 }
 
 /// Unit trunk axis, hip centre → shoulder centre (the longest midline baseline, least affected
@@ -51,14 +85,13 @@ pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<Joint
     let mut out = Vec::new();
     for (i, &a) in Segment::ALL.iter().enumerate() {
         for &b in &Segment::ALL[i + 1..] {
-            let shared = a.bones().iter().find_map(|&(u, v)| {
-                b.bones()
-                    .iter()
-                    .find_map(|&(r, s)| [u, v].into_iter().find(|&x| x == r || x == s))
-            });
-            let Some(j) = shared else { continue };
-            let (Some(da), Some(db)) = (away_from(a, j, p, usable), away_from(b, j, p, usable))
-            else {
+            let Some(j) = shared_joint(a, b) else {
+                continue;
+            };
+            let (Some(da), Some(db)) = (
+                segment_direction(a, j, p, usable),
+                segment_direction(b, j, p, usable),
+            ) else {
                 continue;
             };
             // d_A into the joint is −da; the bisector of (−da, db) is db − da.
@@ -154,6 +187,11 @@ pub(crate) fn joint_asymmetry(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option
 /// True if two side segments lie on the same side of the body.
 pub(crate) fn same_side(a: Segment, b: Segment) -> bool {
     side(a) == side(b)
+}
+
+/// True for the segments of an arm chain (clavicle, upper arm, forearm).
+pub(crate) fn is_arm(s: Segment) -> bool {
+    matches!(root(s), Segment::ClavicleLeft | Segment::ClavicleRight)
 }
 
 /// The root (hip or clavicle) of the limb chain a side segment belongs to.

@@ -178,3 +178,74 @@ fn an_empty_mesh_and_bad_options_are_errors() {
         Err(AttachError::InvalidOption(_))
     ));
 }
+
+#[test]
+fn a_malformed_boundary_convention_is_an_error() {
+    use symcorr_attach::{BoundaryConvention, BoundaryRule, Joint, Segment};
+    let sk = t_pose(1.0);
+    let (_, mesh) = body();
+    let rule = |a, b, plane| BoundaryConvention {
+        rules: vec![BoundaryRule {
+            a,
+            b,
+            joint: Joint::ElbowLeft,
+            plane,
+        }],
+    };
+    let bad = [
+        (
+            rule(
+                Segment::UpperArmLeft,
+                Segment::ForearmLeft,
+                [f64::NAN, 0.0, 0.0, 0.0],
+            ),
+            true,
+        ),
+        (
+            rule(
+                Segment::ForearmLeft,
+                Segment::ForearmLeft,
+                [1.0, 0.0, 0.0, 0.0],
+            ),
+            true,
+        ),
+        (
+            rule(Segment::HipLeft, Segment::HipRight, [1.0, 0.0, 0.0, 0.0]),
+            true,
+        ),
+        // A well-formed rule, but joint planes are off: the convention would be ignored.
+        (
+            rule(
+                Segment::UpperArmLeft,
+                Segment::ForearmLeft,
+                [1.0, 0.0, 0.0, 0.0],
+            ),
+            false,
+        ),
+    ];
+    for (conv, joint_planes) in bad {
+        let o = AttachOptions {
+            convention: Some(conv),
+            joint_planes,
+            ..AttachOptions::default()
+        };
+        match attach(&mesh, &sk, &o) {
+            Err(AttachError::InvalidOption(msg)) => assert!(!msg.contains('\n'), "{msg}"),
+            other => panic!(
+                "expected InvalidOption, got {:?}",
+                other.map(|a| a.labels.len())
+            ),
+        }
+    }
+    // The same well-formed rule with joint planes on is accepted.
+    let ok = AttachOptions {
+        convention: Some(rule(
+            Segment::UpperArmLeft,
+            Segment::ForearmLeft,
+            [1.0, 0.0, 0.0, 0.0],
+        )),
+        ..AttachOptions::default()
+    };
+    let a = attach(&mesh, &sk, &ok).unwrap();
+    assert!(a.diagnostics.convention_changes.is_some());
+}

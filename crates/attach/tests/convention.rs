@@ -86,7 +86,6 @@ fn a_shifted_elbow_boundary_is_learned() {
     eprintln!("reference → learned: {pairs:?}");
     let (before, after) = (wrong(&base.labels), wrong(&learned.labels));
     eprintln!("disagreeing vertices: joint planes {before}, learned convention {after}");
-    assert_eq!(before, moved);
     assert!(after * 10 <= before, "{after} of {before} still disagree");
     // Elsewhere the reference is the joint planes' and bone heat's own labels, which one plane
     // per boundary reproduces only approximately (the midline guard's band is no plane).

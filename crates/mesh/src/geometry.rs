@@ -98,6 +98,24 @@ impl TriMesh {
             .collect()
     }
 
+    /// Barycentric area of every vertex: a third of the area of each triangle it is a corner
+    /// of (the lumped mass of a P1 finite-element mesh). Sums to [`TriMesh::total_area`].
+    ///
+    /// ```
+    /// use symcorr_mesh::TriMesh;
+    /// let m = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+    /// assert!(m.vertex_areas().iter().all(|&a| (a - 1.0 / 6.0).abs() < 1e-15));
+    /// ```
+    pub fn vertex_areas(&self) -> Vec<f64> {
+        let mut a = vec![0.0; self.num_vertices()];
+        for (t, area) in self.triangles.iter().zip(self.triangle_areas()) {
+            for &v in t {
+                a[v as usize] += area / 3.0;
+            }
+        }
+        a
+    }
+
     /// Total surface area.
     pub fn total_area(&self) -> f64 {
         self.triangle_areas().iter().sum()

@@ -4,7 +4,7 @@
 //!
 //! Training bodies: the rest pose of three shapes, [`TRAINING_SHAPES`] (the base shape, a
 //! heavy woman, a muscular man) with exact joints. tools/synth/tests/attach_labels.rs evaluates
-//! on 20 poses of the base shape and of a heavy young man that is not among them, so 38 of its
+//! on 20 poses of the base shape and of a heavy young man that is not among them, so 39 of its
 //! 40 bodies (all but the base shape's rest pose) and both scans are held out.
 
 use std::fmt::Write;

@@ -217,13 +217,7 @@ fn rig_like() -> AttachOptions {
 }
 
 fn vertex_areas(m: &TriMesh) -> Vec<f64> {
-    let mut a = vec![0.0; m.num_vertices()];
-    for (t, ar) in m.triangle_areas().iter().enumerate() {
-        for &v in &m.triangles[t] {
-            a[v as usize] += ar / 3.0;
-        }
-    }
-    a
+    m.vertex_areas()
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -464,10 +458,10 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
 
 // Measured (2 shapes × 20 poses, 2026-12-01) with the MakeHuman boundary convention
 // ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23): exact joints
-// strict mean 0.924 / worst 0.877 (0.859 / 0.828), 0.923 on the 39 bodies outside the
-// convention's training set; boundary-tolerant (3 cm) mean 0.962 / worst 0.921 (0.914 / 0.884);
+// strict mean 0.927 / worst 0.882 (0.859 / 0.828), 0.926 on the 39 bodies outside the
+// convention's training set; boundary-tolerant (3 cm) mean 0.965 / worst 0.926 (0.914 / 0.884);
 // mirrored area 0 (0); anatomical cross-side area ≤ 0.0006 (≤ 0.0018), none beyond 3 cm.
-// Noisy joints strict mean 0.844 / worst 0.782 (0.816 / 0.757), tolerant 0.902 / 0.842
+// Noisy joints strict mean 0.845 / worst 0.784 (0.816 / 0.757), tolerant 0.903 / 0.843
 // (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
 // area beyond 3 cm of the midline. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
 // strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
@@ -480,10 +474,15 @@ fn exact_joints_40_bodies() {
     let s = run_bodies(None);
     let r = summary("exact", &s);
     // Body 0 (the base shape at rest) is one of the convention's training bodies.
-    summary("exact, held out of the convention's training", &s[1..]);
-    assert!(r.mean >= 0.92, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.87, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.955, "mean tolerant agreement {}", r.tmean);
+    let held = summary("exact, held out of the convention's training", &s[1..]);
+    assert!(
+        held.mean >= 0.923,
+        "held-out mean strict agreement {}",
+        held.mean
+    );
+    assert!(r.mean >= 0.924, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.875, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.96, "mean tolerant agreement {}", r.tmean);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert!(r.cross_anat <= 0.0025, "cross-side area {}", r.cross_anat);
     assert!(
@@ -560,8 +559,8 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured with the MakeHuman convention: strict 0.902 (ideal scan) / 0.872 (Kinect realism),
-// tolerant 0.951 / 0.927, no mirrored or cross-side area (joint planes: 0.870 / 0.851,
+// Measured with the MakeHuman convention: strict 0.922 (ideal scan) / 0.894 (Kinect realism),
+// tolerant 0.965 / 0.945, no mirrored or cross-side area (joint planes: 0.870 / 0.851,
 // 0.946 / 0.920). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
 // the ideal scan, not on the one with Kinect realism; the assertions guard the measured level.
 #[test]
@@ -573,8 +572,8 @@ fn virtual_kinect_scans() {
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
     let r = summary("scans", &s);
-    assert!(r.worst >= 0.865, "worst strict agreement {}", r.worst);
-    assert!(r.tworst >= 0.92, "worst tolerant agreement {}", r.tworst);
+    assert!(r.worst >= 0.89, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.94, "worst tolerant agreement {}", r.tworst);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }

@@ -168,13 +168,7 @@ fn mirror_map_is_an_involution_and_a_symmetry_of_the_rest_mesh() {
 }
 
 fn vertex_areas(mesh: &TriMesh) -> Vec<f64> {
-    let mut a = vec![0.0; mesh.num_vertices()];
-    for (t, area) in mesh.triangles.iter().zip(mesh.triangle_areas()) {
-        for &v in t {
-            a[v as usize] += area / 3.0;
-        }
-    }
-    a
+    mesh.vertex_areas()
 }
 
 #[test]

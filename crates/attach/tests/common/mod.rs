@@ -8,13 +8,7 @@ use symcorr_mesh::TriMesh;
 
 /// Area per vertex (a third of the incident triangle areas).
 pub fn vertex_areas(m: &TriMesh) -> Vec<f64> {
-    let mut a = vec![0.0; m.num_vertices()];
-    for (t, ar) in m.triangle_areas().iter().enumerate() {
-        for &v in &m.triangles[t] {
-            a[v as usize] += ar / 3.0;
-        }
-    }
-    a
+    m.vertex_areas()
 }
 
 /// `(area fraction with got == want, area fraction with got == mirror(want) ≠ want)` over the
