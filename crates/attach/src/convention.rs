@@ -94,10 +94,10 @@ pub struct BoundaryRule {
 ///
 /// Off by default: correspondence measured no gain from it. `symcorr bench` on the generated
 /// bodies20 datasets (58 pairs), one session, 2026-12-01, joint planes vs [`Self::makehuman`]
-/// (mean error, flip rate): articulated dense 0.00246 / 0 vs 0.00257 / 0; with σ = 3 cm joints
-/// 0.0124 / 0.0014 % vs 0.0126 / 0.0014 %; single-view scans 0.0185 / 0.053 % vs 0.0192 /
-/// 0.052 %; paper pipeline sparse 0.0437 / 0.023 % vs 0.0439 / 0.021 %, noisy 0.0524 / 0.25 %
-/// vs 0.0522 / 0.28 %. What matters there is that template and target get the same boundaries,
+/// (mean error, flip rate): articulated dense 0.00246 / 0 vs 0.00255 / 0; with σ = 3 cm joints
+/// 0.0124 / 0.0014 % vs 0.0126 / 0.0014 %; single-view scans 0.0185 / 0.053 % vs 0.0188 /
+/// 0.052 %; paper pipeline sparse 0.0437 / 0.023 % vs 0.0438 / 0.021 %, noisy 0.0524 / 0.25 %
+/// vs 0.0522 / 0.27 %. What matters there is that template and target get the same boundaries,
 /// not where they are.
 ///
 /// ```

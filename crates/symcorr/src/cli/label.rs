@@ -110,6 +110,14 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
                                 "fallback": c.fallback}))
                 .collect::<Vec<_>>(),
             "nearest_bone_vertices": d.nearest_bone_vertices,
+            // Where neighbouring segments end (`--boundaries`), what that moved, and the
+            // joints' left/right asymmetry (≈ their noise, mesh units).
+            "boundaries": match a.boundaries {
+                Boundaries::JointPlanes => "joint-planes",
+                Boundaries::Makehuman => "makehuman",
+            },
+            "convention_changes": d.convention_changes,
+            "joint_asymmetry": d.joint_asymmetry,
         },
     });
     if a.weights {
@@ -213,6 +221,10 @@ mod tests {
         })
         .unwrap();
         let r: Value = serde_json::from_str(&std::fs::read_to_string(&rig).unwrap()).unwrap();
+        assert_eq!(r["diagnostics"]["boundaries"], "makehuman");
+        assert!(r["diagnostics"]["convention_changes"].as_u64().unwrap() > 0);
+        assert_eq!(v["diagnostics"]["boundaries"], "joint-planes");
+        assert!(v["diagnostics"]["convention_changes"].is_null());
         let moved = r["labels"]
             .as_array()
             .unwrap()
