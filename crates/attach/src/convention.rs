@@ -29,7 +29,8 @@
 //! hip centre, clavicles at the shoulder centre) are never learned, a rule never moves a vertex
 //! to the other side than its label before the rules, and a midline vertex (pelvis, torso,
 //! head) becomes a side segment only when bone heat clearly puts more weight on that side
-//! ([`SIDE_MARGIN`]) and it lies outside a band around the sagittal plane whose width follows
+//! ([`SIDE_MARGIN`]) and it lies outside a band around the left/right joint plane of its limb
+//! chain (the hips' or the clavicles', the planes the midline guard uses) whose width follows
 //! the joints' noise ([`side_band`]); the midline guard runs again afterwards with that band.
 //! Why adaptive: with a fixed band of 0.05 skeleton heights (the midline guard's) exact-joint
 //! agreement on the 40 test bodies was 0.910, with 0.006 it was 0.924 — but then σ = 3 cm
@@ -40,7 +41,10 @@
 //! Three times it, clamped to 0.006…0.05 heights, gives 0.924 exact with no mirrored area and
 //! keeps noisy joints at 0.844 with ≤ 0.0003 mirrored (the fixed wide band's figures). Without
 //! the bone-heat margin a narrow band mirrored 0.18 % of an extreme pose's exactly-midline
-//! groin vertices. Tried and dropped: fitting the hip centre's left/right plane to the
+//! groin vertices. (Figures of this paragraph from before the limb-carried `e2` and the side
+//! test against the limb chain's joint plane — a sagittal plane through the hip centre then —
+//! which raised exact agreement 0.924 → 0.927 and the scans' 0.902 / 0.872 → 0.922 / 0.894.)
+//! Tried and dropped: fitting the hip centre's left/right plane to the
 //! surface's reflective symmetry (trimmed reflection ICP within 0.15 heights, a coarse offset
 //! search first): the median plane offset with σ = 3 cm joints fell from 1.9 to 0.5 cm, but
 //! the worst fit was 12 cm off on asymmetric poses and noisy mirrored area rose to 0.7 %.

@@ -455,8 +455,9 @@ pub struct Diagnostics {
     /// bones (mesh units). About the joints' noise level: 0 for exact joints, 2–10 cm for
     /// σ = 3 cm noise. `None` without the joints it needs.
     pub joint_asymmetry: Option<f64>,
-    /// Labels the boundary convention changed (its rules, then the midline guard once more);
-    /// `None` without [`AttachOptions::convention`].
+    /// Vertices whose label the boundary convention changed (its rules, then the midline
+    /// guard once more, against the joint planes' labels); `None` without
+    /// [`AttachOptions::convention`].
     pub convention_changes: Option<usize>,
     /// Wall-clock seconds per stage: `align`, `mirror`, `refine`, `heat`, `labels` (argmax,
     /// joint planes, midline guard).
@@ -653,7 +654,8 @@ pub(crate) fn attach_with_usable(
         );
         if let Some(conv) = &options.convention {
             let band = convention::side_band(asymmetry, height, options.midline_band);
-            let moved = convention::apply(
+            let before = labels.clone();
+            convention::apply(
                 conv,
                 &mesh.positions,
                 &positions,
@@ -663,9 +665,8 @@ pub(crate) fn attach_with_usable(
                 &|v| heat.weights.segment_weights(v),
                 &mut labels,
             );
-            let guarded =
-                planes::midline_guard(&mesh.positions, &positions, &planes, band, &mut labels);
-            convention_changes = Some(moved + guarded);
+            planes::midline_guard(&mesh.positions, &positions, &planes, band, &mut labels);
+            convention_changes = Some(labels.iter().zip(&before).filter(|(a, b)| a != b).count());
         }
     }
     lap("labels", &mut clock);
