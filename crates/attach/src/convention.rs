@@ -50,7 +50,7 @@
 //! the worst fit was 12 cm off on asymmetric poses and noisy mirrored area rose to 0.7 %.
 
 use crate::geom::unit;
-use crate::planes::{segment_direction, shared_joint, side, JointPlane};
+use crate::planes::{segment_direction, shared_joint, side, side_weights, JointPlane};
 use crate::{attach_with_usable, AttachError, AttachOptions, Joint, Segment, Skeleton};
 use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
 use symcorr_mesh::TriMesh;
@@ -428,19 +428,6 @@ pub(crate) fn apply(
         };
         dot(sub(x, o), n)
     };
-    // Bone heat's side: +1 left, −1 right, by the summed weights of each side's segments.
-    let heat_side = |v: usize| -> (f64, f64) {
-        let w = weights(v);
-        let (mut l, mut r) = (0.0, 0.0);
-        for s in Segment::ALL {
-            match side(s) {
-                1 => l += w[s.index()],
-                -1 => r += w[s.index()],
-                _ => {}
-            }
-        }
-        (l, r)
-    };
     let frames: Vec<Option<Frame>> = convention
         .rules
         .iter()
@@ -467,7 +454,7 @@ pub(crate) fn apply(
                     }
                     if was == 0 {
                         let sd = lateral(x, new);
-                        let (l, r) = heat_side(v);
+                        let (l, r) = side_weights(&weights(v));
                         let heat = if l > r {
                             1
                         } else if r > l {

@@ -722,14 +722,13 @@ fn side_first_argmax(s: &[f64; 17]) -> Segment {
     if b.mirror() == b {
         return b;
     }
-    let total = |side_of: Segment| -> f64 {
-        Segment::ALL
-            .into_iter()
-            .filter(|x| *x != x.mirror() && planes::same_side(*x, side_of))
-            .map(|x| s[x.index()])
-            .sum()
+    let (left, right) = planes::side_weights(s);
+    let (own, other) = if planes::side(b) == 1 {
+        (left, right)
+    } else {
+        (right, left)
     };
-    if total(b.mirror()) > total(b) {
+    if other > own {
         best(&|x| x != x.mirror() && planes::same_side(x, b.mirror()))
     } else {
         b

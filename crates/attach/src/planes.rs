@@ -169,19 +169,27 @@ pub(crate) fn joint_asymmetry(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option
             m.push(dot(sub(at(J::HipCenter), mid), u));
         }
     }
-    for (a, b) in [
-        (J::HipCenter, J::HipLeft),
-        (J::HipLeft, J::KneeLeft),
-        (J::KneeLeft, J::AnkleLeft),
-        (J::ShoulderLeft, J::ElbowLeft),
-        (J::ElbowLeft, J::WristLeft),
-    ] {
-        let (ra, rb) = (a.mirror(), b.mirror());
+    let hip_bones = ((J::HipCenter, J::HipLeft), (J::HipCenter, J::HipRight));
+    for ((a, b), (ra, rb)) in std::iter::once(hip_bones).chain(crate::refine::TWIN_LIMB_BONES) {
         if ok(&[a, b, ra, rb]) {
             m.push(len(a, b) - len(ra, rb));
         }
     }
     (!m.is_empty()).then(|| (m.iter().map(|x| x * x).sum::<f64>() / m.len() as f64).sqrt())
+}
+
+/// Summed weights of the left and of the right segments in per-segment weights `w`
+/// (midline segments count for neither).
+pub(crate) fn side_weights(w: &[f64; 17]) -> (f64, f64) {
+    let (mut l, mut r) = (0.0, 0.0);
+    for s in Segment::ALL {
+        match side(s) {
+            1 => l += w[s.index()],
+            -1 => r += w[s.index()],
+            _ => {}
+        }
+    }
+    (l, r)
 }
 
 /// True if two side segments lie on the same side of the body.

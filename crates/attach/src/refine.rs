@@ -411,8 +411,9 @@ pub(crate) fn refine(
     Refined { moves, skipped }
 }
 
-/// Left/right bone pairs whose lengths should agree.
-const PAIRS: [((Joint, Joint), (Joint, Joint)); 4] = {
+/// Left/right limb bone pairs whose lengths should agree (refinement evens them out;
+/// `planes::joint_asymmetry` measures them).
+pub(crate) const TWIN_LIMB_BONES: [((Joint, Joint), (Joint, Joint)); 4] = {
     use Joint as J;
     [
         (
@@ -444,7 +445,7 @@ fn symmetric_bone_lengths(
     tol: f64,
     moves: &mut Vec<JointMove>,
 ) {
-    for ((la, lb), (ra, rb)) in PAIRS {
+    for ((la, lb), (ra, rb)) in TWIN_LIMB_BONES {
         if ![la, lb, ra, rb].iter().all(|j| usable[j.index()]) {
             continue;
         }

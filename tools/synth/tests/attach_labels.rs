@@ -216,10 +216,6 @@ fn rig_like() -> AttachOptions {
     }
 }
 
-fn vertex_areas(m: &TriMesh) -> Vec<f64> {
-    m.vertex_areas()
-}
-
 #[derive(Debug, Clone, Copy)]
 struct Score {
     strict: f64,
@@ -249,7 +245,7 @@ fn score(
     mirror_map: Option<&[u32]>,
 ) -> Score {
     let hops = segment_hops();
-    let area = vertex_areas(m);
+    let area = m.vertex_areas();
     let mut by_ref: Vec<Vec<[f64; 3]>> = vec![Vec::new(); 17];
     for (v, w) in want.iter().enumerate() {
         if let Some(w) = w {

@@ -4,7 +4,6 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use symcorr_attach::{Joint, Segment};
-use symcorr_mesh::TriMesh;
 use symcorr_synth::geom::winding_number;
 use symcorr_synth::mapping::{kinect_joints, reference_labels};
 use symcorr_synth::noise::{apply_joint_noise, JointNoise};
@@ -167,17 +166,13 @@ fn mirror_map_is_an_involution_and_a_symmetry_of_the_rest_mesh() {
     assert_eq!(file, mirror);
 }
 
-fn vertex_areas(mesh: &TriMesh) -> Vec<f64> {
-    mesh.vertex_areas()
-}
-
 #[test]
 fn reference_labels_respect_the_mirror_map() {
     let m = model();
     let body = m.body(&Shape::default()).unwrap();
     let labels = reference_labels(&body).unwrap();
     let mirror = m.assets.body_mirror().unwrap();
-    let areas = vertex_areas(&body.rest);
+    let areas = body.rest.vertex_areas();
     let total: f64 = areas.iter().sum();
     let mut agree = 0.0;
     for v in 0..labels.len() {

@@ -6,15 +6,10 @@ use symcorr_attach::testbody::RADII;
 use symcorr_attach::{Segment, Skeleton, BONES};
 use symcorr_mesh::TriMesh;
 
-/// Area per vertex (a third of the incident triangle areas).
-pub fn vertex_areas(m: &TriMesh) -> Vec<f64> {
-    m.vertex_areas()
-}
-
 /// `(area fraction with got == want, area fraction with got == mirror(want) ≠ want)` over the
 /// vertices where `mask` holds.
 pub fn agreement(m: &TriMesh, got: &[Segment], want: &[Segment], mask: &[bool]) -> (f64, f64) {
-    let a = vertex_areas(m);
+    let a = m.vertex_areas();
     let (mut total, mut same, mut mirror) = (0.0, 0.0, 0.0);
     for v in 0..a.len() {
         if !mask[v] {
