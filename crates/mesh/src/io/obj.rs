@@ -8,7 +8,7 @@
 
 use std::fmt::Write as _;
 
-use super::text::{fan, parse_coord, Lines};
+use super::text::{fan, parse_coord, parse_xyz, Lines};
 use super::{LoadedMesh, Source};
 use crate::{MeshError, TriMesh};
 
@@ -38,19 +38,8 @@ pub(crate) fn read(bytes: &[u8], src: &Source) -> Result<LoadedMesh, MeshError> 
         match toks.next() {
             Some("v") => {
                 let t: Vec<&str> = toks.collect();
-                let v = positions.len();
-                if t.len() < 3 {
-                    return Err(src.parse_err(
-                        l,
-                        format!("vertex {v}: expected x y z, found {} values", t.len()),
-                    ));
-                }
-                let what = format!("vertex {v}");
-                positions.push([
-                    parse_coord(t[0], src, l, &what)?,
-                    parse_coord(t[1], src, l, &what)?,
-                    parse_coord(t[2], src, l, &what)?,
-                ]);
+                let what = format!("vertex {}", positions.len());
+                positions.push(parse_xyz(&t, src, l, &what)?);
                 if all_colored && t.len() >= 6 {
                     let mut c = [0u8; 3];
                     for k in 0..3 {

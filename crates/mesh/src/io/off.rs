@@ -7,7 +7,7 @@
 
 use std::fmt::Write as _;
 
-use super::text::{capped_capacity, fan, parse_color, parse_coord, parse_usize, Lines};
+use super::text::{capped_capacity, fan, parse_color, parse_usize, parse_xyz, Lines};
 use super::{LoadedMesh, Source};
 use crate::{MeshError, TriMesh};
 
@@ -79,18 +79,7 @@ pub(crate) fn read(bytes: &[u8], src: &Source) -> Result<LoadedMesh, MeshError> 
             )
         })??;
         let t: Vec<&str> = text.split_whitespace().collect();
-        if t.len() < 3 {
-            return Err(src.parse_err(
-                l,
-                format!("vertex {v}: expected x y z, found {} values", t.len()),
-            ));
-        }
-        let what = format!("vertex {v}");
-        positions.push([
-            parse_coord(t[0], src, l, &what)?,
-            parse_coord(t[1], src, l, &what)?,
-            parse_coord(t[2], src, l, &what)?,
-        ]);
+        positions.push(parse_xyz(&t, src, l, &format!("vertex {v}"))?);
         if let Some(colors) = colors.as_mut() {
             let start = 3 + if has_n { 3 } else { 0 };
             let end = t.len().saturating_sub(if has_st { 2 } else { 0 });

@@ -92,6 +92,27 @@ pub(crate) fn parse_coord(
     Ok(v)
 }
 
+/// Parses the `x y z` in the first three of a vertex line's tokens (more may follow); `what`
+/// names the vertex in errors (`vertex 12`).
+pub(crate) fn parse_xyz(
+    toks: &[&str],
+    src: &Source,
+    line: usize,
+    what: &str,
+) -> Result<[f64; 3], MeshError> {
+    if toks.len() < 3 {
+        return Err(src.parse_err(
+            line,
+            format!("{what}: expected x y z, found {} values", toks.len()),
+        ));
+    }
+    Ok([
+        parse_coord(toks[0], src, line, what)?,
+        parse_coord(toks[1], src, line, what)?,
+        parse_coord(toks[2], src, line, what)?,
+    ])
+}
+
 /// Parses a non-negative integer count or index.
 pub(crate) fn parse_usize(
     tok: &str,
