@@ -174,19 +174,30 @@ fn bodies() -> &'static Vec<Body> {
 /// Debug output for offline analysis: `NAME.txt` with `x y z reference got` per vertex and
 /// `NAME.joints.txt` with the input and refined joints.
 fn dump(dir: &Path, name: &str, m: &TriMesh, joints: &Skeleton, a: &symcorr_attach::Attachment) {
+    dump_labels(dir, name, m, joints, a, reference(), |_| true);
+}
+
+/// Writes `NAME.txt` (per vertex: position, reference segment or −1 where `known` is false,
+/// label, 17 segment weights), `NAME.joints.txt` (given and refined joints) and
+/// `NAME.tris.txt` for offline analysis.
+fn dump_labels(
+    dir: &Path,
+    name: &str,
+    m: &TriMesh,
+    joints: &Skeleton,
+    a: &symcorr_attach::Attachment,
+    reference: &[Segment],
+    known: impl Fn(usize) -> bool,
+) {
     use std::fmt::Write;
     let mut t = String::new();
     for (v, p) in m.positions.iter().enumerate() {
-        write!(
-            t,
-            "{} {} {} {} {}",
-            p[0],
-            p[1],
-            p[2],
-            reference()[v].index(),
-            a.labels[v].index()
-        )
-        .unwrap();
+        let r = if known(v) {
+            reference[v].index() as i64
+        } else {
+            -1
+        };
+        write!(t, "{} {} {} {r} {}", p[0], p[1], p[2], a.labels[v].index()).unwrap();
         for w in a.weights.segment_weights(v) {
             write!(t, " {w:.4}").unwrap();
         }
@@ -555,21 +566,32 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured with the MakeHuman convention: strict 0.922 (ideal scan) / 0.894 (Kinect realism),
-// tolerant 0.965 / 0.945, no mirrored or cross-side area (joint planes: 0.870 / 0.851,
-// 0.946 / 0.920). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
-// the ideal scan, not on the one with Kinect realism; the assertions guard the measured level.
+// Measured with the MakeHuman convention (2026-12-02): strict 0.922 (ideal scan) / 0.919 (Kinect
+// realism), tolerant 0.965 / 0.975, no mirrored or cross-side area (joint planes: 0.870 / 0.867,
+// 0.946 / 0.949). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
+// both. Before refinement refused circles far from the joint (2026-12-01) the realistic scan
+// scored 0.894: its left wrist, hidden against the hip, was moved 12 cm onto the hip and 3 % of
+// the pelvis/hip became forearm.
 #[test]
 fn virtual_kinect_scans() {
     let mut s = Vec::new();
     for dir in ["scan", "scan_kinect"] {
         let (mesh, joints, want) = scan_case(dir);
         let a = attach(&mesh, &joints, &rig_like()).unwrap();
+        if let Some(out) = std::env::var_os("ATTACH_EVAL_DUMP") {
+            let want_ids: Vec<Segment> = want
+                .iter()
+                .map(|w| w.map_or(Segment::Pelvis, |t| t.segment))
+                .collect();
+            dump_labels(Path::new(&out), dir, &mesh, &joints, &a, &want_ids, |v| {
+                want[v].is_some()
+            });
+        }
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
     let r = summary("scans", &s);
-    assert!(r.worst >= 0.89, "worst strict agreement {}", r.worst);
-    assert!(r.tworst >= 0.94, "worst tolerant agreement {}", r.tworst);
+    assert!(r.worst >= 0.91, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.96, "worst tolerant agreement {}", r.tworst);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }
