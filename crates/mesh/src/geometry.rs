@@ -249,23 +249,11 @@ impl TriMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tetra() -> TriMesh {
-        TriMesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-        )
-        .unwrap()
-    }
+    use crate::testmesh::tetrahedron;
 
     #[test]
     fn tetra_area_edges_components() {
-        let m = tetra();
+        let m = tetrahedron();
         let expected = 1.5 + 3f64.sqrt() / 2.0;
         assert!((m.total_area() - expected).abs() < 1e-12);
         assert_eq!(m.edges().len(), 6);
@@ -275,7 +263,7 @@ mod tests {
 
     #[test]
     fn outward_normals_on_tetra() {
-        let m = tetra();
+        let m = tetrahedron();
         let c = [0.25, 0.25, 0.25];
         for (t, n) in m.triangle_normals().iter().enumerate() {
             let p = m.corners(t)[0];

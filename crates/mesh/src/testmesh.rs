@@ -58,6 +58,19 @@ fn build(positions: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> TriMesh {
     TriMesh::new(positions, triangles).expect("generated meshes are valid by construction")
 }
 
+/// The corner tetrahedron: the origin and the three unit points on the axes, faces outward.
+pub fn tetrahedron() -> TriMesh {
+    build(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ],
+        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    )
+}
+
 /// The regular icosahedron inscribed in the unit sphere.
 pub fn icosahedron() -> TriMesh {
     build(

@@ -4,19 +4,13 @@
 use base64::Engine as _;
 use serde_json::{json, Value};
 use symcorr_mesh::io::{self, Format, PlyEncoding};
-use symcorr_mesh::{MeshError, TriMesh};
+use symcorr_mesh::{testmesh, MeshError, TriMesh};
 
+/// The shared tetrahedron with its apex raised to z = 1.5, so the bounds differ per axis.
 fn tetra() -> TriMesh {
-    TriMesh::new(
-        vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.5],
-        ],
-        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    )
-    .unwrap()
+    let mut m = testmesh::tetrahedron();
+    m.positions[3][2] = 1.5;
+    m
 }
 
 fn glb_chunks(b: &[u8]) -> (Value, Vec<u8>) {

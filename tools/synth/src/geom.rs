@@ -138,23 +138,11 @@ pub fn nearest_vertex(mesh: &TriMesh, p: V3) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tetra() -> TriMesh {
-        TriMesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap()
-    }
+    use symcorr_mesh::testmesh::tetrahedron;
 
     #[test]
     fn winding_number_is_one_inside_zero_outside() {
-        let m = tetra();
+        let m = tetrahedron();
         assert!((winding_number(&m, [0.1, 0.1, 0.1]) - 1.0).abs() < 1e-9);
         assert!(winding_number(&m, [1.0, 1.0, 1.0]).abs() < 1e-9);
     }
