@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use symcorr_attach::{Joint, Skeleton};
 use symcorr_kinect::scan::{depth_to_points, fuse_depth_frames, scan_mesh, ScanOptions};
 use symcorr_kinect::{
-    check_handedness, read_joints, DepthFrame, FrameSelect, Handedness, Intrinsics, JointFrame,
-    JointLog, KinectError, SkeletonKind,
+    check_handedness, read_joints, DepthFrame, FrameSelect, Handedness, Intrinsics, JointLog,
+    KinectError,
 };
 use symcorr_mesh::TriMesh;
 
@@ -22,19 +22,8 @@ fn standing() -> Skeleton {
         .clone()
 }
 
-fn log_of(skeletons: Vec<Skeleton>) -> JointLog {
-    JointLog {
-        skeleton_kind: SkeletonKind::KinectV1,
-        frames: skeletons
-            .into_iter()
-            .enumerate()
-            .map(|(i, skeleton)| JointFrame {
-                time_s: i as f64 * 0.1,
-                skeleton,
-            })
-            .collect(),
-    }
-}
+/// Frame rate of the test logs: frames 0.1 s apart.
+const FPS: f64 = 10.0;
 
 fn shifted(s: &Skeleton, d: [f64; 3]) -> Skeleton {
     let mut out = s.clone();
@@ -49,10 +38,11 @@ fn shifted(s: &Skeleton, d: [f64; 3]) -> Skeleton {
 #[test]
 fn replay_selects_frames_by_index_and_time() {
     let base = standing();
-    let log = log_of(
+    let log = JointLog::from_skeletons(
         (0..5)
             .map(|i| shifted(&base, [0.01 * i as f64, 0.0, 0.0]))
             .collect(),
+        FPS,
     );
     assert_eq!(log.frame(3).unwrap(), &log.frames[3].skeleton);
     assert!(matches!(log.frame(5), Err(KinectError::Replay(_))));
@@ -90,7 +80,7 @@ fn robust_average_drops_outlier_frames_and_weights_by_confidence() {
         frames[f].positions[Joint::Head.index()][1] += 0.3;
         frames[f].confidence[Joint::Head.index()] = 0.0;
     }
-    let log = log_of(frames);
+    let log = JointLog::from_skeletons(frames, FPS);
     let avg = log
         .select(FrameSelect::Window {
             start_s: 0.0,
@@ -112,10 +102,11 @@ fn robust_average_drops_outlier_frames_and_weights_by_confidence() {
 #[test]
 fn bone_length_report_finds_the_stretching_bone() {
     let base = standing();
-    let rigid = log_of(
+    let rigid = JointLog::from_skeletons(
         (0..4)
             .map(|i| shifted(&base, [0.1 * i as f64, 0.0, 0.0]))
             .collect(),
+        FPS,
     );
     let r = rigid.bone_lengths();
     assert_eq!(r.bones.len(), 19);
@@ -133,7 +124,7 @@ fn bone_length_report_finds_the_stretching_bone() {
             *q += d;
         }
     }
-    let r = log_of(frames).bone_lengths();
+    let r = JointLog::from_skeletons(frames, FPS).bone_lengths();
     assert_eq!(r.worst_bone, (Joint::ElbowLeft, Joint::WristLeft));
     assert!(!r.is_consistent(0.05));
     let fore = &r.bones[5];
