@@ -150,6 +150,21 @@
 //!   0.0526 / 0.24 % — the flips it removed were all fallbacks, and the fallback is what costs
 //!   the noisy mean. Applied to the pelvis, torso and hips too: 27 flips (landmarks near the
 //!   groin move with the thighs).
+//!   What the 11 remaining exact-joint flips are (session 6, `examples/paper_flips` VERBOSE):
+//!   gross errors, not side confusions. Seven are head points of shape s0 matched on shape s1
+//!   (the s0 → s1 random pairs) with errors 0.11–0.19 √area, on the *correct* half: the
+//!   si-HKS of the true vertex is 0.23–0.27 away, while a few target vertices on the back of
+//!   the neck and skull (the same four "hubs" for every point) are at 0.15–0.17, so all five
+//!   candidates lie there; eq. 8 would prefer the true vertex (gap 0.037–0.048 vs 0.064–0.092)
+//!   but it is not a candidate. In the head's frame (position along shoulder centre → head)
+//!   the points sit at 1.0–1.26 bone lengths, the hubs at 0.66–0.76. A head-only axial band
+//!   `|t(q) − t(p)| ≤ δ` with the same fallback: δ = 0.2 → 16 flips, 0.3 → 13, 0.4 → 8 (mean
+//!   0.0437 → 0.0432–0.0435) — the fallback's nearest descriptor inside the band is again a
+//!   gross error. Three are crotch points of s1_rest (thigh_right, all raw candidates on the
+//!   left thigh or far down the right one); one is a template attachment label (pelvis where
+//!   the rig says thigh_left). Zero needs a candidate stage that finds the true vertex, i.e.
+//!   a descriptor that survives a change of shape on the head; the refined method's extrinsic
+//!   alignment is what does that.
 //!   Whole benchmark with the skull plane of `symcorr::midline_halves` (release binary,
 //!   58 pairs each, `symcorr bench --method paper`): exact joints sparse 0.0444 / 0.172 % →
 //!   0.0437 / 0.02 %, dense 0.0352 / 0.184 % → 0.0344 / 0.04 %; σ = 3 cm sparse 0.0532 /
