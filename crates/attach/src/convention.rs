@@ -129,7 +129,7 @@ pub struct BoundaryConvention {
 pub struct LabelledBody<'a> {
     /// The surface.
     pub mesh: &'a TriMesh,
-    /// Its skeleton (as [`attach`] takes it).
+    /// Its skeleton (as [`attach`](crate::attach) takes it).
     pub skeleton: &'a Skeleton,
     /// The reference segment of every vertex.
     pub labels: &'a [Segment],
@@ -256,7 +256,7 @@ impl BoundaryConvention {
     /// segment get no rule.
     ///
     /// Errors: [`AttachError::InvalidOption`] when a body's labels do not match its mesh or no
-    /// boundary could be learned; any error of [`attach`].
+    /// boundary could be learned; any error of [`attach`](crate::attach).
     pub fn fit(
         bodies: &[LabelledBody<'_>],
         options: &AttachOptions,
