@@ -237,8 +237,8 @@ fn evaluate(plane: &[f64; 4], u: [f64; 3]) -> f64 {
 
 impl BoundaryConvention {
     /// MakeHuman's skinning convention (the `game_engine` rig's dominant bone per vertex mapped
-    /// to the 17 segments, as tools/synth's reference labels), fitted on the rest pose of three
-    /// MakeHuman shapes.
+    /// to the 17 segments, as tools/synth's reference labels), fitted on three MakeHuman shapes
+    /// in the rest pose and twelve other poses (tools/synth `convention`, `TRAINING_POSES`).
     pub fn makehuman() -> Self {
         BoundaryConvention {
             rules: crate::convention_makehuman::RULES

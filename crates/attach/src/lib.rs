@@ -71,10 +71,10 @@
 //!    guard runs again afterwards with that band ([`Diagnostics::convention_changes`] counts
 //!    what moved). [`BoundaryConvention::fit`] learns a
 //!    convention from any labelled bodies; [`BoundaryConvention::makehuman`] is fitted on the
-//!    MakeHuman rig's skinning (tools/synth `convention`: rest pose of three shapes). Against
+//!    MakeHuman rig's skinning (tools/synth `convention`: three shapes in 13 poses). Against
 //!    those reference labels on 40 generated bodies (20 poses × 2 shapes, one shape not trained
-//!    on) it raises area agreement from 0.859 to 0.927 (exact joints), 0.816 to 0.845
-//!    (σ = 3 cm joints) and 0.870 / 0.867 to 0.922 / 0.919 (virtual-Kinect scans, ideal /
+//!    on) it raises area agreement from 0.859 to 0.932 (exact joints), 0.816 to 0.848
+//!    (σ = 3 cm joints) and 0.870 / 0.867 to 0.936 / 0.923 (virtual-Kinect scans, ideal /
 //!    Kinect realism), with mirrored area unchanged (0 exact, ≤ 0.0003 noisy). It is off by
 //!    default because the correspondence pipeline measured no gain from it (see
 //!    [`BoundaryConvention`]).
@@ -118,8 +118,9 @@
 //! *created* mirrored area (noisy 0.0019 → 0.0126) and lowered agreement.
 //!
 //! # What limits agreement with noisy joints (measured 2026-12-02)
-//! On the 40 generated bodies with the MakeHuman convention, σ = 3 cm joints (10 % on the
-//! surface) give 0.845 strict agreement against 0.927 with exact joints. Taking parts of the
+//! On the 40 generated bodies with the MakeHuman convention (the table trained on the rest pose
+//! only, as of session 5), σ = 3 cm joints (10 % on the surface) give 0.845 strict agreement
+//! against 0.927 with exact joints (0.848 / 0.932 with the posed-trained table). Taking parts of the
 //! noise away in the test harness (tools/synth/tests/attach_labels.rs, the noisy skeleton with
 //! one component replaced by the exact value; harness edits not kept) shows where the 8 % go:
 //!

@@ -1,6 +1,6 @@
 //! Issue 5 acceptance: symcorr-attach's segment labels, with the MakeHuman boundary convention
-//! ([`BoundaryConvention::makehuman`], fitted on the rest pose of three shapes, only one of
-//! them here), against the rig's reference labels
+//! ([`BoundaryConvention::makehuman`], fitted on three shapes, only one of them here, in the
+//! rest pose and twelve poses not used here), against the rig's reference labels
 //! ([`symcorr_synth::mapping::reference_labels`]) on bodies generated here (20 poses × 2 shapes,
 //! exact and noisy joints) and on the committed virtual-Kinect scans.
 //!
@@ -463,12 +463,12 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
         .collect()
 }
 
-// Measured (2 shapes × 20 poses, 2026-12-01) with the MakeHuman boundary convention
-// ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23): exact joints
-// strict mean 0.927 / worst 0.882 (0.859 / 0.828), 0.926 on the 39 bodies outside the
-// convention's training set; boundary-tolerant (3 cm) mean 0.965 / worst 0.926 (0.914 / 0.884);
-// mirrored area 0 (0); anatomical cross-side area ≤ 0.0006 (≤ 0.0018), none beyond 3 cm.
-// Noisy joints strict mean 0.845 / worst 0.784 (0.816 / 0.757), tolerant 0.903 / 0.843
+// Measured (2 shapes × 20 poses, 2026-12-02) with the MakeHuman boundary convention trained on
+// posed bodies ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23):
+// exact joints strict mean 0.932 / worst 0.893 (0.859 / 0.828), 0.931 on the 39 bodies outside
+// the convention's training set; boundary-tolerant (3 cm) mean 0.969 / worst 0.938 (0.914 /
+// 0.884); mirrored area 0 (0); cross-side area beyond 3 cm of the midline 0.
+// Noisy joints strict mean 0.848 / worst 0.789 (0.816 / 0.757), tolerant 0.907 / 0.852
 // (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
 // area beyond 3 cm of the midline. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
 // strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
@@ -484,13 +484,13 @@ fn exact_joints_40_bodies() {
     // Body 0 (the base shape at rest) is one of the convention's training bodies.
     let held = summary("exact, held out of the convention's training", &s[1..]);
     assert!(
-        held.mean >= 0.923,
+        held.mean >= 0.928,
         "held-out mean strict agreement {}",
         held.mean
     );
-    assert!(r.mean >= 0.924, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.875, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.96, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mean >= 0.929, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.885, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.965, "mean tolerant agreement {}", r.tmean);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert!(r.cross_anat <= 0.0025, "cross-side area {}", r.cross_anat);
     assert!(
@@ -511,9 +511,9 @@ fn noisy_joints_40_bodies() {
     };
     let s = run_bodies(Some(noise));
     let r = summary("noisy", &s);
-    assert!(r.mean >= 0.84, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.775, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.895, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mean >= 0.845, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.785, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.90, "mean tolerant agreement {}", r.tmean);
     assert!(r.mirrored <= 0.0025, "mirrored area {}", r.mirrored);
     assert!(r.cross_anat <= 0.005, "cross-side area {}", r.cross_anat);
     assert!(
@@ -567,8 +567,9 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured with the MakeHuman convention (2026-12-02): strict 0.922 (ideal scan) / 0.919 (Kinect
-// realism), tolerant 0.965 / 0.975, no mirrored or cross-side area (joint planes: 0.870 / 0.867,
+// Measured with the MakeHuman convention trained on posed bodies (2026-12-02): strict 0.936
+// (ideal scan) / 0.923 (Kinect realism), tolerant 0.985 / 0.984 (rest-pose training: 0.922 /
+// 0.919, 0.965 / 0.975), no mirrored or cross-side area (joint planes: 0.870 / 0.867,
 // 0.946 / 0.949). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
 // both. Before refinement refused circles far from the joint (2026-12-01) the realistic scan
 // scored 0.894: its left wrist, hidden against the hip, was moved 12 cm onto the hip and 3 % of
@@ -591,8 +592,8 @@ fn virtual_kinect_scans() {
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
     let r = summary("scans", &s);
-    assert!(r.worst >= 0.91, "worst strict agreement {}", r.worst);
-    assert!(r.tworst >= 0.96, "worst tolerant agreement {}", r.tworst);
+    assert!(r.worst >= 0.915, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.975, "worst tolerant agreement {}", r.tworst);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }
