@@ -101,8 +101,10 @@ pub struct BoundaryRule {
 /// (mean error, flip rate): articulated dense 0.00246 / 0 vs 0.00255 / 0; with σ = 3 cm joints
 /// 0.0124 / 0.0014 % vs 0.0126 / 0.0014 %; single-view scans 0.0185 / 0.053 % vs 0.0188 /
 /// 0.052 %; paper pipeline sparse 0.0437 / 0.023 % vs 0.0438 / 0.021 %, noisy 0.0524 / 0.25 %
-/// vs 0.0522 / 0.27 %. What matters there is that template and target get the same boundaries,
-/// not where they are.
+/// vs 0.0522 / 0.27 %. Re-measured 2026-12-02 with the table trained on posed bodies
+/// (articulated, dense, one session): 0.00246 / 0 vs 0.00249 / 0; noisy 0.0124 / 0.0014 % vs
+/// 0.0126 / 0.0014 %; scans 0.0184 / 0.053 % vs 0.0184 / 0.051 %. What matters there is that
+/// template and target get the same boundaries, not where they are.
 ///
 /// ```
 /// use symcorr_attach::{attach, AttachOptions, BoundaryConvention};
