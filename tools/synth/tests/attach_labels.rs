@@ -467,15 +467,15 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
 // posed bodies ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23):
 // exact joints strict mean 0.932 / worst 0.893 (0.859 / 0.828), 0.931 on the 39 bodies outside
 // the convention's training set; boundary-tolerant (3 cm) mean 0.969 / worst 0.938 (0.914 /
-// 0.884); mirrored area 0 (0); cross-side area beyond 3 cm of the midline 0.
+// 0.884); mirrored area 0 (0); anatomical cross-side area 0 (≤ 0.0018).
 // Noisy joints strict mean 0.848 / worst 0.789 (0.816 / 0.757), tolerant 0.907 / 0.852
 // (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
 // area beyond 3 cm of the midline. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
 // strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
 // noisy joints are NOT reached. The remaining confusion is printed with ATTACH_EVAL_VERBOSE=1
 // and listed in symcorr-attach's docs; its section "What limits agreement with noisy joints"
-// splits the noisy loss by joint-noise component (along-bone positions and the hips). The assertions guard the measured levels (a little below
-// them).
+// splits the noisy loss by joint-noise component (along-bone positions and the hips). The
+// assertions guard the measured levels (a little below them).
 
 #[test]
 fn exact_joints_40_bodies() {
