@@ -270,10 +270,6 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
 /// and noisy, label exactly as without it).
 const OFF_CIRCLE: f64 = 0.05;
 
-fn length_2d(c: [f64; 2]) -> f64 {
-    (c[0] * c[0] + c[1] * c[1]).sqrt()
-}
-
 /// Two unit vectors spanning the plane perpendicular to `n`.
 fn plane_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let t = if n[0].abs() < 0.9 {
@@ -392,7 +388,7 @@ pub(crate) fn refine(
                 // wrist is hidden). Measured on the Kinect-realism scan: a circle of 5 mm radius
                 // fitted to 7 hip pixels 13 cm from the left wrist moved the wrist 12 cm onto
                 // the hip.
-                if r > radius || length_2d(c) > r + OFF_CIRCLE * height {
+                if r > radius || c[0].hypot(c[1]) > r + OFF_CIRCLE * height {
                     continue;
                 }
                 add(x, add(scale(e1, c[0]), scale(e2, c[1])))

@@ -48,18 +48,18 @@ pub const TRAINING_POSES: [&str; 12] = [
 /// Fits the convention on the training bodies with [`AttachOptions::default`].
 pub fn fit_makehuman(model: &Model) -> Result<BoundaryConvention> {
     let base = model.body(&Shape::default())?;
-    let labels: Vec<Segment> = reference_labels(&base)?
-        .into_iter()
-        .map(|l| Segment::from_index(l as usize))
+    let raw = reference_labels(&base)?;
+    let labels: Vec<Segment> = raw
+        .iter()
+        .map(|&l| Segment::from_index(l as usize))
         .collect::<Option<_>>()
         .ok_or_else(|| SynthError::Invalid("reference label out of range".into()))?;
-    let mut bodies = Vec::new();
-    let raw: Vec<u8> = labels.iter().map(|s| s.index() as u8).collect();
     let check = SelfIntersectionCheck::new(&base.rest.triangles, &raw);
     let mut poses = vec![Pose::default()];
     for name in TRAINING_POSES {
         poses.push(resolve_pose(model, &base, &check, name)?);
     }
+    let mut bodies = Vec::new();
     for s in TRAINING_SHAPES {
         let body = model.body(&Shape::parse(s)?)?;
         for pose in &poses {

@@ -174,10 +174,10 @@ fn bodies() -> &'static Vec<Body> {
 /// Debug output for offline analysis: `NAME.txt` with `x y z reference got` per vertex and
 /// `NAME.joints.txt` with the input and refined joints.
 fn dump(dir: &Path, name: &str, m: &TriMesh, joints: &Skeleton, a: &symcorr_attach::Attachment) {
-    dump_labels(dir, name, m, joints, a, reference(), |_| true);
+    dump_labels(dir, name, m, joints, a, |v| Some(reference()[v]));
 }
 
-/// Writes `NAME.txt` (per vertex: position, reference segment or −1 where `known` is false,
+/// Writes `NAME.txt` (per vertex: position, reference segment or −1 where it is unknown,
 /// label, 17 segment weights), `NAME.joints.txt` (given and refined joints) and
 /// `NAME.tris.txt` for offline analysis.
 fn dump_labels(
@@ -186,17 +186,12 @@ fn dump_labels(
     m: &TriMesh,
     joints: &Skeleton,
     a: &symcorr_attach::Attachment,
-    reference: &[Segment],
-    known: impl Fn(usize) -> bool,
+    reference: impl Fn(usize) -> Option<Segment>,
 ) {
     use std::fmt::Write;
     let mut t = String::new();
     for (v, p) in m.positions.iter().enumerate() {
-        let r = if known(v) {
-            reference[v].index() as i64
-        } else {
-            -1
-        };
+        let r = reference(v).map_or(-1, |s| s.index() as i64);
         write!(t, "{} {} {} {r} {}", p[0], p[1], p[2], a.labels[v].index()).unwrap();
         for w in a.weights.segment_weights(v) {
             write!(t, " {w:.4}").unwrap();
@@ -581,12 +576,8 @@ fn virtual_kinect_scans() {
         let (mesh, joints, want) = scan_case(dir);
         let a = attach(&mesh, &joints, &rig_like()).unwrap();
         if let Some(out) = std::env::var_os("ATTACH_EVAL_DUMP") {
-            let want_ids: Vec<Segment> = want
-                .iter()
-                .map(|w| w.map_or(Segment::Pelvis, |t| t.segment))
-                .collect();
-            dump_labels(Path::new(&out), dir, &mesh, &joints, &a, &want_ids, |v| {
-                want[v].is_some()
+            dump_labels(Path::new(&out), dir, &mesh, &joints, &a, |v| {
+                want[v].map(|t| t.segment)
             });
         }
         s.push(score(dir, &mesh, &a.labels, &want, None));
