@@ -50,7 +50,7 @@
 //! the worst fit was 12 cm off on asymmetric poses and noisy mirrored area rose to 0.7 %.
 
 use crate::geom::unit;
-use crate::planes::{segment_direction, shared_joint, side, side_weights, JointPlane};
+use crate::planes::{segment_direction, shared_joint, side_weights, JointPlane};
 use crate::{attach_with_usable, AttachError, AttachOptions, Joint, Segment, Skeleton};
 use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
 use symcorr_mesh::TriMesh;
@@ -194,7 +194,7 @@ impl Frame {
         // points up), so the frame of a forearm reaching forward turns with it instead of
         // being spun by noise where facing ∥ e1. Near the opposite direction (an arm straight
         // overhead) that rotation is undefined: facing projected as is.
-        let rest = if side(a) != 0 || side(b) != 0 {
+        let rest = if a.side() != 0 || b.side() != 0 {
             scale(up, -1.0)
         } else {
             up
@@ -448,9 +448,9 @@ pub(crate) fn apply(
                 } else {
                     rule.a
                 };
-                let s = side(new);
+                let s = new.side();
                 if s != 0 {
-                    let was = side(before[v]);
+                    let was = before[v].side();
                     if was == -s {
                         continue;
                     }

@@ -752,7 +752,7 @@ fn side_first_argmax(s: &[f64; 17]) -> Segment {
         return b;
     }
     let (left, right) = planes::side_weights(s);
-    let (own, other) = if planes::side(b) == 1 {
+    let (own, other) = if b.side() == 1 {
         (left, right)
     } else {
         (right, left)

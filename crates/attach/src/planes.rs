@@ -143,15 +143,6 @@ pub(crate) fn apply(
     }
 }
 
-/// The side of a segment: `1` left, `-1` right, `0` midline.
-pub(crate) fn side(s: Segment) -> i32 {
-    match s.mirror().index().cmp(&s.index()) {
-        std::cmp::Ordering::Greater => 1,
-        std::cmp::Ordering::Less => -1,
-        std::cmp::Ordering::Equal => 0,
-    }
-}
-
 /// The skeleton's left/right asymmetry where a body is symmetric whatever its pose: the hip
 /// centre's offset from the hips' midpoint along the hip line, and the length differences of
 /// the hip, thigh, shin, upper-arm and forearm bones of the two sides. Returns the root mean
@@ -183,7 +174,7 @@ pub(crate) fn joint_asymmetry(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option
 pub(crate) fn side_weights(w: &[f64; 17]) -> (f64, f64) {
     let (mut l, mut r) = (0.0, 0.0);
     for s in Segment::ALL {
-        match side(s) {
+        match s.side() {
             1 => l += w[s.index()],
             -1 => r += w[s.index()],
             _ => {}
@@ -194,7 +185,7 @@ pub(crate) fn side_weights(w: &[f64; 17]) -> (f64, f64) {
 
 /// True if two side segments lie on the same side of the body.
 pub(crate) fn same_side(a: Segment, b: Segment) -> bool {
-    side(a) == side(b)
+    a.side() == b.side()
 }
 
 /// True for the segments of an arm chain (clavicle, upper arm, forearm).
@@ -223,7 +214,7 @@ fn root(s: Segment) -> Segment {
 pub(crate) fn keep_limb_sides(heat_labels: &[Segment], labels: &mut [Segment]) -> usize {
     let mut changed = 0;
     for (h, l) in heat_labels.iter().zip(labels.iter_mut()) {
-        let (sh, sl) = (side(*h), side(*l));
+        let (sh, sl) = (h.side(), l.side());
         if sh != 0 && sl == -sh && root(*l) != *l {
             *l = root(*l);
             changed += 1;

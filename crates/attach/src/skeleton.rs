@@ -230,6 +230,23 @@ impl Segment {
         }
     }
 
+    /// The side of the body this segment is on: `1` left, `-1` right, `0` a midline segment
+    /// (pelvis, torso, head). A product of two sides is negative exactly for a left/right pair.
+    ///
+    /// ```
+    /// use symcorr_attach::Segment;
+    /// assert_eq!(Segment::ThighLeft.side(), 1);
+    /// assert_eq!(Segment::ThighRight.side(), -1);
+    /// assert_eq!(Segment::Torso.side(), 0);
+    /// ```
+    pub fn side(self) -> i8 {
+        match self.mirror().index().cmp(&self.index()) {
+            std::cmp::Ordering::Greater => 1,
+            std::cmp::Ordering::Less => -1,
+            std::cmp::Ordering::Equal => 0,
+        }
+    }
+
     /// The skeleton bones (parent joint → child joint) that make up this segment. Every segment
     /// has one bone except the forearms, which are elbow→wrist plus wrist→hand.
     pub fn bones(self) -> &'static [(Joint, Joint)] {
@@ -336,6 +353,8 @@ mod tests {
             assert_eq!(s.mirror().mirror(), s);
             let l = s.name().ends_with("_left");
             let r = s.name().ends_with("_right");
+            assert_eq!(s.side(), i8::from(l) - i8::from(r), "{}", s.name());
+            assert_eq!(s.mirror().side(), -s.side());
             if l || r {
                 assert_ne!(s.mirror(), s);
                 assert_eq!(s.mirror().name().ends_with("_left"), r);

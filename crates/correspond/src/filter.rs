@@ -66,7 +66,7 @@ pub fn skeleton_filter(
         let same = if present[sp.index()] {
             sq == sp
         } else {
-            side(sp) * side(sq) >= 0
+            sp.side() * sq.side() >= 0
         };
         same && halves.is_none_or(|(hp, hq)| hp[p as usize] * hq[q as usize] >= 0)
     };
@@ -221,16 +221,6 @@ pub(crate) fn is_midline(s: Segment) -> bool {
 }
 
 /// `+1` for a segment on the subject's left, `-1` on the right, `0` on the midline.
-fn side(s: Segment) -> i8 {
-    if s.mirror() == s {
-        0
-    } else if s.name().ends_with("_left") {
-        1
-    } else {
-        -1
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -53,19 +53,8 @@ pub fn adjacent_segments(s: Segment) -> Vec<Segment> {
         .collect()
 }
 
-/// `+1` left segment, `-1` right segment, `0` midline.
-pub(crate) fn segment_side(s: Segment) -> i8 {
-    if s.mirror() == s {
-        0
-    } else if s.name().ends_with("_left") {
-        1
-    } else {
-        -1
-    }
-}
-
 fn vertex_side(s: Segment, half: i8) -> i8 {
-    match segment_side(s) {
+    match s.side() {
         0 => half.signum(),
         x => x,
     }
@@ -148,11 +137,7 @@ impl SegmentPools {
         let mut groups = Vec::with_capacity(tl.len());
         let mut members: Vec<Vec<u32>> = Vec::new();
         for (v, &s) in tl.iter().enumerate() {
-            let h = if segment_side(s) == 0 {
-                half_of(th, v)
-            } else {
-                0
-            };
+            let h = if s.side() == 0 { half_of(th, v) } else { 0 };
             let k = key(s, h);
             if group_of_key[k] == u32::MAX {
                 group_of_key[k] = keys.len() as u32;
@@ -850,17 +835,14 @@ mod tests {
                 .collect();
             assert!(got.contains(&s), "{s:?}");
             for &o in &got {
-                assert!(
-                    segment_side(o) * segment_side(s) >= 0,
-                    "{s:?} pool holds {o:?}"
-                );
+                assert!(o.side() * s.side() >= 0, "{s:?} pool holds {o:?}");
                 assert!(
                     o == s || adjacent_segments(s).contains(&o),
                     "{s:?} pool holds {o:?}"
                 );
             }
             for o in adjacent_segments(s) {
-                if segment_side(o) * segment_side(s) >= 0 {
+                if o.side() * s.side() >= 0 {
                     assert!(got.contains(&o), "{s:?} pool lacks {o:?}");
                 }
             }

@@ -81,17 +81,6 @@ fn rest_side() -> &'static Vec<f64> {
     })
 }
 
-/// Which side a segment belongs to: −1 right, 0 midline, +1 left.
-fn side_of(s: Segment) -> i32 {
-    if s.name().ends_with("_left") {
-        1
-    } else if s.name().ends_with("_right") {
-        -1
-    } else {
-        0
-    }
-}
-
 /// Vertices closer than this to the rest-pose plane of symmetry have no anatomical side in the
 /// anatomical cross-side figure (metres).
 const MIDLINE_M: f64 = 0.01;
@@ -270,8 +259,8 @@ fn score(
         let g = got[v];
         total += area[v];
         conf[w.index()][g.index()] += area[v];
-        let gs = side_of(g);
-        if gs != 0 && side_of(w) != gs {
+        let gs = g.side();
+        if gs != 0 && w.side() != gs {
             cross_ref += area[v];
         }
         if gs != 0 && t.side * f64::from(gs) < -MIDLINE_M {
