@@ -345,8 +345,9 @@ impl FrameAlignment {
     }
 }
 
-/// Result of the left/right handedness check.
-#[derive(Debug, Clone, PartialEq)]
+/// Result of the left/right handedness check. `Default` is the check not run: no evidence,
+/// nothing swapped.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct MirrorCheck {
     /// Mean cosine between the ankle→foot joints and the torso frame's facing direction
     /// (`None` without usable feet).
@@ -608,15 +609,7 @@ pub(crate) fn attach_with_usable(
     lap("align", &mut clock);
     // 3. Mirror check.
     let mut usable = rep.usable;
-    let mut mirror = MirrorCheck {
-        skeleton_evidence: None,
-        mesh_evidence: None,
-        knee_evidence: None,
-        mesh_offset: None,
-        mesh_vertices: 0,
-        facing: None,
-        swapped: false,
-    };
+    let mut mirror = MirrorCheck::default();
     if options.mirror != MirrorPolicy::Ignore {
         mirror = refine::mirror_check(mesh, &positions, &usable, height);
         let evidence = mirror.evidence();

@@ -44,15 +44,7 @@ pub(crate) fn mirror_check(
     height: f64,
 ) -> MirrorCheck {
     use Joint as J;
-    let mut out = MirrorCheck {
-        skeleton_evidence: None,
-        mesh_evidence: None,
-        knee_evidence: None,
-        mesh_offset: None,
-        mesh_vertices: 0,
-        facing: None,
-        swapped: false,
-    };
+    let mut out = MirrorCheck::default();
     let Some([_, left, facing]) = torso_frame(p, usable) else {
         return out;
     };

@@ -220,7 +220,6 @@ pub(crate) fn is_midline(s: Segment) -> bool {
     matches!(s, Segment::Pelvis | Segment::Torso | Segment::Head)
 }
 
-/// `+1` for a segment on the subject's left, `-1` on the right, `0` on the midline.
 #[cfg(test)]
 mod tests {
     use super::*;
