@@ -48,6 +48,21 @@
 //! surface's reflective symmetry (trimmed reflection ICP within 0.15 heights, a coarse offset
 //! search first): the median plane offset with σ = 3 cm joints fell from 1.9 to 0.5 cm, but
 //! the worst fit was 12 cm off on asymmetric poses and noisy mirrored area rose to 0.7 %.
+//!
+//! Tried and dropped in session 7 (40 test bodies and the two scans, strict agreement):
+//! * **Bone heat as a fifth feature** of every rule, `ln((w_b + ε)/(w_a + ε))` clamped, fitted
+//!   jointly with the plane (table regenerated): exact 0.932 → 0.938 (worst 0.893 → 0.911),
+//!   σ = 3 cm 0.848 → 0.856, but the Kinect-realism scan 0.923 → 0.913 and the ideal one
+//!   0.936 → 0.931 (ε = 0.01, clamp ±5; ε = 0.05, ±3: 0.938 / 0.857 / 0.912). On a
+//!   single-view scan bone heat diffuses over an open surface with half of each limb missing,
+//!   so the learned heat weights do not transfer (thigh/shin and hip/pelvis confusions grew).
+//!   Neither exact nor noisy reaches its target with it, and the scans are the realistic case.
+//! * **Pelvis and hips by the nearest of the three pelvic bones** (hip centre → spine, → left
+//!   hip, → right hip; the rule tools/synth uses to split the rig's `Root`/`pelvis` vertices),
+//!   applied to every vertex labelled pelvis or hip after the rules: exact 0.932 → 0.925, with
+//!   0.8 % of each side's area going pelvis → hip even on the rest pose. The reference pelvis
+//!   also holds the rig's `spine_01` vertices, which lie nearer the hip bones; that boundary
+//!   is a skinning one, not a distance one.
 
 use crate::geom::unit;
 use crate::planes::{segment_direction, shared_joint, side_weights, JointPlane};

@@ -170,6 +170,22 @@
 //!   but 12 flips; w = 0.5: 0.0423, 10 flips; k = 30, w = 1: 0.0398, 12 flips. Not kept (the
 //!   flip rate is what is open; the mean is already far under the paper's 0.083), but the
 //!   mean-error gain is worth having if the candidate stage is revisited.
+//!   Candidate-stage variants measured in session 7 (`examples/paper_flips`, 58 pairs, sparse,
+//!   exact joints, same build; base 0.0437 / 11 flips of 47,622), none kept: *filter first*
+//!   (the N nearest descriptors among the compatible target vertices instead of the survivors
+//!   of the N nearest overall; variant `f`) N = 5: 0.0472 / 8, N = 10: 0.0523 / 8 — the
+//!   crotch points gain a candidate near the truth, every other point gains bad ones;
+//!   *spatially diverse candidates* (skip a compatible vertex within ρ·√area of one already
+//!   taken; `x`) ρ = 0.02: 0.0541 / 15, 0.05: 0.0692 / 11, with filter first ρ = 0.03: 0.0596 /
+//!   9; *adaptive widening* (a point whose best eq. 8 gap exceeds τ gets the M nearest
+//!   compatible vertices; `g`, `w`) τ = 0.05, M = 50: 0.0441 / 16; τ = 0.03, M = 20: 0.0447 /
+//!   29; τ = 0.02, M = 20: 0.0463 / 44. More candidates let eq. 8's single scalar pick more
+//!   gross errors, as in session 1's N sweep. *si-HKS frequencies* (symcorr's
+//!   `PrepareOptions::si_hks`, harness env `SIHKS_FREQ`, `EIG`, `SIHKS_START`): 6 → 16:
+//!   0.0432 / 9 (σ = 3 cm joints 0.0524 / 117 → 0.0519 / 116 flips), 32: 0.0431 / 9, 16 with
+//!   100 eigenpairs: 0.0429 / 9, 16 with the window from τ = −10: 0.0472 / 25. A small gain on
+//!   both, not taken into the defaults because it moves every refined and paper figure for
+//!   two flips; the remaining flips are then 3–4 head, 4 thigh, 1 template label.
 //!   Whole benchmark with the skull plane of `symcorr::midline_halves` (release binary,
 //!   58 pairs each, `symcorr bench --method paper`): exact joints sparse 0.0444 / 0.172 % →
 //!   0.0437 / 0.02 %, dense 0.0352 / 0.184 % → 0.0344 / 0.04 %; σ = 3 cm sparse 0.0532 /

@@ -4,7 +4,12 @@
 //! `cargo run --release -p symcorr --example paper_flips -- DATASET [dense] [VARIANT,...]`
 //!
 //! Every mesh is prepared once; each variant of the matching options then runs on every pair
-//! and prints mean error and flip rate. For the first variant every flip is classified:
+//! and prints mean error and flip rate. A variant is parts joined by `+` (see `Rule` for the
+//! custom ones): `base`, `paper`, `noband`, `off`, `n<N>` candidates, `band<r>`, `lib` (the
+//! library's sagittal band), `f<N>` filter first, `x<ρ>` diverse candidates, `g<τ>` + `w<M>`
+//! adaptive widening, `a<δ>` axial band, `d`/`r`/`l`/`s`/`own`/`w` sagittal-rule variants.
+//! The environment variables `SIHKS_FREQ`, `SIHKS_START`, `SIHKS_END` and `EIG` change the
+//! si-HKS and the eigenpair count of the prepared meshes. For the first variant every flip is classified:
 //! * `tmpl_label`: the template point's attachment label differs from its reference label;
 //! * `target_label`: the target's attachment label at the true vertex differs from the
 //!   reference label (the filter cannot keep the true match);
@@ -153,6 +158,16 @@ struct Rule {
     /// Limbs: keep a candidate when its position along the segment's bone chain differs from
     /// the point's by at most this fraction of the chain.
     axial: Option<f64>,
+    /// Filter first: the N nearest descriptors among the *compatible* target vertices (same
+    /// segment and half), instead of the compatible survivors of the N nearest overall.
+    first: Option<usize>,
+    /// Spatially diverse candidates: walk the compatible target vertices by descriptor
+    /// distance and skip one within this distance (over √area) of a candidate already taken.
+    diverse: Option<f64>,
+    /// Adaptive widening: a point whose best eq. 8 gap exceeds this gets `widen` candidates.
+    gap: Option<f64>,
+    /// See `gap`.
+    widen: usize,
 }
 
 /// Position along the segment's chain (first joint → last joint), 0..1, per vertex (0 on
@@ -213,6 +228,14 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
                     r.axial = Some(x);
                 } else if let Some(x) = num("l") {
                     r.lambda = x;
+                } else if let Some(x) = num("f") {
+                    r.first = Some(x as usize);
+                } else if let Some(x) = num("x") {
+                    r.diverse = Some(x);
+                } else if let Some(x) = num("g") {
+                    r.gap = Some(x);
+                } else if let Some(x) = num("w") {
+                    r.widen = x as usize;
                 } else {
                     panic!("unknown variant part {part}");
                 }
@@ -226,6 +249,26 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
         }
     }
     (o, custom.then_some(r))
+}
+
+/// Every target vertex compatible with template point `p` (same segment, not the other
+/// half), nearest descriptor first.
+fn compatible_by_descriptor(
+    ta: &PreparedMesh,
+    tb: &PreparedMesh,
+    halves: (&[i8], &[i8]),
+    p: usize,
+) -> Vec<Candidate> {
+    let lp = ta.labels()[p];
+    let mut all: Vec<Candidate> = (0..tb.num_vertices())
+        .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0)
+        .map(|q| Candidate {
+            vertex: q as u32,
+            distance: ta.descriptors.distance(p, &tb.descriptors, q),
+        })
+        .collect();
+    all.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+    all
 }
 
 /// candidates → skeleton filter (halves) → sagittal rule → selection.
@@ -268,6 +311,40 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
         &ta.descriptors,
         &tb.descriptors,
     );
+    if r.first.is_some() || r.diverse.is_some() {
+        let n = r.first.or(o.candidates.nearest).unwrap_or(5);
+        let s = mb.p.area.sqrt();
+        let pos = &tb.mesh.positions;
+        use rayon::prelude::*;
+        cands = points
+            .par_iter()
+            .map(|&p| {
+                let all = compatible_by_descriptor(ta, tb, halves, p as usize);
+                let mut out: Vec<Candidate> = Vec::new();
+                for c in all {
+                    if out.len() == n {
+                        break;
+                    }
+                    if let Some(rad) = r.diverse {
+                        let x = pos[c.vertex as usize];
+                        let near = out.iter().any(|o| {
+                            let y = pos[o.vertex as usize];
+                            let d = ((x[0] - y[0]).powi(2)
+                                + (x[1] - y[1]).powi(2)
+                                + (x[2] - y[2]).powi(2))
+                            .sqrt();
+                            d < rad * s
+                        });
+                        if near {
+                            continue;
+                        }
+                    }
+                    out.push(c);
+                }
+                out
+            })
+            .collect();
+    }
     if r.libband {
         symcorr_correspond::sagittal_band(
             &mut cands,
@@ -278,6 +355,38 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             &ta.descriptors,
             &tb.descriptors,
         );
+    }
+    if let Some(tau) = r.gap {
+        let m = r.widen.max(1);
+        use rayon::prelude::*;
+        let widened: Vec<Option<Vec<Candidate>>> = cands
+            .par_iter()
+            .zip(points)
+            .map(|(list, &p)| {
+                let p = p as usize;
+                let dp = ta.profile[p];
+                let best = list
+                    .iter()
+                    .map(|c| (tb.profile[c.vertex as usize] - dp).abs())
+                    .fold(f64::INFINITY, f64::min);
+                if best <= tau {
+                    return None;
+                }
+                let mut all = compatible_by_descriptor(ta, tb, halves, p);
+                all.truncate(m);
+                Some(all)
+            })
+            .collect();
+        let mut count = 0;
+        for (list, w) in cands.iter_mut().zip(widened) {
+            if let Some(w) = w {
+                *list = w;
+                count += 1;
+            }
+        }
+        if std::env::var("GAPSTAT").is_ok() {
+            eprintln!("widened {count} of {}", points.len());
+        }
     }
     if let Some(delta) = r.axial {
         let (xa, xb) = (axial(ta), axial(tb));
@@ -387,7 +496,22 @@ fn main() {
     };
     let ds = Dataset::open(root, None).unwrap();
     let mirror = ds.mirror.clone().unwrap();
+    let mut prepare = symcorr::PrepareOptions::default();
+    let env = |k: &str| std::env::var(k).ok().and_then(|x| x.parse::<f64>().ok());
+    if let Some(x) = env("SIHKS_FREQ") {
+        prepare.si_hks.frequencies = x as usize;
+    }
+    if let Some(x) = env("SIHKS_START") {
+        prepare.si_hks.tau_start = x;
+    }
+    if let Some(x) = env("SIHKS_END") {
+        prepare.si_hks.tau_end = x;
+    }
+    if let Some(x) = env("EIG") {
+        prepare.eigenpairs = x as usize;
+    }
     let pipeline = Pipeline::new(PipelineOptions {
+        prepare,
         method: Method::Paper,
         mode: if dense {
             Mode::Dense
