@@ -231,7 +231,8 @@ impl Segment {
     }
 
     /// The side of the body this segment is on: `1` left, `-1` right, `0` a midline segment
-    /// (pelvis, torso, head). A product of two sides is negative exactly for a left/right pair.
+    /// (pelvis, torso, head). The product of two sides is negative exactly when one segment is
+    /// a left one and the other a right one.
     ///
     /// ```
     /// use symcorr_attach::Segment;

@@ -9,7 +9,9 @@
 //! library's sagittal band), `f<N>` filter first, `x<ρ>` diverse candidates, `g<τ>` + `w<M>`
 //! adaptive widening, `a<δ>` axial band, `d`/`r`/`l`/`s`/`own`/`w` sagittal-rule variants.
 //! The environment variables `SIHKS_FREQ`, `SIHKS_START`, `SIHKS_END` and `EIG` change the
-//! si-HKS and the eigenpair count of the prepared meshes. For the first variant every flip is classified:
+//! si-HKS and the eigenpair count of the prepared meshes.
+//!
+//! For the first variant every flip is classified:
 //! * `tmpl_label`: the template point's attachment label differs from its reference label;
 //! * `target_label`: the target's attachment label at the true vertex differs from the
 //!   reference label (the filter cannot keep the true match);
@@ -312,7 +314,10 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
         &tb.descriptors,
     );
     if r.first.is_some() || r.diverse.is_some() {
-        let n = r.first.or(o.candidates.nearest).unwrap_or(5);
+        let n = r
+            .first
+            .or(o.candidates.nearest)
+            .unwrap_or(symcorr_correspond::DEFAULT_NEAREST);
         let s = mb.p.area.sqrt();
         let pos = &tb.mesh.positions;
         use rayon::prelude::*;
@@ -328,12 +333,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                     if let Some(rad) = r.diverse {
                         let x = pos[c.vertex as usize];
                         let near = out.iter().any(|o| {
-                            let y = pos[o.vertex as usize];
-                            let d = ((x[0] - y[0]).powi(2)
-                                + (x[1] - y[1]).powi(2)
-                                + (x[2] - y[2]).powi(2))
-                            .sqrt();
-                            d < rad * s
+                            symcorr_mesh::geometry::dist(x, pos[o.vertex as usize]) < rad * s
                         });
                         if near {
                             continue;
@@ -377,15 +377,10 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                 Some(all)
             })
             .collect();
-        let mut count = 0;
         for (list, w) in cands.iter_mut().zip(widened) {
             if let Some(w) = w {
                 *list = w;
-                count += 1;
             }
-        }
-        if std::env::var("GAPSTAT").is_ok() {
-            eprintln!("widened {count} of {}", points.len());
         }
     }
     if let Some(delta) = r.axial {
