@@ -179,8 +179,11 @@
 //!   taken; `x`) ρ = 0.02: 0.0541 / 15, 0.05: 0.0692 / 11, with filter first ρ = 0.03: 0.0596 /
 //!   9; *adaptive widening* (a point whose best eq. 8 gap exceeds τ gets the M nearest
 //!   compatible vertices; `g`, `w`) τ = 0.05, M = 50: 0.0441 / 16; τ = 0.03, M = 20: 0.0447 /
-//!   29; τ = 0.02, M = 20: 0.0463 / 44. More candidates let eq. 8's single scalar pick more
-//!   gross errors, as in session 1's N sweep. *si-HKS frequencies* (symcorr's
+//!   29; τ = 0.02, M = 20: 0.0463 / 44; *reverse nearest neighbours* (keep `q` only if `p` is
+//!   among the `K` template descriptors nearest `q`, against hubs; `k`) K = 20 / 50 / 200:
+//!   0.0434–0.0437 / 11 (at K = 20 the same segments as the base); with 20 raw candidates
+//!   K = 50 / 200: 0.0512 / 10, 0.0517 / 8. More candidates let eq. 8's single scalar pick
+//!   more gross errors, as in session 1's N sweep. *si-HKS frequencies* (symcorr's
 //!   `PrepareOptions::si_hks`, harness env `SIHKS_FREQ`, `EIG`, `SIHKS_START`): 6 → 16:
 //!   0.0432 / 9 (σ = 3 cm joints 0.0524 / 117 → 0.0519 / 116 flips), 32: 0.0431 / 9, 16 with
 //!   100 eigenpairs: 0.0429 / 9, 16 with the window from τ = −10: 0.0472 / 25. A small gain on

@@ -7,7 +7,7 @@
 //! and prints mean error and flip rate. A variant is parts joined by `+` (see `Rule` for the
 //! custom ones): `base`, `paper`, `noband`, `off`, `n<N>` candidates, `band<r>`, `lib` (the
 //! library's sagittal band), `f<N>` filter first, `x<ρ>` diverse candidates, `g<τ>` + `w<M>`
-//! adaptive widening, `a<δ>` axial band, `d`/`r`/`l`/`s`/`own`/`w` sagittal-rule variants.
+//! adaptive widening, `k<K>` reverse nearest neighbours, `a<δ>` axial band, `d`/`r`/`l`/`s`/`own`/`w` sagittal-rule variants.
 //! The environment variables `SIHKS_FREQ`, `SIHKS_START`, `SIHKS_END` and `EIG` change the
 //! si-HKS and the eigenpair count of the prepared meshes.
 //!
@@ -170,6 +170,10 @@ struct Rule {
     gap: Option<f64>,
     /// See `gap`.
     widen: usize,
+    /// Reverse nearest neighbours: keep a candidate `q` of `p` only if `p` is among the `k`
+    /// template vertices nearest `q` in descriptor space (hubs are near many points but have
+    /// only `k` reverse neighbours); a point whose candidates all fail keeps them.
+    reverse: Option<usize>,
 }
 
 /// Position along the segment's chain (first joint → last joint), 0..1, per vertex (0 on
@@ -238,6 +242,8 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
                     r.gap = Some(x);
                 } else if let Some(x) = num("w") {
                     r.widen = x as usize;
+                } else if let Some(x) = num("k") {
+                    r.reverse = Some(x as usize);
                 } else {
                     panic!("unknown variant part {part}");
                 }
@@ -355,6 +361,29 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             &ta.descriptors,
             &tb.descriptors,
         );
+    }
+    if let Some(k) = r.reverse {
+        let all: Vec<u32> = (0..tb.num_vertices() as u32).collect();
+        let back = candidates(
+            &tb.descriptors,
+            &ta.descriptors,
+            &all,
+            &symcorr_correspond::CandidateOptions {
+                nearest: Some(k),
+                threshold: None,
+            },
+        )
+        .unwrap();
+        for (list, &p) in cands.iter_mut().zip(points) {
+            let kept: Vec<Candidate> = list
+                .iter()
+                .copied()
+                .filter(|c| back[c.vertex as usize].iter().any(|b| b.vertex == p))
+                .collect();
+            if !kept.is_empty() {
+                *list = kept;
+            }
+        }
     }
     if let Some(tau) = r.gap {
         let m = r.widen.max(1);
