@@ -63,7 +63,8 @@
 //! 8. **Learned boundaries** (optional, [`AttachOptions::convention`]): a
 //!    [`BoundaryConvention`] replaces each joint plane by a plane learned from bodies labelled
 //!    in a rig's convention, in a frame that moves with the skeleton (the joint, the bisector
-//!    normal, the torso's facing direction; trunk length as unit). Sides stay bone heat's: the
+//!    normal, the torso's facing direction; trunk length as unit), bent by bone heat's vote
+//!    between the two segments. Sides stay bone heat's: the
 //!    two left/right twin planes are never learned, no rule moves a vertex across the body, a
 //!    midline vertex takes a side label only with a clear bone-heat side and outside a band
 //!    around the left/right plane whose width follows the joints' noise (measured as the
@@ -71,11 +72,12 @@
 //!    guard runs again afterwards with that band ([`Diagnostics::convention_changes`] counts
 //!    what moved). [`BoundaryConvention::fit`] learns a
 //!    convention from any labelled bodies; [`BoundaryConvention::makehuman`] is fitted on the
-//!    MakeHuman rig's skinning (tools/synth `convention`: three shapes in 13 poses). Against
-//!    those reference labels on 40 generated bodies (20 poses × 2 shapes, one shape not trained
-//!    on) it raises area agreement from 0.859 to 0.932 (exact joints), 0.816 to 0.848
-//!    (σ = 3 cm joints) and 0.870 / 0.867 to 0.936 / 0.923 (virtual-Kinect scans, ideal /
-//!    Kinect realism), with mirrored area unchanged (0 exact, ≤ 0.0003 noisy). It is off by
+//!    MakeHuman rig's skinning (tools/synth `convention`: three shapes in 13 poses, each body
+//!    also as a single-view scan). Against those reference labels on 40 generated bodies
+//!    (20 poses × 2 shapes, one shape not trained on) it raises area agreement from 0.859 to
+//!    0.937 (exact joints), 0.816 to 0.856 (σ = 3 cm joints) and 0.870 / 0.867 to 0.950 /
+//!    0.948 (virtual-Kinect scans, ideal / Kinect realism), with mirrored area unchanged (0
+//!    exact, ≤ 0.0003 noisy). It is off by
 //!    default because the correspondence pipeline measured no gain from it (see
 //!    [`BoundaryConvention`]).
 //!
@@ -120,7 +122,8 @@
 //! # What limits agreement with noisy joints (measured 2026-12-02)
 //! On the 40 generated bodies with the MakeHuman convention (the table trained on the rest pose
 //! only, as of session 5), σ = 3 cm joints (10 % on the surface) give 0.845 strict agreement
-//! against 0.927 with exact joints (0.848 / 0.932 with the posed-trained table). Taking parts of the
+//! against 0.927 with exact joints (0.848 / 0.932 with the posed-trained table of session 6,
+//! 0.856 / 0.937 with session 7's heat vote and scans). Taking parts of the
 //! noise away in the test harness (tools/synth/tests/attach_labels.rs, the noisy skeleton with
 //! one component replaced by the exact value; harness edits not kept) shows where the 8 % go:
 //!

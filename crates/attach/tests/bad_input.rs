@@ -197,7 +197,7 @@ fn a_malformed_boundary_convention_is_an_error() {
             rule(
                 Segment::UpperArmLeft,
                 Segment::ForearmLeft,
-                [f64::NAN, 0.0, 0.0, 0.0],
+                [f64::NAN, 0.0, 0.0, 0.0, 0.0],
             ),
             true,
         ),
@@ -205,12 +205,16 @@ fn a_malformed_boundary_convention_is_an_error() {
             rule(
                 Segment::ForearmLeft,
                 Segment::ForearmLeft,
-                [1.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0],
             ),
             true,
         ),
         (
-            rule(Segment::HipLeft, Segment::HipRight, [1.0, 0.0, 0.0, 0.0]),
+            rule(
+                Segment::HipLeft,
+                Segment::HipRight,
+                [1.0, 0.0, 0.0, 0.0, 0.0],
+            ),
             true,
         ),
         // A well-formed rule, but joint planes are off: the convention would be ignored.
@@ -218,7 +222,7 @@ fn a_malformed_boundary_convention_is_an_error() {
             rule(
                 Segment::UpperArmLeft,
                 Segment::ForearmLeft,
-                [1.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0],
             ),
             false,
         ),
@@ -242,7 +246,7 @@ fn a_malformed_boundary_convention_is_an_error() {
         convention: Some(rule(
             Segment::UpperArmLeft,
             Segment::ForearmLeft,
-            [1.0, 0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0, 0.0],
         )),
         ..AttachOptions::default()
     };

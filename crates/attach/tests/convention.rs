@@ -43,11 +43,12 @@ fn a_shifted_elbow_boundary_is_learned() {
         .count();
     assert!(moved > 20, "the shift must move vertices ({moved})");
 
+    let known: Vec<Option<Segment>> = reference.iter().copied().map(Some).collect();
     let conv = BoundaryConvention::fit(
         &[LabelledBody {
             mesh: &mesh,
             skeleton: &sk,
-            labels: &reference,
+            labels: &known,
         }],
         &plain,
     )
@@ -107,7 +108,7 @@ fn a_shifted_elbow_boundary_is_learned() {
 fn fit_refuses_labels_of_the_wrong_length() {
     let sk = t_pose(1.0);
     let (mesh, _) = capsule_body(&sk, 0.04);
-    let labels = vec![Segment::Torso; 3];
+    let labels = vec![Some(Segment::Torso); 3];
     let err = BoundaryConvention::fit(
         &[LabelledBody {
             mesh: &mesh,

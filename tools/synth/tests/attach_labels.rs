@@ -447,14 +447,16 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
         .collect()
 }
 
-// Measured (2 shapes × 20 poses, 2026-12-02) with the MakeHuman boundary convention trained on
-// posed bodies ([`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23):
-// exact joints strict mean 0.932 / worst 0.893 (0.859 / 0.828), 0.931 on the 39 bodies outside
-// the convention's training set; boundary-tolerant (3 cm) mean 0.969 / worst 0.938 (0.914 /
+// Measured (2 shapes × 20 poses, 2026-12-02, session 7) with the MakeHuman boundary convention
+// (its rules use bone heat's vote and were trained on posed bodies and their single-view scans;
+// [`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23): exact joints
+// strict mean 0.937 / worst 0.910 (0.859 / 0.828), 0.936 on the 39 bodies outside the
+// convention's training set; boundary-tolerant (3 cm) mean 0.974 / worst 0.953 (0.914 /
 // 0.884); mirrored area 0 (0); anatomical cross-side area 0 (≤ 0.0018).
-// Noisy joints strict mean 0.848 / worst 0.789 (0.816 / 0.757), tolerant 0.907 / 0.852
+// Noisy joints strict mean 0.856 / worst 0.805 (0.816 / 0.757), tolerant 0.915 / 0.870
 // (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
-// area beyond 3 cm of the midline. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
+// area beyond 3 cm of the midline. The table before session 7 (planes only, no scans in
+// training): exact 0.932 / 0.893, noisy 0.848 / 0.789. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
 // strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
 // noisy joints are NOT reached. The remaining confusion is printed with ATTACH_EVAL_VERBOSE=1
 // and listed in symcorr-attach's docs; its section "What limits agreement with noisy joints"
@@ -468,13 +470,13 @@ fn exact_joints_40_bodies() {
     // Body 0 (the base shape at rest) is one of the convention's training bodies.
     let held = summary("exact, held out of the convention's training", &s[1..]);
     assert!(
-        held.mean >= 0.928,
+        held.mean >= 0.934,
         "held-out mean strict agreement {}",
         held.mean
     );
-    assert!(r.mean >= 0.929, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.885, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.965, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mean >= 0.934, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.905, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.970, "mean tolerant agreement {}", r.tmean);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert!(r.cross_anat <= 0.0025, "cross-side area {}", r.cross_anat);
     assert!(
@@ -495,9 +497,9 @@ fn noisy_joints_40_bodies() {
     };
     let s = run_bodies(Some(noise));
     let r = summary("noisy", &s);
-    assert!(r.mean >= 0.845, "mean strict agreement {}", r.mean);
-    assert!(r.worst >= 0.785, "worst strict agreement {}", r.worst);
-    assert!(r.tmean >= 0.90, "mean tolerant agreement {}", r.tmean);
+    assert!(r.mean >= 0.852, "mean strict agreement {}", r.mean);
+    assert!(r.worst >= 0.800, "worst strict agreement {}", r.worst);
+    assert!(r.tmean >= 0.91, "mean tolerant agreement {}", r.tmean);
     assert!(r.mirrored <= 0.0025, "mirrored area {}", r.mirrored);
     assert!(r.cross_anat <= 0.005, "cross-side area {}", r.cross_anat);
     assert!(
@@ -516,7 +518,7 @@ fn makehuman_convention_table_is_reproducible() {
     assert_eq!(fitted.rules.len(), committed.rules.len());
     for (f, c) in fitted.rules.iter().zip(&committed.rules) {
         assert_eq!((f.a, f.b, f.joint), (c.a, c.b, c.joint));
-        for k in 0..4 {
+        for k in 0..5 {
             assert!(
                 (f.plane[k] - c.plane[k]).abs() <= 1e-9 * (1.0 + c.plane[k].abs()),
                 "{f:?} vs {c:?}"
@@ -551,10 +553,12 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured with the MakeHuman convention trained on posed bodies (2026-12-02): strict 0.936
-// (ideal scan) / 0.923 (Kinect realism), tolerant 0.985 / 0.984 (rest-pose training: 0.922 /
-// 0.919, 0.965 / 0.975), no mirrored or cross-side area (joint planes: 0.870 / 0.867,
-// 0.946 / 0.949). Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
+// Measured with the MakeHuman convention trained on posed bodies and their single-view scans
+// (session 7, 2026-12-02): strict 0.950 (ideal scan) / 0.948 (Kinect realism), tolerant 0.985 /
+// 0.988; without scans in the training (session 6) 0.936 / 0.923 and 0.985 / 0.984; rest-pose
+// training (session 5) 0.922 / 0.919; no mirrored or cross-side area (joint planes: 0.870 /
+// 0.867, tolerant 0.946 / 0.949). These scans are s0_walk-10 seen by the fixture camera: the
+// training scans use the same camera and shape but other poses and another noise seed. Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
 // both. Before refinement refused circles far from the joint (2026-12-01) the realistic scan
 // scored 0.894: its left wrist, hidden against the hip, was moved 12 cm onto the hip and 3 % of
 // the pelvis/hip became forearm.
@@ -572,8 +576,8 @@ fn virtual_kinect_scans() {
         s.push(score(dir, &mesh, &a.labels, &want, None));
     }
     let r = summary("scans", &s);
-    assert!(r.worst >= 0.915, "worst strict agreement {}", r.worst);
-    assert!(r.tworst >= 0.975, "worst tolerant agreement {}", r.tworst);
+    assert!(r.worst >= 0.94, "worst strict agreement {}", r.worst);
+    assert!(r.tworst >= 0.98, "worst tolerant agreement {}", r.tworst);
     assert_eq!(r.mirrored, 0.0, "mirrored area");
     assert_eq!(r.cross_anat, 0.0, "cross-side area");
 }
