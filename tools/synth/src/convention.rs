@@ -90,21 +90,22 @@ pub fn fit_makehuman(model: &Model) -> Result<BoundaryConvention> {
                 &Realism::kinect(TRAINING_SCAN_SEED),
                 stream,
             )?;
-            let seen = scan
+            let seen: Vec<Option<Segment>> = scan
                 .truth
                 .iter()
                 .map(|t| t.map(|v| labels[v as usize]))
                 .collect();
-            bodies.push((posed.mesh, joints, whole.clone()));
-            bodies.push((scan.mesh, scan.joints, seen));
+            bodies.push((posed.mesh, joints, None));
+            bodies.push((scan.mesh, scan.joints, Some(seen)));
         }
     }
     let examples: Vec<LabelledBody<'_>> = bodies
         .iter()
-        .map(|(mesh, skeleton, labels)| LabelledBody {
+        .map(|(mesh, skeleton, seen)| LabelledBody {
             mesh,
             skeleton,
-            labels,
+            // A whole body has every vertex's reference; a scan the seen ones.
+            labels: seen.as_deref().unwrap_or(&whole),
         })
         .collect();
     BoundaryConvention::fit(&examples, &AttachOptions::default())
