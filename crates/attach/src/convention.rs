@@ -489,7 +489,8 @@ pub(crate) fn apply(
                     continue;
                 }
                 let x = positions[v];
-                let u = features(frame, x, &weights(v), rule.a, rule.b);
+                let w = weights(v);
+                let u = features(frame, x, &w, rule.a, rule.b);
                 let new = if evaluate(&rule.plane, u) > 0.0 {
                     rule.b
                 } else {
@@ -503,7 +504,7 @@ pub(crate) fn apply(
                     }
                     if was == 0 {
                         let sd = lateral(x, new);
-                        let (l, r) = side_weights(&weights(v));
+                        let (l, r) = side_weights(&w);
                         let heat = if l > r {
                             1
                         } else if r > l {
