@@ -13,12 +13,13 @@ fn load() -> (symcorr_mesh::TriMesh, Skeleton) {
         &std::fs::read_to_string(root.join("joints/s0_walk-10.json")).expect("joints"),
     )
     .expect("json");
-    let mut sk = Skeleton::from_positions([[0.0; 3]; 20]);
+    let mut sk = Skeleton::from_arrays([[0.0; 3]; 20]);
     for j in Joint::ALL {
         let a = v["frames"][0]["joints"][j.name()]
             .as_array()
             .expect("joint");
-        sk.positions[j.index()] = std::array::from_fn(|k| a[k].as_f64().expect("number"));
+        sk.positions[j.index()] =
+            nalgebra::Point3::from(std::array::from_fn(|k| a[k].as_f64().expect("number")));
     }
     (mesh, sk)
 }

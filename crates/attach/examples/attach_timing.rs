@@ -21,10 +21,11 @@ fn main() {
     };
     let text = std::fs::read_to_string(&joints_path).unwrap_or_default();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
-    let mut sk = Skeleton::from_positions([[0.0; 3]; 20]);
+    let mut sk = Skeleton::from_arrays([[0.0; 3]; 20]);
     for j in Joint::ALL {
         if let Some(a) = v["frames"][0]["joints"][j.name()].as_array() {
-            sk.positions[j.index()] = std::array::from_fn(|k| a[k].as_f64().unwrap_or(f64::NAN));
+            sk.positions[j.index()] =
+                nalgebra::Point3::from(std::array::from_fn(|k| a[k].as_f64().unwrap_or(f64::NAN)));
         }
     }
     // Side by side in one run: the default joint planes and the learned MakeHuman convention.

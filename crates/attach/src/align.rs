@@ -53,8 +53,8 @@ pub(crate) fn coverage(
 ) -> f64 {
     let bones: Vec<([f64; 3], [f64; 3])> = crate::BONES
         .iter()
-        .filter(|b| usable[b.0.index()] && usable[b.1.index()])
-        .map(|b| (p[b.0.index()], p[b.1.index()]))
+        .filter(|b| usable[b.parent.index()] && usable[b.child.index()])
+        .map(|b| (p[b.parent.index()], p[b.child.index()]))
         .collect();
     let stride = (mesh.num_vertices() / 1000).max(1);
     let mut d: Vec<f64> = mesh

@@ -72,7 +72,7 @@
 
 use crate::geom::unit;
 use crate::planes::{segment_direction, shared_joint, side_weights, JointPlane};
-use crate::{attach_with_usable, AttachError, AttachOptions, Joint, Segment, Skeleton};
+use crate::{attach_with_usable, AttachError, AttachOptions, BodySide, Joint, Segment, Skeleton};
 use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
 use symcorr_mesh::TriMesh;
 
@@ -217,7 +217,7 @@ impl Frame {
         // points up), so the frame of a forearm reaching forward turns with it instead of
         // being spun by noise where facing ∥ e1. Near the opposite direction (an arm straight
         // overhead) that rotation is undefined: facing projected as is.
-        let rest = if a.side() != 0 || b.side() != 0 {
+        let rest = if a.side() != BodySide::Midline || b.side() != BodySide::Midline {
             scale(up, -1.0)
         } else {
             up
@@ -322,7 +322,7 @@ impl BoundaryConvention {
             let area = body.mesh.vertex_areas();
             let mean_area = area.iter().sum::<f64>() / area.len().max(1) as f64;
             for (k, &(a, b, j)) in pairs.iter().enumerate() {
-                let Some(frame) = Frame::new(a, b, j, &att.joints.positions, &usable) else {
+                let Some(frame) = Frame::new(a, b, j, &att.joints.to_arrays(), &usable) else {
                     continue;
                 };
                 let vertices = body.labels.iter().zip(&att.labels);
@@ -496,9 +496,9 @@ pub(crate) fn apply(
                 } else {
                     rule.a
                 };
-                let s = new.side();
+                let s = new.side().sign();
                 if s != 0 {
-                    let was = before[v].side();
+                    let was = before[v].side().sign();
                     if was == -s {
                         continue;
                     }
@@ -641,12 +641,12 @@ mod tests {
         // w = (1, 0, 0), c = 0 in the boundary frame is the joint plane itself.
         let sk = t_pose(1.0);
         let usable = [true; 20];
-        let planes = crate::planes::joint_planes(&sk.positions, &usable);
+        let planes = crate::planes::joint_planes(&sk.to_arrays(), &usable);
         for pl in &planes {
             if pl.a.mirror() == pl.b {
                 continue;
             }
-            let f = Frame::new(pl.a, pl.b, pl.joint, &sk.positions, &usable).unwrap();
+            let f = Frame::new(pl.a, pl.b, pl.joint, &sk.to_arrays(), &usable).unwrap();
             for k in 0..3 {
                 assert!((f.axes[0][k] - pl.normal[k]).abs() < 1e-9, "{pl:?}");
             }
@@ -675,7 +675,7 @@ mod tests {
         use Segment as S;
         let sk = t_pose(1.0);
         let usable = [true; 20];
-        let p = sk.positions;
+        let p = sk.to_arrays();
         let planes = crate::planes::joint_planes(&p, &usable);
         let hc = p[Joint::HipCenter.index()];
         // Two rules: the first gives every pelvis/hip_right vertex to the pelvis (offset −10),

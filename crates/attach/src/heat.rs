@@ -44,7 +44,8 @@ fn sources(
     let mut d: Vec<(f64, usize, [f64; 3])> = active
         .iter()
         .map(|&b| {
-            let (q, d) = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]);
+            let (q, d) =
+                closest_on_segment(x, p[BONES[b].parent.index()], p[BONES[b].child.index()]);
             (d / reach[b], b, q)
         })
         .collect();
@@ -141,10 +142,12 @@ pub(crate) fn bone_heat(
             .iter()
             .copied()
             .min_by(|&a, &b| {
-                let da = closest_on_segment(x, p[BONES[a].0.index()], p[BONES[a].1.index()]).1
-                    / reach[a];
-                let db = closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]).1
-                    / reach[b];
+                let da =
+                    closest_on_segment(x, p[BONES[a].parent.index()], p[BONES[a].child.index()]).1
+                        / reach[a];
+                let db =
+                    closest_on_segment(x, p[BONES[b].parent.index()], p[BONES[b].child.index()]).1
+                        / reach[b];
                 da.total_cmp(&db)
             })
             .unwrap_or(0)
@@ -174,7 +177,9 @@ pub(crate) fn bone_heat(
                 let x = sub_mesh.positions[i];
                 let q = active
                     .iter()
-                    .map(|&b| closest_on_segment(x, p[BONES[b].0.index()], p[BONES[b].1.index()]))
+                    .map(|&b| {
+                        closest_on_segment(x, p[BONES[b].parent.index()], p[BONES[b].child.index()])
+                    })
                     .min_by(|a, b| a.1.total_cmp(&b.1))
                     .map_or(x, |c| c.0);
                 dot(normals[i], sub(q, x)) > 0.0

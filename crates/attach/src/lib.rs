@@ -221,14 +221,13 @@ pub mod palette;
 mod planes;
 mod refine;
 mod repair;
-mod skeleton;
 
 pub use convention::{
     boundaries, BoundaryConvention, BoundaryRule, LabelledBody, ASYMMETRY_FACTOR, MIN_SIDE_BAND,
     SIDE_MARGIN,
 };
 pub use error::AttachError;
-pub use skeleton::{Joint, Segment, Skeleton, BONES};
+pub use symcorr_skeleton::{BodySide, Bone, Joint, SagittalPlanes, Segment, Skeleton, BONES};
 
 use symcorr_mesh::TriMesh;
 
@@ -645,7 +644,7 @@ pub(crate) fn attach_with_usable(
     lap("refine", &mut clock);
     // 5. Bone heat.
     let active: Vec<usize> = (0..BONES.len())
-        .filter(|&b| usable[BONES[b].0.index()] && usable[BONES[b].1.index()])
+        .filter(|&b| usable[BONES[b].parent.index()] && usable[BONES[b].child.index()])
         .collect();
     let dropped_bones: Vec<usize> = (0..BONES.len()).filter(|b| !active.contains(b)).collect();
     let mut reach = [1.0; 19];
@@ -695,7 +694,7 @@ pub(crate) fn attach_with_usable(
         }
     }
     lap("labels", &mut clock);
-    let mut joints = Skeleton::from_positions(positions);
+    let mut joints = Skeleton::from_arrays(positions);
     for j in Joint::ALL {
         joints.confidence[j.index()] = if usable[j.index()] {
             skeleton.confidence[j.mirror_if(mirror.swapped).index()].max(0.0)
@@ -748,7 +747,7 @@ fn side_first_argmax(s: &[f64; 17]) -> Segment {
         return b;
     }
     let (left, right) = planes::side_weights(s);
-    let (own, other) = if b.side() == 1 {
+    let (own, other) = if b.side() == BodySide::Left {
         (left, right)
     } else {
         (right, left)

@@ -12,7 +12,7 @@
 //! siblings it is the sagittal plane through the midline joint.
 
 use crate::geom::unit;
-use crate::{Joint, Segment};
+use crate::{BodySide, Bone, Joint, Segment};
 use symcorr_mesh::geometry::{add, dot, norm, scale, sub};
 
 /// One boundary: segments `a` and `b` meet at `joint`; `normal` points into `b`'s side.
@@ -44,7 +44,11 @@ pub(crate) fn segment_direction(
     if !ok(j) {
         return None;
     }
-    if let Some(&(u, v)) = s.bones().iter().find(|b| b.0 == j || b.1 == j) {
+    if let Some(&Bone {
+        parent: u,
+        child: v,
+    }) = s.bones().iter().find(|b| b.parent == j || b.child == j)
+    {
         let other = if u == j { v } else { u };
         return if ok(other) {
             unit(sub(p[other.index()], p[j.index()]))
@@ -52,7 +56,10 @@ pub(crate) fn segment_direction(
             None
         };
     }
-    let &(u, v) = s.bones().first()?;
+    let &Bone {
+        parent: u,
+        child: v,
+    } = s.bones().first()?;
     if !(ok(u) && ok(v)) {
         return None;
     }
@@ -62,10 +69,12 @@ pub(crate) fn segment_direction(
 
 /// The skeleton joint two segments share, if any (the first found along `a`'s bones).
 pub(crate) fn shared_joint(a: Segment, b: Segment) -> Option<Joint> {
-    a.bones().iter().find_map(|&(u, v)| {
-        b.bones()
-            .iter()
-            .find_map(|&(r, s)| [u, v].into_iter().find(|&x| x == r || x == s))
+    a.bones().iter().find_map(|u| {
+        b.bones().iter().find_map(|r| {
+            [u.parent, u.child]
+                .into_iter()
+                .find(|&x| x == r.parent || x == r.child)
+        })
     })
 }
 
@@ -175,9 +184,9 @@ pub(crate) fn side_weights(w: &[f64; 17]) -> (f64, f64) {
     let (mut l, mut r) = (0.0, 0.0);
     for s in Segment::ALL {
         match s.side() {
-            1 => l += w[s.index()],
-            -1 => r += w[s.index()],
-            _ => {}
+            BodySide::Left => l += w[s.index()],
+            BodySide::Right => r += w[s.index()],
+            BodySide::Midline => {}
         }
     }
     (l, r)
@@ -214,8 +223,7 @@ fn root(s: Segment) -> Segment {
 pub(crate) fn keep_limb_sides(heat_labels: &[Segment], labels: &mut [Segment]) -> usize {
     let mut changed = 0;
     for (h, l) in heat_labels.iter().zip(labels.iter_mut()) {
-        let (sh, sl) = (h.side(), l.side());
-        if sh != 0 && sl == -sh && root(*l) != *l {
+        if h.side().opposes(l.side()) && root(*l) != *l {
             *l = root(*l);
             changed += 1;
         }
@@ -272,11 +280,11 @@ mod tests {
     #[test]
     fn a_symmetric_skeleton_has_no_asymmetry_and_a_noisy_one_does() {
         let sk = t_pose(1.0);
-        let a = joint_asymmetry(&sk.positions, &[true; 20]).unwrap();
+        let a = joint_asymmetry(&sk.to_arrays(), &[true; 20]).unwrap();
         assert!(a < 1e-12, "{a}");
         // The left leg below the hip moved 4 cm along the thigh: the left thigh is 4 cm longer,
         // every other measure unchanged, so the RMS of the six measures is 4/√6 cm.
-        let mut p = sk.positions;
+        let mut p = sk.to_arrays();
         let (hip, knee) = (p[Joint::HipLeft.index()], p[Joint::KneeLeft.index()]);
         let d = scale(crate::geom::unit(sub(knee, hip)).unwrap(), 0.04);
         for j in [Joint::KneeLeft, Joint::AnkleLeft, Joint::FootLeft] {
@@ -323,7 +331,7 @@ mod tests {
     #[test]
     fn planes_bisect_the_bones_at_their_shared_joint() {
         let sk = t_pose(1.0);
-        let planes = joint_planes(&sk.positions, &[true; 20]);
+        let planes = joint_planes(&sk.to_arrays(), &[true; 20]);
         // 20 pairs of segments share a joint (3 at the hip centre, 6 at the shoulder centre,
         // 1 at the spine, and 5 along each side).
         assert_eq!(planes.len(), 20);
@@ -344,7 +352,7 @@ mod tests {
     #[test]
     fn labels_follow_the_side_of_the_plane_and_the_guard_takes_the_midline() {
         let sk = t_pose(1.0);
-        let p = sk.positions;
+        let p = sk.to_arrays();
         let planes = joint_planes(&p, &[true; 20]);
         let spine = p[Joint::Spine.index()];
         let hc = p[Joint::HipCenter.index()];

@@ -176,7 +176,7 @@ fn kind(j: Joint) -> Kind {
 }
 
 fn children(j: Joint) -> impl Iterator<Item = Joint> {
-    BONES.iter().filter(move |b| b.0 == j).map(|b| b.1)
+    BONES.iter().filter(move |b| b.parent == j).map(|b| b.child)
 }
 
 /// Vertices of `set` grouped into connected pieces (mesh edges within the set).
@@ -483,7 +483,7 @@ fn symmetric_bone_lengths(
 pub(crate) fn nearest_bone_distance(x: [f64; 3], p: &[[f64; 3]; 20]) -> f64 {
     BONES
         .iter()
-        .map(|b| closest_on_segment(x, p[b.0.index()], p[b.1.index()]).1)
+        .map(|b| closest_on_segment(x, p[b.parent.index()], p[b.child.index()]).1)
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -521,7 +521,7 @@ mod tests {
         // cross-section, 10 cm from the joint: the wrist stays where it is. A tube of forearm
         // radius 2 cm from the joint is the wrist's own cross-section: it moves there.
         let sk = crate::testbody::t_pose(1.0);
-        let p = sk.positions;
+        let p = sk.to_arrays();
         let (e, w, h) = (
             p[Joint::ElbowLeft.index()],
             p[Joint::WristLeft.index()],

@@ -37,7 +37,7 @@ const RULES: [(Joint, Joint, Joint, f64); 17] = {
 };
 
 pub(crate) fn repair(sk: &Skeleton) -> Result<Repaired, AttachError> {
-    let mut positions = sk.positions;
+    let mut positions = sk.to_arrays();
     let mut usable = [false; 20];
     for j in 0..20 {
         let finite = positions[j].iter().all(|c| c.is_finite());
@@ -69,7 +69,7 @@ pub(crate) fn repair(sk: &Skeleton) -> Result<Repaired, AttachError> {
     let torso = usable[Joint::HipCenter.index()] && usable[Joint::ShoulderCenter.index()];
     let any_bone = BONES
         .iter()
-        .any(|b| usable[b.0.index()] && usable[b.1.index()]);
+        .any(|b| usable[b.parent.index()] && usable[b.child.index()]);
     if !torso || !any_bone || !(extent > 0.0) || n_usable < 3 {
         return Err(AttachError::EmptySkeleton {
             usable: n_usable,

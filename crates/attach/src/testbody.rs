@@ -56,14 +56,19 @@ pub fn t_pose(s: f64) -> Skeleton {
         set(an, [0.16 * side, 0.10, 0.0]);
         set(fo, [0.17 * side, 0.04, 0.14]);
     }
-    Skeleton::from_positions(p)
+    Skeleton::from_arrays(p)
 }
 
 /// Signed distance to the capsule union and the nearest capsule's bone.
 fn sdf(x: [f64; 3], sk: &Skeleton, s: f64) -> (f64, usize) {
     let mut best = (f64::INFINITY, 0);
-    for (b, (a, c)) in BONES.iter().enumerate() {
-        let d = closest_on_segment(x, sk.position(*a), sk.position(*c)).1 - RADII[b] * s;
+    for (b, bone) in BONES.iter().enumerate() {
+        let d = closest_on_segment(
+            x,
+            sk.position(bone.parent).into(),
+            sk.position(bone.child).into(),
+        )
+        .1 - RADII[b] * s;
         if d < best.0 {
             best = (d, b);
         }
@@ -75,13 +80,13 @@ fn sdf(x: [f64; 3], sk: &Skeleton, s: f64) -> (f64, usize) {
 /// hip→shoulder distance) with grid step `step`, returning the mesh and per-vertex reference
 /// labels (segment of the nearest capsule).
 pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
-    let s = symcorr_mesh::geometry::dist(
-        sk.position(Joint::HipCenter),
-        sk.position(Joint::ShoulderCenter),
+    let s = nalgebra::distance(
+        &sk.position(Joint::HipCenter),
+        &sk.position(Joint::ShoulderCenter),
     ) / 0.45;
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for p in &sk.positions {
+    for p in &sk.to_arrays() {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k] - 0.2 * s);
             hi[k] = hi[k].max(p[k] + 0.2 * s);

@@ -22,7 +22,7 @@ fn empty_skeleton_is_an_error() {
         "{e}"
     );
     // All joints at the origin (what an untracked Kinect frame reports).
-    let zeros = Skeleton::from_positions([[0.0; 3]; 20]);
+    let zeros = Skeleton::from_arrays([[0.0; 3]; 20]);
     let e = label(&mesh, &zeros).unwrap_err();
     assert!(matches!(e, AttachError::EmptySkeleton { .. }), "{e}");
     assert!(e.to_string().contains("empty"));
@@ -31,8 +31,8 @@ fn empty_skeleton_is_an_error() {
 #[test]
 fn non_finite_joints_are_interpolated_or_dropped_and_reported() {
     let (mut sk, mesh) = body();
-    sk.positions[Joint::ElbowLeft.index()] = [f64::NAN, 0.0, 0.0];
-    sk.positions[Joint::FootRight.index()] = [f64::INFINITY; 3];
+    sk.positions[Joint::ElbowLeft.index()] = [f64::NAN, 0.0, 0.0].into();
+    sk.positions[Joint::FootRight.index()] = [f64::INFINITY; 3].into();
     let a = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
     let rep = &a.diagnostics.repaired_joints;
     assert!(rep.contains(&(Joint::ElbowLeft, JointRepair::Interpolated)));
@@ -50,7 +50,11 @@ fn non_finite_joints_are_interpolated_or_dropped_and_reported() {
         .labels
         .iter()
         .all(|&s| s != symcorr_attach::Segment::FootRight));
-    assert!(a.joints.positions.iter().flatten().all(|c| c.is_finite()));
+    assert!(a
+        .joints
+        .positions
+        .iter()
+        .all(|p| p.iter().all(|c| c.is_finite())));
 }
 
 #[test]
@@ -87,7 +91,7 @@ fn a_skeleton_100_times_too_large_is_rescaled_and_a_hopeless_one_refused() {
     // nowhere.
     let mut flat = sk.clone();
     for p in &mut flat.positions {
-        *p = [p[0] * 3.0 + 5.0, 0.0, p[1] * 0.3 + 9.0];
+        *p = nalgebra::Point3::new(p[0] * 3.0 + 5.0, 0.0, p[1] * 0.3 + 9.0);
     }
     let e = attach(&mesh, &flat, &AttachOptions::default()).unwrap_err();
     assert!(

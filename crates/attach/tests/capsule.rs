@@ -49,10 +49,13 @@ fn exact_skeleton_labels_the_capsule_body() {
     .unwrap();
     assert_eq!(plain.weights, a.weights);
     let shares_joint = |x: Segment, y: Segment| {
-        x.bones().iter().any(|&(p, q)| {
-            y.bones()
-                .iter()
-                .any(|&(r, s)| p == r || p == s || q == r || q == s)
+        x.bones().iter().any(|b| {
+            y.bones().iter().any(|c| {
+                b.parent == c.parent
+                    || b.parent == c.child
+                    || b.child == c.parent
+                    || b.child == c.child
+            })
         })
     };
     let mut moved = 0;
@@ -119,11 +122,11 @@ fn units_rotation_and_offset_are_aligned() {
     // Skeleton in centimetres, rotated 90° about y and moved.
     let mut moved = sk.clone();
     for p in &mut moved.positions {
-        *p = [
+        *p = nalgebra::Point3::new(
             100.0 * p[2] + 30.0,
             100.0 * p[1] - 12.0,
             -100.0 * p[0] + 7.0,
-        ];
+        );
     }
     let a = attach(&mesh, &moved, &AttachOptions::default()).unwrap();
     let al = &a.diagnostics.alignment;

@@ -18,11 +18,12 @@ fn read_joints(path: &Path) -> Skeleton {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let f = &v["frames"][0];
-    let mut sk = Skeleton::from_positions([[f64::NAN; 3]; 20]);
+    let mut sk = Skeleton::from_arrays([[f64::NAN; 3]; 20]);
     for j in Joint::ALL {
         let p = &f["joints"][j.name()];
         if let Some(a) = p.as_array() {
-            sk.positions[j.index()] = std::array::from_fn(|k| a[k].as_f64().unwrap());
+            sk.positions[j.index()] =
+                nalgebra::Point3::from(std::array::from_fn(|k| a[k].as_f64().unwrap()));
         } else {
             sk.confidence[j.index()] = 0.0;
         }

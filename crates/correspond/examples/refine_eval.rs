@@ -9,9 +9,10 @@ use faer::Mat;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
-use symcorr_attach::{attach, AttachOptions, Joint, Segment, Skeleton};
+use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::*;
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::{Joint, Segment, Skeleton};
 use symcorr_spectral::*;
 
 fn env<T: std::str::FromStr>(name: &str, default: T) -> T {
@@ -35,7 +36,7 @@ struct Prep {
 }
 
 fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton) -> Vec<i8> {
-    let p = |x: Joint| j.position(x);
+    let p = |x: Joint| -> [f64; 3] { j.position(x).into() };
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let mid =
         |a: [f64; 3], b: [f64; 3]| [(a[0] + b[0]) / 2., (a[1] + b[1]) / 2., (a[2] + b[2]) / 2.];

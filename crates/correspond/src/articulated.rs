@@ -27,10 +27,11 @@ use crate::kdtree::PoolTrees;
 use crate::{CorrespondError, SegmentPools};
 use faer::Mat;
 use rayon::prelude::*;
-use symcorr_attach::{BoneWeights, Joint, Segment, Skeleton, BONES};
+use symcorr_attach::BoneWeights;
 use symcorr_mesh::geometry::{
     add, closest_on_segment, cross, dot, mat_vec, norm, scale, sub, unit,
 };
+use symcorr_skeleton::{Bone, Joint, Segment, Skeleton, BONES};
 
 /// The nearest-neighbour features of the alignment: position ⊕ β·normal.
 fn features(positions: &[[f64; 3]], normals: &[[f64; 3]], beta: f64) -> Vec<[f64; 6]> {
@@ -164,7 +165,7 @@ fn swing(a: [f64; 3], b: [f64; 3]) -> Mat3 {
 /// difference between both ends.
 ///
 /// ```
-/// use symcorr_attach::Skeleton;
+/// use symcorr_skeleton::Skeleton;
 /// use symcorr_correspond::bone_transforms;
 /// let s = symcorr_attach::testbody::t_pose(1.0);
 /// let t = bone_transforms(&s, &s);
@@ -175,8 +176,8 @@ fn swing(a: [f64; 3], b: [f64; 3]) -> Mat3 {
 /// }
 /// ```
 pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> [BoneTransform; 19] {
-    let pf = |j: Joint| from.position(j);
-    let pt = |j: Joint| to.position(j);
+    let pf = |j: Joint| -> [f64; 3] { from.position(j).into() };
+    let pt = |j: Joint| -> [f64; 3] { to.position(j).into() };
     let frame_rotation = |x: (Joint, Joint), y: (Joint, Joint)| -> Option<Mat3> {
         let f = frame(sub(pf(x.1), pf(x.0)), sub(pf(y.1), pf(y.0)))?;
         let t = frame(sub(pt(x.1), pt(x.0)), sub(pt(y.1), pt(y.0)))?;
@@ -196,7 +197,8 @@ pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> [BoneTransform; 19] {
     )
     .unwrap_or(pelvis);
     let mut rotations: [Mat3; 19] = [IDENTITY; 19];
-    for (b, &(p, c)) in BONES.iter().enumerate() {
+    for (b, bone) in BONES.iter().enumerate() {
+        let (p, c) = (bone.parent, bone.child);
         rotations[b] = match (p, c) {
             (J::HipCenter, _) => pelvis,
             (J::Spine, J::ShoulderCenter) => chest,
@@ -206,7 +208,7 @@ pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> [BoneTransform; 19] {
             }
             _ => {
                 // Parent bone: the one ending at p (BONES lists parents first).
-                let parent = BONES.iter().position(|&(_, pc)| pc == p).unwrap_or(0);
+                let parent = BONES.iter().position(|pb| pb.child == p).unwrap_or(0);
                 let r = rotations[parent];
                 let d = mat_vec(&r, sub(pf(c), pf(p)));
                 mat_mul(&swing(d, sub(pt(c), pt(p))), &r)
@@ -214,7 +216,8 @@ pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> [BoneTransform; 19] {
         };
     }
     let mut out = [BoneTransform::IDENTITY; 19];
-    for (b, &(p, c)) in BONES.iter().enumerate() {
+    for (b, bone) in BONES.iter().enumerate() {
+        let (p, c) = (bone.parent, bone.child);
         let r = rotations[b];
         let mid_from = scale(add(pf(p), pf(c)), 0.5);
         let mid_to = scale(add(pt(p), pt(c)), 0.5);
@@ -321,10 +324,14 @@ pub fn outward_normals(
 ) -> Vec<[f64; 3]> {
     let mut balance = 0.0;
     for ((&x, n), s) in positions.iter().zip(&normals).zip(labels) {
-        let Some(&(a, b)) = s.bones().first() else {
+        let Some(bone) = s.bones().first() else {
             continue;
         };
-        let (on_bone, _) = closest_on_segment(x, joints.position(a), joints.position(b));
+        let (on_bone, _) = closest_on_segment(
+            x,
+            joints.position(bone.parent).into(),
+            joints.position(bone.child).into(),
+        );
         let out = sub(x, on_bone);
         balance += dot(*n, out).signum();
     }
@@ -466,7 +473,7 @@ fn twist_search(
                 return false;
             }
             seen += 1;
-            (seen - 1) % stride == 0
+            (seen - 1).is_multiple_of(stride)
         })
         .collect();
     let subset = pools.members_where(|v| on_bone[v as usize]);
@@ -474,9 +481,9 @@ fn twist_search(
     if count < 20 {
         return Ok(initial);
     }
-    let (p, c) = BONES[b];
-    let pivot = target.joints.position(p);
-    let Some(axis) = unit(sub(target.joints.position(c), pivot)) else {
+    let (p, c) = (BONES[b].parent, BONES[b].child);
+    let pivot: [f64; 3] = target.joints.position(p).into();
+    let Some(axis) = unit(sub(target.joints.position(c).into(), pivot)) else {
         return Ok(initial);
     };
     let gate = options.gate_start * template.area.sqrt();
@@ -514,8 +521,8 @@ fn twist_search(
             let anchor = options.joint_anchor * pairs.len() as f64;
             for j in [p, c] {
                 pairs.push((
-                    template.joints.position(j),
-                    target.joints.position(j),
+                    template.joints.position(j).into(),
+                    target.joints.position(j).into(),
                     anchor,
                 ));
             }
@@ -632,14 +639,14 @@ pub fn articulated_match(
     // The ICP fits use an even stride sample of at most `icp_points` template vertices (a
     // bone's rigid fit needs hundreds of pairs, not tens of thousands); the final map uses all.
     let stride = n.div_ceil(options.icp_points.max(1)).max(1);
-    let sample = pools.members_where(|v| v as usize % stride == 0);
+    let sample = pools.members_where(|v| (v as usize).is_multiple_of(stride));
     let nearest = |posed: &[[f64; 3]], pn: &[[f64; 3]], subset: Option<&[Vec<u32>]>| {
         trees.nearest(&pools, &features(posed, pn, beta), subset)
     };
     let mut transforms = bone_transforms(template.joints, target.joints);
     let head_bone = BONES
         .iter()
-        .position(|&b| b == (Joint::ShoulderCenter, Joint::Head))
+        .position(|&b| b == Bone::new(Joint::ShoulderCenter, Joint::Head))
         .unwrap_or(2);
     transforms[head_bone] = twist_search(
         head_bone,
@@ -689,14 +696,14 @@ pub fn articulated_match(
                     return;
                 }
                 let wsum: f64 = pairs.iter().map(|p| p.2).sum();
-                let (p, c) = BONES[b];
+                let (p, c) = (BONES[b].parent, BONES[b].child);
                 // The skeleton anchors the fit: both joints, carried by the previous transform
                 // of the bone, pulled to the target's joints.
                 let anchor = options.joint_anchor * wsum;
                 for j in [p, c] {
                     pairs.push((
-                        template.joints.position(j),
-                        target.joints.position(j),
+                        template.joints.position(j).into(),
+                        target.joints.position(j).into(),
                         anchor,
                     ));
                 }
@@ -859,7 +866,7 @@ mod tests {
         let t = [1.0, 2.0, -0.5];
         let mut moved = s.clone();
         for p in moved.positions.iter_mut() {
-            *p = add(mat_vec(&r, *p), t);
+            *p = add(mat_vec(&r, (*p).into()), t).into();
         }
         for (b, tr) in bone_transforms(&s, &moved).iter().enumerate() {
             for x in [[0.1, 0.5, 0.0], [-0.3, 1.2, 0.2]] {
@@ -875,18 +882,18 @@ mod tests {
     fn bone_transforms_follow_a_bent_elbow() {
         let s = symcorr_attach::testbody::t_pose(1.0);
         let mut bent = s.clone();
-        let elbow = s.position(Joint::ElbowLeft);
+        let elbow: [f64; 3] = s.position(Joint::ElbowLeft).into();
         let r = rot_z(0.9);
         for j in [Joint::WristLeft, Joint::HandLeft] {
-            let p = s.position(j);
-            bent.positions[j.index()] = add(elbow, mat_vec(&r, sub(p, elbow)));
+            let p = s.position(j).into();
+            bent.positions[j.index()] = add(elbow, mat_vec(&r, sub(p, elbow))).into();
         }
         let tr = bone_transforms(&s, &bent);
-        for (b, &(p, c)) in BONES.iter().enumerate() {
-            for j in [p, c] {
-                let got = tr[b].apply(s.position(j));
+        for (b, bone) in BONES.iter().enumerate() {
+            for j in [bone.parent, bone.child] {
+                let got = tr[b].apply(s.position(j).into());
                 assert!(
-                    norm(sub(got, bent.position(j))) < 1e-9,
+                    norm(sub(got, bent.position(j).into())) < 1e-9,
                     "bone {b} joint {j:?}"
                 );
             }

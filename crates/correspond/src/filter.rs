@@ -2,7 +2,7 @@
 //! point is dropped — this is what keeps a left limb from matching a right one.
 
 use crate::{Candidate, Descriptors};
-use symcorr_attach::Segment;
+use symcorr_skeleton::Segment;
 
 /// What the filter did, over all points.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -37,7 +37,7 @@ pub struct FilterStats {
 /// opposite side are dropped ([`FilterStats::segment_missing`]).
 ///
 /// ```
-/// use symcorr_attach::Segment::{ThighLeft, ThighRight};
+/// use symcorr_skeleton::Segment::{ThighLeft, ThighRight};
 /// use symcorr_correspond::{skeleton_filter, Candidate, Descriptors};
 /// let d = Descriptors::new(2, 1, vec![0.0, 0.1]).unwrap();
 /// let mut c = vec![vec![Candidate { vertex: 1, distance: 0.0 }, Candidate { vertex: 0, distance: 0.1 }]];
@@ -66,7 +66,7 @@ pub fn skeleton_filter(
         let same = if present[sp.index()] {
             sq == sp
         } else {
-            sp.side() * sq.side() >= 0
+            !sp.side().opposes(sq.side())
         };
         same && halves.is_none_or(|(hp, hq)| hp[p as usize] * hq[q as usize] >= 0)
     };
@@ -145,7 +145,7 @@ pub struct BandStats {
 /// target has no such vertex the list is left as it was.
 ///
 /// ```
-/// use symcorr_attach::Segment::Torso;
+/// use symcorr_skeleton::Segment::Torso;
 /// use symcorr_correspond::{sagittal_band, Candidate, Descriptors};
 /// let d = Descriptors::new(3, 1, vec![0.0, 0.1, 0.2]).unwrap();
 /// // Candidate 0 lies on the plane, 1 on the point's side as far out as the point, 2 across.

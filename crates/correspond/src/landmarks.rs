@@ -6,17 +6,17 @@
 use crate::CorrespondError;
 use faer::Mat;
 use rayon::prelude::*;
-use symcorr_attach::{Joint, Skeleton};
+use symcorr_skeleton::{Joint, Skeleton};
 use symcorr_spectral::HeatGeodesics;
 
 /// One landmark per joint of [`Joint::ALL`], in that order: the mesh vertex nearest (Euclidean)
 /// to the refined joint position. Empty meshes give an empty list.
 ///
 /// ```
-/// use symcorr_attach::{Joint, Skeleton};
+/// use symcorr_skeleton::{Joint, Skeleton};
 /// use symcorr_correspond::joint_landmarks;
-/// let mut sk = Skeleton::from_positions([[0.0; 3]; 20]);
-/// sk.positions[Joint::Head.index()] = [0.0, 2.0, 0.0];
+/// let mut sk = Skeleton::from_arrays([[0.0; 3]; 20]);
+/// sk.positions[Joint::Head.index()] = [0.0, 2.0, 0.0].into();
 /// let pos = [[0.0, 0.1, 0.0], [0.0, 1.9, 0.0]];
 /// let l = joint_landmarks(&pos, &sk);
 /// assert_eq!(l[Joint::Head.index()], 1);
@@ -121,7 +121,7 @@ pub fn skeleton_landmarks(
     joints: &Skeleton,
     slab: f64,
 ) -> Vec<Vec<u32>> {
-    use symcorr_attach::Segment;
+    use symcorr_skeleton::Segment;
     assert_eq!(labels.len(), positions.len(), "one label per vertex");
     if positions.is_empty() {
         return vec![Vec::new(); Joint::ALL.len()];
@@ -136,14 +136,14 @@ pub fn skeleton_landmarks(
             [0.0, 1.0, 0.0]
         }
     };
-    let p = |j: Joint| joints.position(j);
+    let p = |j: Joint| -> [f64; 3] { joints.position(j).into() };
     let nearest = joint_landmarks(positions, joints);
     // Segments whose bones touch a joint.
     let touching = |j: Joint| -> Vec<Segment> {
         Segment::ALL
             .iter()
             .copied()
-            .filter(|s| s.bones().iter().any(|&(a, b)| a == j || b == j))
+            .filter(|s| s.bones().iter().any(|b| b.parent == j || b.child == j))
             .collect()
     };
     Joint::ALL
@@ -195,7 +195,7 @@ pub fn skeleton_landmarks(
 mod tests {
     use super::*;
     use symcorr_attach::testbody::{capsule_body, t_pose};
-    use symcorr_attach::Segment;
+    use symcorr_skeleton::Segment;
     use symcorr_spectral::EdgeGraph;
 
     #[test]

@@ -15,7 +15,7 @@
 //! labels are computed by symcorr-spectral and symcorr-attach; the `symcorr` crate wires them.
 //!
 //! ```
-//! use symcorr_attach::Segment::{ThighLeft, ThighRight};
+//! use symcorr_skeleton::Segment::{ThighLeft, ThighRight};
 //! use symcorr_correspond::{match_points, Descriptors, MatchOptions, Side};
 //! // Two vertices per mesh with identical descriptors (a perfect left/right symmetry): only
 //! // the segments tell them apart.
@@ -232,7 +232,7 @@ pub use selection::{assign_confidence, base_profile, select, Match};
 pub use symmetry::refine_symmetry_plane;
 
 use std::time::Instant;
-use symcorr_attach::Segment;
+use symcorr_skeleton::Segment;
 
 /// Default number of nearest candidates per template point (§3.1), chosen by measurement.
 pub const DEFAULT_NEAREST: usize = 5;

@@ -7,7 +7,7 @@ use crate::CorrespondError;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 use rayon::prelude::*;
-use symcorr_attach::Segment;
+use symcorr_skeleton::{BodySide, Segment};
 use symcorr_spectral::EdgeGraph;
 
 /// Which target vertices a template vertex may be matched to.
@@ -34,7 +34,7 @@ pub struct SegmentPools {
 /// meets the pelvis at the spine joint, and the head and both clavicles at the shoulder centre).
 ///
 /// ```
-/// use symcorr_attach::Segment::*;
+/// use symcorr_skeleton::Segment::*;
 /// use symcorr_correspond::adjacent_segments;
 /// assert_eq!(adjacent_segments(ForearmLeft), vec![UpperArmLeft]);
 /// assert!(adjacent_segments(Torso).contains(&ClavicleRight));
@@ -43,7 +43,7 @@ pub fn adjacent_segments(s: Segment) -> Vec<Segment> {
     let joints = |x: Segment| {
         x.bones()
             .iter()
-            .flat_map(|&(a, b)| [a, b])
+            .flat_map(|b| [b.parent, b.child])
             .collect::<Vec<_>>()
     };
     let mine = joints(s);
@@ -55,8 +55,8 @@ pub fn adjacent_segments(s: Segment) -> Vec<Segment> {
 
 fn vertex_side(s: Segment, half: i8) -> i8 {
     match s.side() {
-        0 => half.signum(),
-        x => x,
+        BodySide::Midline => half.signum(),
+        x => x.sign(),
     }
 }
 
@@ -87,7 +87,7 @@ impl SegmentPools {
     /// clavicle), while left and right stay apart.
     ///
     /// ```
-    /// use symcorr_attach::Segment::{ClavicleLeft, ClavicleRight, Torso};
+    /// use symcorr_skeleton::Segment::{ClavicleLeft, ClavicleRight, Torso};
     /// use symcorr_correspond::SegmentPools;
     /// use symcorr_mesh::TriMesh;
     /// use symcorr_spectral::EdgeGraph;
@@ -137,7 +137,11 @@ impl SegmentPools {
         let mut groups = Vec::with_capacity(tl.len());
         let mut members: Vec<Vec<u32>> = Vec::new();
         for (v, &s) in tl.iter().enumerate() {
-            let h = if s.side() == 0 { half_of(th, v) } else { 0 };
+            let h = if s.side() == BodySide::Midline {
+                half_of(th, v)
+            } else {
+                0
+            };
             let k = key(s, h);
             if group_of_key[k] == u32::MAX {
                 group_of_key[k] = keys.len() as u32;
@@ -488,7 +492,7 @@ pub fn zoomout(
     // Intermediate iterations on an even stride sample of at most `max_points` vertices, its
     // masses rescaled to the total (a quadrature of ∫ φ ψ∘T).
     let stride = n.div_ceil(options.max_points.max(1)).max(1);
-    let in_sample = |p: usize| p % stride == 0;
+    let in_sample = |p: usize| p.is_multiple_of(stride);
     let sample_members: Option<Vec<Vec<u32>>> = (stride > 1).then(|| {
         pools
             .members
@@ -835,14 +839,14 @@ mod tests {
                 .collect();
             assert!(got.contains(&s), "{s:?}");
             for &o in &got {
-                assert!(o.side() * s.side() >= 0, "{s:?} pool holds {o:?}");
+                assert!(!o.side().opposes(s.side()), "{s:?} pool holds {o:?}");
                 assert!(
                     o == s || adjacent_segments(s).contains(&o),
                     "{s:?} pool holds {o:?}"
                 );
             }
             for o in adjacent_segments(s) {
-                if o.side() * s.side() >= 0 {
+                if !o.side().opposes(s.side()) {
                     assert!(got.contains(&o), "{s:?} pool lacks {o:?}");
                 }
             }

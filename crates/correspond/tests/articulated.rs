@@ -3,21 +3,21 @@
 //! as a front-only partial view with renumbered vertices.
 
 use symcorr_attach::testbody::{capsule_body, t_pose};
-use symcorr_attach::{attach, AttachOptions, Joint, Skeleton};
+use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::{
     articulated_match, bone_transforms, outward_normals, skin, ArticulatedOptions, ArticulatedSide,
 };
-use symcorr_mesh::geometry::{add, dist, sub};
+use symcorr_mesh::geometry::dist;
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::{Joint, Skeleton};
 use symcorr_spectral::EdgeGraph;
 
 /// Rotates the joints below `pivot` in the chain `chain` by `angle` about the z axis.
 fn bend(sk: &mut Skeleton, pivot: Joint, chain: &[Joint], angle: f64) {
     let o = sk.position(pivot);
-    let (s, c) = angle.sin_cos();
+    let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), angle);
     for &j in chain {
-        let d = sub(sk.position(j), o);
-        sk.positions[j.index()] = add(o, [c * d[0] - s * d[1], s * d[0] + c * d[1], d[2]]);
+        sk.positions[j.index()] = o + turn * (sk.position(j) - o);
     }
 }
 
@@ -45,7 +45,7 @@ fn bodies() -> (Body, Body, symcorr_attach::Attachment) {
     );
     // Move the whole body as well: the target lives in another frame.
     for p in bent.positions.iter_mut() {
-        *p = add(*p, [0.3, -0.1, 2.0]);
+        *p += nalgebra::Vector3::new(0.3, -0.1, 2.0);
     }
     let normals = mesh.vertex_normals();
     let (posed, _) = skin(

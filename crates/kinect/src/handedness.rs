@@ -14,8 +14,9 @@
 //! The skeleton and the mesh must be in the same frame (e.g. both in Kinect camera space, or the
 //! skeleton already aligned to the mesh).
 
-use symcorr_attach::{Skeleton, MIRROR_MARGIN};
+use symcorr_attach::MIRROR_MARGIN;
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::Skeleton;
 
 /// Verdict of [`check_handedness`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

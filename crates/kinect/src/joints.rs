@@ -3,10 +3,10 @@
 //!
 //! ```
 //! use symcorr_kinect::joints::{parse_joints, JointFormat, JointLog, JointFrame, to_json_string};
-//! use symcorr_attach::Skeleton;
+//! use symcorr_skeleton::Skeleton;
 //! let mut positions = [[0.0; 3]; 20];
 //! for (i, p) in positions.iter_mut().enumerate() { *p = [0.01 * i as f64, 1.0, 2.5]; }
-//! let log = JointLog::from_skeletons(vec![Skeleton::from_positions(positions)], 30.0);
+//! let log = JointLog::from_skeletons(vec![Skeleton::from_arrays(positions)], 30.0);
 //! let text = to_json_string(&log);
 //! let (back, format) = parse_joints(&text, "<memory>").unwrap();
 //! assert_eq!(format, JointFormat::Json);
@@ -19,7 +19,7 @@ use serde::ser::{SerializeMap, SerializeSeq};
 use serde::{Serialize, Serializer};
 use serde_json::Value;
 use std::path::Path;
-use symcorr_attach::{Joint, Skeleton};
+use symcorr_skeleton::{Joint, Skeleton};
 
 /// The `format` tag of the native joint file.
 pub const JOINTS_FORMAT: &str = "symcorr.joints/1";
@@ -390,7 +390,7 @@ impl Serialize for JointsOut<'_> {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let mut m = s.serialize_map(Some(20))?;
         for j in Joint::ALL {
-            m.serialize_entry(j.name(), &self.0.positions[j.index()])?;
+            m.serialize_entry(j.name(), &<[f64; 3]>::from(self.0.positions[j.index()]))?;
         }
         m.end()
     }

@@ -41,7 +41,7 @@
 //! sensor faces −z).
 
 use crate::geom::{add, cross, lerp, norm, normalize, scale, sub};
-use symcorr_attach::{Joint, Skeleton};
+use symcorr_skeleton::{Joint, Skeleton};
 
 /// The skeleton a tracker reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -284,7 +284,7 @@ impl Partial {
             }
         }
         Ok(Skeleton {
-            positions,
+            positions: positions.map(Into::into),
             confidence: self.confidence,
             interpolated,
         })

@@ -3,21 +3,21 @@
 //! a tracker's do, and by how much says how far to trust it).
 //!
 //! ```
-//! use symcorr_attach::Skeleton;
+//! use symcorr_skeleton::Skeleton;
 //! use symcorr_kinect::joints::JointLog;
 //! use symcorr_kinect::replay::FrameSelect;
 //! let mut p = [[0.0; 3]; 20];
 //! for (i, q) in p.iter_mut().enumerate() { *q = [0.1 * i as f64, 0.0, 2.0]; }
-//! let log = JointLog::from_skeletons(vec![Skeleton::from_positions(p); 5], 30.0);
+//! let log = JointLog::from_skeletons(vec![Skeleton::from_arrays(p); 5], 30.0);
 //! let s = log.select(FrameSelect::Window { start_s: 0.0, end_s: 1.0 }).unwrap();
-//! assert_eq!(s, Skeleton::from_positions(p));
+//! assert_eq!(s, Skeleton::from_arrays(p));
 //! assert!(log.bone_lengths().max_relative_std < 1e-12);
 //! ```
 
 use crate::error::KinectError;
 use crate::geom::{norm, sub};
 use crate::joints::JointLog;
-use symcorr_attach::{Joint, Skeleton, BONES};
+use symcorr_skeleton::{Bone, Skeleton, BONES};
 
 /// Which skeleton of a log to use.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,7 +39,7 @@ pub enum FrameSelect {
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoneLengthStats {
     /// The bone (parent, child).
-    pub bone: (Joint, Joint),
+    pub bone: Bone,
     /// Mean length, metres.
     pub mean: f64,
     /// Standard deviation, metres.
@@ -58,7 +58,7 @@ pub struct BoneLengthReport {
     /// The largest std/mean over all bones (0 for a rigid skeleton).
     pub max_relative_std: f64,
     /// The bone with the largest relative spread.
-    pub worst_bone: (Joint, Joint),
+    pub worst_bone: Bone,
 }
 
 impl BoneLengthReport {
@@ -74,16 +74,16 @@ impl std::fmt::Display for BoneLengthReport {
         writeln!(
             f,
             "bone lengths: worst {}→{} varies by {:.1} % (std/mean)",
-            self.worst_bone.0.name(),
-            self.worst_bone.1.name(),
+            self.worst_bone.parent.name(),
+            self.worst_bone.child.name(),
             100.0 * self.max_relative_std
         )?;
         for b in &self.bones {
             writeln!(
                 f,
                 "  {:>15} → {:<15} mean {:.3} m  std {:.4} m  range [{:.3}, {:.3}]",
-                b.bone.0.name(),
-                b.bone.1.name(),
+                b.bone.parent.name(),
+                b.bone.child.name(),
                 b.mean,
                 b.std,
                 b.min,
@@ -194,7 +194,7 @@ impl JointLog {
             .iter()
             .map(|s| {
                 let mut d: Vec<f64> = (0..20)
-                    .map(|j| norm(sub(s.positions[j], center[j])))
+                    .map(|j| norm(sub(s.positions[j].into(), center[j])))
                     .collect();
                 median(&mut d)
             })
@@ -208,7 +208,7 @@ impl JointLog {
             .map(|(s, _)| *s)
             .collect();
         // The median frame always satisfies the limit, so `kept` is never empty.
-        let mut out = Skeleton::from_positions(center);
+        let mut out = Skeleton::from_arrays(center);
         for j in 0..20 {
             for k in 0..3 {
                 let vals: Vec<(f64, f64)> = kept
@@ -228,11 +228,11 @@ impl JointLog {
     pub fn bone_lengths(&self) -> BoneLengthReport {
         let mut bones = Vec::with_capacity(BONES.len());
         let mut worst = (BONES[0], 0.0);
-        for &(a, b) in BONES.iter() {
+        for &bone in BONES.iter() {
             let lengths: Vec<f64> = self
                 .frames
                 .iter()
-                .map(|f| norm(sub(f.skeleton.position(b), f.skeleton.position(a))))
+                .map(|f| f.skeleton.bone_vector(bone).norm())
                 .collect();
             let n = lengths.len().max(1) as f64;
             let mean = lengths.iter().sum::<f64>() / n;
@@ -240,10 +240,10 @@ impl JointLog {
             let std = var.sqrt();
             let rel = if mean > 0.0 { std / mean } else { 0.0 };
             if rel > worst.1 {
-                worst = ((a, b), rel);
+                worst = (bone, rel);
             }
             bones.push(BoneLengthStats {
-                bone: (a, b),
+                bone,
                 mean,
                 std,
                 min: lengths.iter().copied().fold(f64::INFINITY, f64::min),

@@ -21,8 +21,8 @@ use crate::camera::Intrinsics;
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
 use crate::geom::{cross, dot, norm, normalize, sub};
-use symcorr_attach::{Joint, Skeleton};
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::{Joint, Skeleton};
 
 /// Parameters of [`scan_mesh`].
 #[derive(Debug, Clone, PartialEq)]
@@ -253,12 +253,12 @@ pub fn scan_mesh(
         let up = skeleton
             .and_then(|s| {
                 normalize(sub(
-                    s.position(Joint::ShoulderCenter),
-                    s.position(Joint::HipCenter),
+                    s.position(Joint::ShoulderCenter).into(),
+                    s.position(Joint::HipCenter).into(),
                 ))
             })
             .unwrap_or([0.0, 1.0, 0.0]);
-        let hip = skeleton.map(|s| s.position(Joint::HipCenter));
+        let hip = skeleton.map(|s| s.position(Joint::HipCenter).into());
         let candidates: Vec<[f64; 3]> = points.iter().flatten().copied().collect();
         if let Some((plane, count)) = ransac_floor(&candidates, up, hip, opts) {
             // A handful of coplanar points is not a floor.

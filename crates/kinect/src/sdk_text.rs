@@ -8,7 +8,7 @@ use crate::error::KinectError;
 use crate::joints::{JointFrame, JointLog, KINECT_FPS};
 use crate::mapping::{Partial, SkeletonKind};
 use std::fmt::Write;
-use symcorr_attach::Joint;
+use symcorr_skeleton::Joint;
 
 pub(crate) fn tokens(line: &str) -> impl Iterator<Item = &str> {
     line.split(|c: char| c.is_whitespace() || c == ',')

@@ -2,7 +2,6 @@
 
 use approx::assert_abs_diff_eq;
 use std::path::PathBuf;
-use symcorr_attach::{Joint, Skeleton};
 use symcorr_kinect::joints::{
     parse_joints, parse_joints_as, read_ntu_skeleton, to_json_string, BodySelect, JointFormat,
 };
@@ -11,6 +10,7 @@ use symcorr_kinect::{
     read_joints, read_joints_with_format, write_joints_json, JointFrame, JointLog, KinectError,
     SkeletonKind,
 };
+use symcorr_skeleton::{Joint, Skeleton};
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -18,7 +18,8 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+fn close(a: impl Into<[f64; 3]>, b: impl Into<[f64; 3]>) -> bool {
+    let (a, b) = (a.into(), b.into());
     (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9)
 }
 
@@ -86,7 +87,10 @@ fn nite_json_maps_fifteen_joints_and_flags_interpolated_ones() {
     };
     assert!(close(
         s.position(Joint::HipCenter),
-        mid(v1.position(Joint::HipLeft), v1.position(Joint::HipRight))
+        mid(
+            v1.position(Joint::HipLeft).into(),
+            v1.position(Joint::HipRight).into()
+        )
     ));
     // Feet are extrapolated toward the facing direction: the subject faces the sensor (−z).
     for (a, f) in [
@@ -410,7 +414,7 @@ fn skeleton(seed: u64) -> Skeleton {
         let t = (seed as f64) * 0.37 + i as f64;
         *p = [t.sin(), t.cos(), 2.0 + 0.1 * i as f64];
     }
-    Skeleton::from_positions(positions)
+    Skeleton::from_arrays(positions)
 }
 
 #[test]
@@ -447,10 +451,10 @@ mod props {
                     p[2] = p[2].abs() + 0.5;
                 }
                 if text {
-                    Skeleton::from_positions(positions)
+                    Skeleton::from_arrays(positions)
                 } else {
                     Skeleton {
-                        positions,
+                        positions: positions.map(Into::into),
                         confidence,
                         interpolated,
                     }

@@ -2,13 +2,13 @@
 //! depth frames.
 
 use std::path::PathBuf;
-use symcorr_attach::{Joint, Skeleton};
 use symcorr_kinect::scan::{depth_to_points, fuse_depth_frames, scan_mesh, ScanOptions};
 use symcorr_kinect::{
     check_handedness, read_joints, DepthFrame, FrameSelect, Handedness, Intrinsics, JointLog,
     KinectError,
 };
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::{Bone, Joint, Skeleton};
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -125,10 +125,10 @@ fn bone_length_report_finds_the_stretching_bone() {
         }
     }
     let r = JointLog::from_skeletons(frames, FPS).bone_lengths();
-    assert_eq!(r.worst_bone, (Joint::ElbowLeft, Joint::WristLeft));
+    assert_eq!(r.worst_bone, Bone::new(Joint::ElbowLeft, Joint::WristLeft));
     assert!(!r.is_consistent(0.05));
     let fore = &r.bones[5];
-    assert_eq!(fore.bone, (Joint::ElbowLeft, Joint::WristLeft));
+    assert_eq!(fore.bone, Bone::new(Joint::ElbowLeft, Joint::WristLeft));
     assert!((fore.max / fore.min - 1.3).abs() < 1e-9);
     assert!(r.to_string().contains("elbow_left"));
 }
@@ -242,7 +242,7 @@ fn subject_skeleton() -> Skeleton {
     p[Joint::ShoulderCenter.index()] = [0.0, 0.2, 2.5];
     p[Joint::FootLeft.index()] = [-0.1, -0.95, 2.45];
     p[Joint::FootRight.index()] = [0.1, -0.95, 2.45];
-    Skeleton::from_positions(p)
+    Skeleton::from_arrays(p)
 }
 
 fn small_k() -> Intrinsics {

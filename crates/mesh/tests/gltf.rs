@@ -172,11 +172,11 @@ fn scene_graph_transforms_and_primitives_from_data_uri_glb_and_external_bin() {
 
 fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
     let mut json = doc.to_string().into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let mut out = b"glTF".to_vec();
@@ -258,7 +258,7 @@ fn index_types_u16_u32_and_float_colours() {
         for i in [0u32, 1, 2] {
             bin.extend_from_slice(&i.to_le_bytes()[..size]);
         }
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let col_off = bin.len();

@@ -25,11 +25,11 @@ use std::path::Path;
 use std::time::Instant;
 use symcorr::dataset::{read_mesh, read_skeleton, Dataset};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
-use symcorr_attach::{Joint, Segment};
 use symcorr_correspond::{
     candidates, evaluate, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
     EvalGraph, MatchOptions,
 };
+use symcorr_skeleton::{Joint, Segment};
 
 struct Mesh {
     p: PreparedMesh,
@@ -46,7 +46,7 @@ struct Mesh {
 /// `sym`), as signed distances over √area.
 fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
     let j = &m.attachment.joints;
-    let p = |x: Joint| j.position(x);
+    let p = |x: Joint| -> [f64; 3] { j.position(x).into() };
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let mid =
         |a: [f64; 3], b: [f64; 3]| [(a[0] + b[0]) / 2., (a[1] + b[1]) / 2., (a[2] + b[2]) / 2.];
@@ -189,7 +189,7 @@ fn axial(m: &PreparedMesh) -> Vec<f64> {
                 return 0.0;
             }
             let b = l.bones();
-            let (a, c) = (j.position(b[0].0), j.position(b[b.len() - 1].1));
+            let (a, c) = (j.position(b[0].parent), j.position(b[b.len() - 1].child));
             let d = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
             let e = [x[0] - a[0], x[1] - a[1], x[2] - a[2]];
             (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])

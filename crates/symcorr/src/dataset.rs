@@ -25,8 +25,8 @@ use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr_attach::Skeleton;
 use symcorr_correspond::{cumulative_curve, evaluate, table1_row, EvalGraph, Evaluation};
+use symcorr_skeleton::Skeleton;
 
 /// Mesh file extensions recognised in `meshes/`, in order of preference.
 const MESH_EXTENSIONS: [&str; 5] = ["off", "ply", "obj", "glb", "gltf"];

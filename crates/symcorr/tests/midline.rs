@@ -3,8 +3,8 @@
 
 use symcorr::{midline_halves, midline_sagittal};
 use symcorr_attach::testbody::t_pose;
-use symcorr_attach::Segment;
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::Segment;
 
 /// A skull (an egg: long face, short back, with a nose) symmetric about the shoulders' plane:
 /// the skull's own plane (the shoulders' refined by the skull's symmetry) must keep every

@@ -21,7 +21,8 @@
 
 use std::fmt::Write;
 
-use symcorr_attach::{AttachOptions, BoundaryConvention, LabelledBody, Segment};
+use symcorr_attach::{AttachOptions, BoundaryConvention, LabelledBody};
+use symcorr_skeleton::Segment;
 
 use crate::body::{Model, Pose, Shape};
 use crate::dataset::resolve_pose;

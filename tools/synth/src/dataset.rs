@@ -15,9 +15,9 @@ use std::path::{Path, PathBuf};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde_json::json;
-use symcorr_attach::Skeleton;
 use symcorr_kinect::joints::{write_joints_json, JointLog};
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::Skeleton;
 
 use crate::body::{Body, Model, Pose, Shape};
 use crate::error::{Result, SynthError};

@@ -11,10 +11,10 @@
 use std::path::Path;
 
 use serde_json::json;
-use symcorr_attach::Skeleton;
 use symcorr_kinect::joints::{write_joints_json, JointFrame, JointLog};
 use symcorr_kinect::write_depth_png16;
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::Skeleton;
 
 use crate::body::{Body, Pose};
 use crate::dataset::{mkdir, write_text};
@@ -31,7 +31,7 @@ fn kerr(e: symcorr_kinect::KinectError) -> SynthError {
 pub fn skeleton_to_camera(s: &Skeleton, to_cam: &Rigid) -> Skeleton {
     let mut out = s.clone();
     for p in out.positions.iter_mut() {
-        *p = to_cam.apply(*p);
+        *p = to_cam.apply((*p).into()).into();
     }
     out
 }

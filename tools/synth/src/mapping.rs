@@ -44,7 +44,7 @@
 //! once on the base shape's rest pose and are the same for every body of a dataset (they are
 //! per-vertex ground truth, like the vertex ids).
 
-use symcorr_attach::{Joint, Segment, Skeleton};
+use symcorr_skeleton::{Joint, Segment, Skeleton};
 
 use crate::body::{Body, Posed};
 use crate::error::Result;
@@ -152,7 +152,7 @@ pub fn kinect_joints(body: &Body<'_>, posed: &Posed) -> Result<Skeleton> {
         let p = scale(p, 1.0 / r.points.len() as f64);
         positions[r.joint.index()] = body.carry(&posed.skin, body.bone(r.carrier)?, p);
     }
-    Ok(Skeleton::from_positions(positions))
+    Ok(Skeleton::from_arrays(positions))
 }
 
 fn point_segment_distance(p: V3, a: V3, b: V3) -> f64 {
@@ -192,7 +192,8 @@ pub fn reference_labels(body: &Body<'_>) -> Result<Vec<u8>> {
                 let p = rest.mesh.positions[v];
                 let mut pick = (Segment::Pelvis, f64::INFINITY);
                 for (s, a, b) in hip_bones {
-                    let d = point_segment_distance(p, skel.position(a), skel.position(b));
+                    let d =
+                        point_segment_distance(p, skel.position(a).into(), skel.position(b).into());
                     if d < pick.1 - 1e-12 {
                         pick = (s, d);
                     }
@@ -211,10 +212,13 @@ pub fn segment_hops() -> [[u8; 17]; 17] {
     for a in Segment::ALL {
         d[a.index()][a.index()] = 0;
         for b in Segment::ALL {
-            let share = a.bones().iter().any(|&(p, q)| {
-                b.bones()
-                    .iter()
-                    .any(|&(r, s)| p == r || p == s || q == r || q == s)
+            let share = a.bones().iter().any(|x| {
+                b.bones().iter().any(|y| {
+                    x.parent == y.parent
+                        || x.parent == y.child
+                        || x.child == y.parent
+                        || x.child == y.child
+                })
             });
             if share && a != b {
                 d[a.index()][b.index()] = 1;

@@ -2,8 +2,8 @@
 
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
-use symcorr_attach::Skeleton;
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::Skeleton;
 
 use crate::geom::nearest_vertex;
 use crate::poses::unit_f64;
@@ -65,7 +65,7 @@ pub fn apply_joint_noise(
     rng.set_stream(stream);
     let n_surface = (noise.surface_fraction * 20.0).round() as usize;
     for j in choose(&mut rng, n_surface) {
-        out.positions[j] = mesh.positions[nearest_vertex(mesh, out.positions[j])];
+        out.positions[j] = mesh.positions[nearest_vertex(mesh, out.positions[j].into())].into();
     }
     let sigma = noise.sigma_cm / 100.0;
     for p in out.positions.iter_mut() {

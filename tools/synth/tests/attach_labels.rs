@@ -19,9 +19,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use symcorr_attach::{attach, AttachOptions, BoundaryConvention, Segment, Skeleton};
+use symcorr_attach::{attach, AttachOptions, BoundaryConvention};
 use symcorr_kinect::scan::{scan_mesh, ScanOptions};
 use symcorr_mesh::TriMesh;
+use symcorr_skeleton::{Segment, Skeleton};
 use symcorr_synth::dataset::resolve_pose;
 use symcorr_synth::mapping::{
     kinect_joints, reference_labels, segment_hops, SelfIntersectionCheck,
@@ -259,8 +260,8 @@ fn score(
         let g = got[v];
         total += area[v];
         conf[w.index()][g.index()] += area[v];
-        let gs = g.side();
-        if gs != 0 && w.side() != gs {
+        let gs = g.side().sign();
+        if gs != 0 && w.side().sign() != gs {
             cross_ref += area[v];
         }
         if gs != 0 && t.side * f64::from(gs) < -MIDLINE_M {

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use symcorr_attach::{Joint, Segment};
+use symcorr_skeleton::{Joint, Segment};
 use symcorr_synth::geom::winding_number;
 use symcorr_synth::mapping::{kinect_joints, reference_labels};
 use symcorr_synth::noise::{apply_joint_noise, JointNoise};
@@ -101,8 +101,8 @@ fn posing_preserves_bone_lengths() {
                 (Joint::KneeRight, Joint::AnkleRight),
                 (Joint::AnkleLeft, Joint::FootLeft),
             ] {
-                let l0 = d(rest_joints.position(a), rest_joints.position(b));
-                let l = d(j.position(a), j.position(b));
+                let l0 = nalgebra::distance(&rest_joints.position(a), &rest_joints.position(b));
+                let l = nalgebra::distance(&j.position(a), &j.position(b));
                 assert!((l - l0).abs() < 1e-9, "{name}: {a:?}-{b:?} {l0} → {l}");
             }
             if name != "rest" {
@@ -127,7 +127,7 @@ fn joints_lie_inside_the_body() {
             let posed = body.pose(&pose).unwrap();
             let j = kinect_joints(&body, &posed).unwrap();
             for joint in Joint::ALL {
-                let w = winding_number(&posed.mesh, j.position(joint));
+                let w = winding_number(&posed.mesh, j.position(joint).into());
                 assert!(w > 0.5, "{name}: {} has winding number {w}", joint.name());
             }
         }

@@ -46,7 +46,7 @@ pub fn unambiguous(m: &TriMesh, sk: &Skeleton, margin: f64) -> Vec<bool> {
         .map(|&x| {
             let raw: Vec<f64> = BONES
                 .iter()
-                .map(|(p, q)| seg_dist(x, sk.position(*p), sk.position(*q)))
+                .map(|b| seg_dist(x, sk.position(b.parent).into(), sk.position(b.child).into()))
                 .collect();
             let argmin = |d: &[f64]| (0..d.len()).min_by(|&a, &b| d[a].total_cmp(&d[b]));
             let mut d: Vec<f64> = raw.iter().zip(RADII).map(|(r, c)| r - c).collect();
@@ -95,7 +95,8 @@ pub fn noisy(sk: &Skeleton, mesh: &TriMesh, sigma: f64, biased: f64, rng: &mut R
                     let db: f64 = (0..3).map(|k| (b[k] - x[k]).powi(2)).sum();
                     da.total_cmp(&db)
                 })
-                .unwrap();
+                .unwrap()
+                .into();
         }
         for c in p.iter_mut() {
             *c += sigma * rng.normal();

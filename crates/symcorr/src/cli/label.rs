@@ -7,7 +7,8 @@ use serde_json::{json, Map, Value};
 use std::path::PathBuf;
 use symcorr::dataset::{read_mesh, read_skeleton_as};
 use symcorr::output::atomic_write;
-use symcorr_attach::{attach, palette, AttachOptions, Joint, Segment, BONES};
+use symcorr_attach::{attach, palette, AttachOptions};
+use symcorr_skeleton::{Joint, Segment, BONES};
 
 /// Arguments of `symcorr label`.
 #[derive(clap::Args)]
@@ -85,7 +86,10 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
     let mut joints = Map::new();
     for j in Joint::ALL {
         if att.joints.confidence[j.index()] > 0.0 || att.joints.interpolated[j.index()] {
-            joints.insert(j.name().into(), json!(att.joints.position(j)));
+            joints.insert(
+                j.name().into(),
+                json!(<[f64; 3]>::from(att.joints.position(j))),
+            );
         }
     }
     let al = &d.alignment;
@@ -123,7 +127,7 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
     if a.weights {
         let bones: Vec<String> = BONES
             .iter()
-            .map(|(p, c)| format!("{}-{}", p.name(), c.name()))
+            .map(|b| format!("{}-{}", b.parent.name(), b.child.name()))
             .collect();
         let rows: Vec<Value> = (0..mesh.num_vertices())
             .map(|v| {

@@ -260,8 +260,8 @@ fn openni_frames(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use symcorr_attach::Skeleton;
     use symcorr_kinect::joints::JointLog;
+    use symcorr_skeleton::Skeleton;
 
     /// A sphere of radius 0.3 m at 2.5 m in front of a wall at 4 m, seen by `k`.
     fn sphere_frame(k: &Intrinsics) -> DepthFrame {
@@ -309,7 +309,7 @@ mod tests {
         let joints = dir.path().join("j.json");
         symcorr_kinect::write_joints_json(
             &joints,
-            &JointLog::from_skeletons(vec![Skeleton::from_positions(p); 3], 30.0),
+            &JointLog::from_skeletons(vec![Skeleton::from_arrays(p); 3], 30.0),
         )
         .unwrap();
         let out = dir.path().join("scan.ply");

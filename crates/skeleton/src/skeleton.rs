@@ -1,0 +1,93 @@
+//! A skeleton: one position, confidence and provenance per joint.
+
+use crate::{Bone, Joint};
+use nalgebra::{Point3, Vector3};
+
+/// A canonical 20-joint skeleton: one position (metres unless stated otherwise, in whatever
+/// frame the source used) and one confidence in [0, 1] per joint. Confidence 0 means the joint
+/// was not tracked; its position is then an estimate (see `interpolated`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skeleton {
+    /// Position per joint, indexed by [`Joint::index`].
+    pub positions: [Point3<f64>; Joint::COUNT],
+    /// Tracking confidence per joint in [0, 1].
+    pub confidence: [f64; Joint::COUNT],
+    /// Joints whose position was not measured but interpolated along the bone chain by an importer.
+    pub interpolated: [bool; Joint::COUNT],
+}
+
+impl Skeleton {
+    /// A skeleton with all joints at the given positions, confidence 1, nothing interpolated.
+    pub fn from_positions(positions: [Point3<f64>; Joint::COUNT]) -> Self {
+        Skeleton {
+            positions,
+            confidence: [1.0; Joint::COUNT],
+            interpolated: [false; Joint::COUNT],
+        }
+    }
+
+    /// [`Skeleton::from_positions`] from plain `[x, y, z]` arrays, in [`Joint::ALL`] order.
+    ///
+    /// ```
+    /// use symcorr_skeleton::{Joint, Skeleton};
+    /// let mut xyz = [[0.0; 3]; Joint::COUNT];
+    /// xyz[Joint::Head.index()] = [0.0, 1.7, 0.0];
+    /// let s = Skeleton::from_arrays(xyz);
+    /// assert_eq!(s.position(Joint::Head).y, 1.7);
+    /// ```
+    pub fn from_arrays(positions: [[f64; 3]; Joint::COUNT]) -> Self {
+        Skeleton::from_positions(positions.map(Point3::from))
+    }
+
+    /// The positions as plain `[x, y, z]` arrays in [`Joint::ALL`] order (what file formats
+    /// hold).
+    pub fn to_arrays(&self) -> [[f64; 3]; Joint::COUNT] {
+        self.positions.map(|p| p.into())
+    }
+
+    /// Position of joint `j`.
+    pub fn position(&self, j: Joint) -> Point3<f64> {
+        self.positions[j.index()]
+    }
+
+    /// The vector from a bone's parent joint to its child joint.
+    pub fn bone_vector(&self, bone: Bone) -> Vector3<f64> {
+        self.position(bone.child) - self.position(bone.parent)
+    }
+
+    /// The skeleton with left and right exchanged (positions unchanged, names swapped): what a
+    /// left/right-mirrored tracker would have reported.
+    pub fn swap_sides(&self) -> Skeleton {
+        let mut out = self.clone();
+        for j in Joint::ALL {
+            out.positions[j.index()] = self.positions[j.mirror().index()];
+            out.confidence[j.index()] = self.confidence[j.mirror().index()];
+            out.interpolated[j.index()] = self.interpolated[j.mirror().index()];
+        }
+        out
+    }
+
+    /// The skeleton with every position mapped by `f` (confidence and provenance kept).
+    pub fn map_positions(&self, f: impl Fn(Point3<f64>) -> Point3<f64>) -> Skeleton {
+        Skeleton {
+            positions: self.positions.map(f),
+            ..self.clone()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn swapping_sides_twice_is_the_identity() {
+        let s = Skeleton::from_arrays(std::array::from_fn(|i| [i as f64, 2.0 * i as f64, 0.5]));
+        let w = s.swap_sides();
+        assert_eq!(w.position(Joint::KneeLeft), s.position(Joint::KneeRight));
+        assert_eq!(w.position(Joint::Head), s.position(Joint::Head));
+        assert_eq!(w.swap_sides(), s);
+        let b = Bone::new(Joint::HipCenter, Joint::Spine);
+        assert_eq!(s.bone_vector(b), Vector3::new(1.0, 2.0, 0.0));
+    }
+}
