@@ -423,9 +423,12 @@ pub const DEFAULT_ICP_POINTS: usize = 16_000;
 /// The result of [`articulated_match`].
 #[derive(Debug, Clone)]
 pub struct ArticulatedMatches {
-    /// One match per template vertex, in vertex order; `confidence` is `1/(1 + d/gate)` with
-    /// `d` the final distance (over √area in `descriptor_distance`).
-    pub matches: Vec<crate::Match>,
+    /// One pair per template vertex, in vertex order; `confidence` is `1/(1 + d/gate)` with
+    /// `d` the final distance.
+    pub pairs: Vec<crate::Pair>,
+    /// Per template vertex, the final distance from the posed template point to its match,
+    /// over √area.
+    pub distance: Vec<f64>,
     /// Per template vertex: does the target show it (within the final gate, same facing)?
     pub has_counterpart: Vec<bool>,
     /// The template posed onto the target (the final skinning).
@@ -771,26 +774,26 @@ pub fn articulated_match(
     let t = Instant::now();
     let near = nearest(&posed, &posed_normals, None)?;
     let mut has_counterpart = Vec::with_capacity(n);
-    let matches = near
+    let mut distance = Vec::with_capacity(n);
+    let pairs = near
         .iter()
         .enumerate()
         .map(|(v, &(q, _))| {
             let d = norm(sub(posed[v], target.positions[q as usize]));
             let seen = holds(posed[v], posed_normals[v], q, gate);
             has_counterpart.push(seen);
-            crate::Match {
+            distance.push(d / unit_len);
+            crate::Pair {
                 template: v as u32,
                 target: q,
                 confidence: 1.0 / (1.0 + d / gate),
-                descriptor_distance: d / unit_len,
-                profile_gap: 0.0,
-                candidate_spread: None,
             }
         })
         .collect();
     timings.push(("map", t.elapsed().as_secs_f64()));
     Ok(ArticulatedMatches {
-        matches,
+        pairs,
+        distance,
         has_counterpart,
         posed,
         transforms,

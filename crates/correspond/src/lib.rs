@@ -228,7 +228,7 @@ pub use refine::{
     DEFAULT_ZOOMOUT_POINTS,
 };
 pub use sample::farthest_point_sample;
-pub use selection::{assign_confidence, base_profile, select, Match};
+pub use selection::{assign_confidence, base_profile, select, Match, Pair};
 pub use symmetry::refine_symmetry_plane;
 
 use std::time::Instant;

@@ -672,8 +672,11 @@ impl Default for RefineOptions {
 /// The result of [`refine_dense`].
 #[derive(Debug, Clone)]
 pub struct RefinedMatches {
-    /// One match per template vertex, in vertex order.
-    pub matches: Vec<crate::Match>,
+    /// One pair per template vertex, in vertex order.
+    pub pairs: Vec<crate::Pair>,
+    /// Per template vertex, the final spectral residual `r` ([`ZoomOutResult::residual`],
+    /// square-rooted) behind its confidence.
+    pub residual: Vec<f64>,
     /// The initial (landmark + descriptor) map, target vertex per template vertex.
     pub initial: Vec<u32>,
     /// Fraction of target vertices hit by the final map ([`coverage`]).
@@ -686,8 +689,7 @@ pub struct RefinedMatches {
 /// neighbour in landmark-coordinate + si-HKS space within each pool, then segment-constrained
 /// ZoomOut. Every template vertex gets a match; its confidence is `1 / (1 + r/r̃)` with `r`
 /// the final spectral residual ([`ZoomOutResult::residual`], square-rooted) and `r̃` its
-/// median, stored with `r` as [`Match::descriptor_distance`](crate::Match) (the eq. 8 gap is 0:
-/// no selection step).
+/// median, with `r` kept in [`RefinedMatches::residual`].
 ///
 /// Errors: [`CorrespondError::InvalidArgument`] when the sides' tables disagree in size.
 pub fn refine_dense(
@@ -785,22 +787,20 @@ pub fn refine_dense(
             v[k].max(f64::MIN_POSITIVE)
         }
     };
-    let matches = z
+    let pairs = z
         .map
         .iter()
         .zip(&r)
         .enumerate()
-        .map(|(p, (&q, &r))| crate::Match {
+        .map(|(p, (&q, &r))| crate::Pair {
             template: p as u32,
             target: q,
             confidence: 1.0 / (1.0 + r / median),
-            descriptor_distance: r,
-            profile_gap: 0.0,
-            candidate_spread: None,
         })
         .collect();
     Ok(RefinedMatches {
-        matches,
+        pairs,
+        residual: r,
         coverage: coverage(&z.map, m),
         initial,
         timings,

@@ -36,7 +36,32 @@ pub fn base_profile<R: AsRef<[f64]>>(rows: &[R], area: f64) -> Vec<f64> {
         .collect()
 }
 
-/// One selected match `template → target`.
+/// A matched pair `template → target` with a confidence in (0, 1] (higher is more
+/// trustworthy): what every method returns. What a confidence means is the method's own:
+/// the paper's ranks by eq. 8's gap ([`assign_confidence`]), the refined method's by the
+/// spectral residual, the articulated method's by the final fit distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pair {
+    /// Template vertex.
+    pub template: u32,
+    /// Target vertex.
+    pub target: u32,
+    /// Confidence in (0, 1].
+    pub confidence: f64,
+}
+
+impl From<&Match> for Pair {
+    fn from(m: &Match) -> Pair {
+        Pair {
+            template: m.template,
+            target: m.target,
+            confidence: m.confidence,
+        }
+    }
+}
+
+/// One match `template → target` selected by the paper's eq. 8, with what the selection
+/// knows about it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Match {
     /// Template vertex.

@@ -106,9 +106,9 @@ fn a_skinned_copy_is_matched_to_itself() {
         &ArticulatedOptions::default(),
     )
     .unwrap();
-    assert_eq!(out.matches.len(), a.mesh.num_vertices());
+    assert_eq!(out.pairs.len(), a.mesh.num_vertices());
     let err: Vec<f64> = out
-        .matches
+        .pairs
         .iter()
         .map(|m| {
             dist(
@@ -128,7 +128,7 @@ fn a_skinned_copy_is_matched_to_itself() {
     );
     // No match lands on the other side of the body (x < 0 is the subject's left here).
     let crossed = out
-        .matches
+        .pairs
         .iter()
         .filter(|m| {
             let (p, q) = (
@@ -191,7 +191,7 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
     )
     .unwrap();
     let (mut tp, mut fp, mut fneg, mut err, mut n_err) = (0, 0, 0, 0.0, 0);
-    for (m, &seen) in out.matches.iter().zip(&out.has_counterpart) {
+    for (m, &seen) in out.pairs.iter().zip(&out.has_counterpart) {
         let visible = new_id[m.template as usize] != u32::MAX;
         match (visible, seen) {
             (true, true) => tp += 1,

@@ -357,7 +357,7 @@ impl BenchReport {
     pub fn fallbacks(&self) -> usize {
         self.pairs
             .iter()
-            .map(|p| p.correspondence.filter.fallbacks)
+            .map(|p| p.correspondence.filter_stats().fallbacks)
             .sum()
     }
 }
@@ -388,10 +388,10 @@ pub fn evaluate_pair(
     // Input id i of the template is input id i of the target; both through their repairs.
     let to_target = target.prepared_ids();
     let common_to_target = |c: u32| -> Option<u32> { *to_target.get(c as usize)? };
-    let mut pairs = Vec::with_capacity(corr.matches.len());
-    let mut truth = Vec::with_capacity(corr.matches.len());
-    let mut confidence = Vec::with_capacity(corr.matches.len());
-    for m in &corr.matches {
+    let mut pairs = Vec::with_capacity(corr.pairs.len());
+    let mut truth = Vec::with_capacity(corr.pairs.len());
+    let mut confidence = Vec::with_capacity(corr.pairs.len());
+    for m in &corr.pairs {
         if let Some(q) = common_to_target(template.input_id(m.template)) {
             truth.push(q);
             pairs.push((truth.len() as u32 - 1, m.target));
@@ -438,9 +438,9 @@ fn evaluate_partial(
             visible[p as usize] = true;
         }
     }
-    let mut pairs = Vec::with_capacity(corr.matches.len());
-    let mut confidence = Vec::with_capacity(corr.matches.len());
-    for m in &corr.matches {
+    let mut pairs = Vec::with_capacity(corr.pairs.len());
+    let mut confidence = Vec::with_capacity(corr.pairs.len());
+    for m in &corr.pairs {
         if !visible[m.template as usize] {
             continue;
         }
@@ -699,7 +699,7 @@ mod tests {
             }
         };
         let visible = corr
-            .matches
+            .pairs
             .iter()
             .filter(|m| target_of(m.template).is_some())
             .count();
@@ -707,7 +707,7 @@ mod tests {
 
         let mut perfect = corr.clone();
         let mut mirrored = corr.clone();
-        for (m, w) in perfect.matches.iter_mut().zip(&mut mirrored.matches) {
+        for (m, w) in perfect.pairs.iter_mut().zip(&mut mirrored.pairs) {
             if let Some(q) = target_of(m.template) {
                 m.target = q;
             }

@@ -69,9 +69,10 @@ pub mod output;
 mod pipeline;
 
 pub use pipeline::{
-    midline_halves, midline_sagittal, symmetric_midline_halves, Correspondence, Method, Mode,
-    Pipeline, PipelineOptions, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
-    DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES, PARTIAL_BOUNDARY_RATIO,
+    midline_halves, midline_sagittal, symmetric_midline_halves, Correspondence, Method,
+    MethodReport, Mode, PaperData, Pipeline, PipelineOptions, PrepareOptions, PreparedMesh,
+    RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES,
+    PARTIAL_BOUNDARY_RATIO,
 };
 
 /// Everything that can go wrong in the pipeline, by stage.
@@ -96,6 +97,10 @@ pub enum PipelineError {
     /// An option is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// A mesh was prepared without the data a method needs ([`PreparedMesh::new`] prepares
+    /// for the methods it is given).
+    #[error("the mesh was not prepared for the {0:?} method")]
+    NotPreparedFor(Method),
     /// A file other than a mesh or joint file (dataset list, output) is wrong.
     #[error("{file}: {message}")]
     File {

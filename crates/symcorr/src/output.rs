@@ -53,16 +53,16 @@ pub fn correspondence_json(
 ) -> Value {
     // Ids in the file are the input files' ids (the stages ran on the repaired meshes).
     // Template points a partial target does not show are listed apart, not as pairs.
-    let seen = |i: usize| corr.has_counterpart.as_ref().is_none_or(|h| h[i]);
+    let seen = |i: usize| corr.has_counterpart().is_none_or(|h| h[i]);
     let no_counterpart: Vec<u32> = corr
-        .matches
+        .pairs
         .iter()
         .enumerate()
         .filter(|&(i, _)| !seen(i))
         .map(|(_, m)| template.input_id(m.template))
         .collect();
     let pairs: Vec<Value> = corr
-        .matches
+        .pairs
         .iter()
         .enumerate()
         .filter(|&(i, _)| seen(i))
@@ -90,15 +90,15 @@ pub fn correspondence_json(
         "pairs": pairs,
         "segments": {"template": labels(template), "target": labels(target)},
         "skeleton_filter": {
-            "points": corr.filter.points,
-            "kept": corr.filter.kept,
-            "removed": corr.filter.removed,
-            "fallbacks": corr.filter.fallbacks,
-            "segment_missing": corr.filter.segment_missing,
+            "points": corr.filter_stats().points,
+            "kept": corr.filter_stats().kept,
+            "removed": corr.filter_stats().removed,
+            "fallbacks": corr.filter_stats().fallbacks,
+            "segment_missing": corr.filter_stats().segment_missing,
         },
         "timings_s": timings,
     });
-    if corr.has_counterpart.is_some() {
+    if corr.has_counterpart().is_some() {
         doc["no_counterpart"] = json!(no_counterpart);
     }
     doc
@@ -152,7 +152,7 @@ pub fn match_colours(
     let (lo, hi) = template.mesh.bounding_box();
     let tp = &template.mesh.positions;
     let colours: Vec<[u8; 3]> = corr
-        .matches
+        .pairs
         .iter()
         .map(|m| field_colour(tp[m.template as usize], lo, hi))
         .collect();
@@ -197,7 +197,7 @@ pub fn match_colours(
         }
         out
     };
-    let m = &corr.matches;
+    let m = &corr.pairs;
     let t_col = spread(&template.mesh, &|i| m[i].template as usize);
     let u_col = spread(&target.mesh, &|i| m[i].target as usize);
     (t_col, u_col)

@@ -9,7 +9,7 @@ use symcorr_correspond::{
     articulated_match, base_profile, coverage, farthest_point_sample, landmark_coordinates,
     match_points, outward_normals, refine_dense, refine_symmetry_plane, skeleton_landmarks,
     ArticulatedMatches, ArticulatedOptions, ArticulatedSide, Descriptors, FilterStats, Match,
-    MatchOptions, RefineOptions, RefineSide, Side, SpectralBasis,
+    MatchOptions, Pair, RefineOptions, RefineSide, Side, SpectralBasis,
 };
 use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
 use symcorr_skeleton::{Joint, Plane, SagittalPlanes, Segment, Skeleton};
@@ -78,19 +78,6 @@ pub struct PrepareOptions {
     /// Half-width of the band around the skeleton's sagittal plane in which a midline vertex
     /// gets no half ([`midline_halves`]), in units of √area.
     pub midline_margin: f64,
-    /// Also keep what the refined method needs ([`RefineData`]: the Laplace–Beltrami basis,
-    /// skeleton landmark coordinates, symmetry-refined halves). [`Pipeline::prepare`] sets it
-    /// for [`Method::Refined`].
-    pub refine_data: bool,
-    /// Compute the paper's base vertex set and its profile (§3.3). [`Pipeline::prepare`] turns
-    /// it off for [`Method::Refined`], which does not use them (then `base_set` and `profile`
-    /// are empty and the paper's method refuses the mesh).
-    pub paper_data: bool,
-    /// Run the spectral stages at all (Laplacian, eigenpairs, si-HKS, curvature).
-    /// [`Pipeline::prepare`] turns them off for [`Method::Articulated`], which needs only the
-    /// attachment; the descriptors are then one zero column, and the paper's and the refined
-    /// methods refuse the mesh.
-    pub spectral_data: bool,
     /// Keep the eigenpairs on disk and reuse them ([`symcorr_spectral::cache`]): `None` (the
     /// default) always runs the eigensolver. A file is used only if it was written for exactly
     /// this (repaired) mesh, eigenpair count and solver setting; a stale, corrupted or unreadable
@@ -119,9 +106,6 @@ impl Default for PrepareOptions {
             base_radius: DEFAULT_BASE_RADIUS,
             attach: AttachOptions::default(),
             midline_margin: DEFAULT_MIDLINE_MARGIN,
-            refine_data: false,
-            paper_data: true,
-            spectral_data: true,
             cache: None,
         }
     }
@@ -144,21 +128,11 @@ pub struct PreparedMesh {
     pub input: Option<TriMesh>,
     /// Total surface area.
     pub area: f64,
-    /// si-HKS descriptor per vertex (§3.1).
-    pub descriptors: Descriptors,
-    /// Gaussian curvature per vertex (eq. 4).
-    pub curvature: Vec<f64>,
-    /// The base vertex set (§3.3).
-    pub base_set: Vec<u32>,
-    /// `D̂(v)`: mean edge-geodesic distance to the base set over √area (eq. 7).
-    pub profile: Vec<f64>,
     /// Skeleton attachment: segment labels, weights, refined joints.
     pub attachment: Attachment,
-    /// Sagittal half per vertex of the midline segments ([`midline_halves`]).
-    pub halves: Vec<i8>,
-    /// Sagittal coordinate per vertex of the midline segments ([`midline_sagittal`]).
-    pub sagittal: Vec<f64>,
-    /// What the refined method needs (with [`PrepareOptions::refine_data`]).
+    /// What the paper's method needs (prepared for [`Method::Paper`]).
+    pub paper: Option<PaperData>,
+    /// What the refined method needs (prepared for [`Method::Refined`]).
     pub refine: Option<RefineData>,
     /// Total length of the mesh's boundary edges (0 for a closed surface): a single-view scan
     /// has a long one ([`PreparedMesh::is_partial`]).
@@ -169,9 +143,12 @@ pub struct PreparedMesh {
 }
 
 impl PreparedMesh {
-    /// Runs the per-mesh stages: the default mesh repair, Laplacian, eigenpairs, si-HKS,
-    /// curvature, base vertex set and its distance profile, and (in parallel) skeleton
-    /// attachment.
+    /// Runs the per-mesh stages that `methods` need: always the default mesh repair and
+    /// skeleton attachment; for [`Method::Paper`] the Laplacian, eigenpairs, si-HKS, curvature,
+    /// base vertex set and its distance profile, and the sagittal halves; for
+    /// [`Method::Refined`] the eigenpairs, si-HKS, landmark coordinates and symmetry halves.
+    /// The spectral stages run in parallel with the attachment. A mesh prepared for one method
+    /// is refused by another that needs more.
     ///
     /// Errors: [`PipelineError::Mesh`] (broken invariants, nothing left after the repair),
     /// [`PipelineError::Spectral`] (e.g. a non-converging eigensolve), [`PipelineError::Attach`]
@@ -179,9 +156,11 @@ impl PreparedMesh {
     pub fn new(
         input: TriMesh,
         skeleton: &Skeleton,
+        methods: &[Method],
         options: &PrepareOptions,
     ) -> Result<PreparedMesh, PipelineError> {
-        if options.spectral_data && options.eigenpairs < 2 {
+        let needs = Needs::of(methods);
+        if needs.spectral() && options.eigenpairs < 2 {
             return Err(PipelineError::InvalidOption(format!(
                 "eigenpairs = {} (need at least 2)",
                 options.eigenpairs
@@ -202,7 +181,7 @@ impl PreparedMesh {
             Some(input)
         };
         let (spectral, attached) = rayon::join(
-            || spectral_stages(&mesh, options),
+            || spectral_stages(&mesh, needs, options),
             || {
                 let t = Instant::now();
                 attach(&mesh, skeleton, &options.attach).map(|a| (a, t.elapsed().as_secs_f64()))
@@ -212,13 +191,22 @@ impl PreparedMesh {
         let (attachment, t_attach) = attached?;
         timings.push(("attachment".into(), t_attach));
         let area = mesh.total_area();
-        let halves = midline_halves(
-            &mesh,
-            &attachment.labels,
-            &attachment.joints,
-            options.midline_margin * area.sqrt(),
-        );
-        let sagittal = midline_sagittal(&mesh, &attachment.labels, &attachment.joints);
+        let paper = match sp.paper {
+            Some((descriptors, base_set, profile)) => Some(PaperData {
+                halves: midline_halves(
+                    &mesh,
+                    &attachment.labels,
+                    &attachment.joints,
+                    options.midline_margin * area.sqrt(),
+                ),
+                sagittal: midline_sagittal(&mesh, &attachment.labels, &attachment.joints),
+                descriptors,
+                curvature: sp.curvature,
+                base_set,
+                profile,
+            }),
+            None => None,
+        };
         let refine = match sp.refine {
             Some(r) => Some(RefineData::new(&mesh, &attachment, r, &mut timings)?),
             None => None,
@@ -226,18 +214,13 @@ impl PreparedMesh {
         let boundary_length = boundary_length(&mesh);
         Ok(PreparedMesh {
             boundary_length,
-            halves,
-            sagittal,
+            paper,
             refine,
             area,
             mesh,
             repair: report,
             vertex_map,
             input,
-            descriptors: sp.descriptors,
-            curvature: sp.curvature,
-            base_set: sp.base_set,
-            profile: sp.profile,
             attachment,
             timings,
         })
@@ -297,16 +280,57 @@ impl PreparedMesh {
 
     /// This mesh as one side of the paper's matching stages (symcorr-correspond's
     /// `match_points`): descriptors, labels, base-set profile, halves, sagittal coordinates and
-    /// positions.
-    pub fn side(&self) -> Side<'_> {
-        Side {
-            descriptors: &self.descriptors,
+    /// positions. Errors unless the mesh was prepared for [`Method::Paper`].
+    pub fn paper_side(&self) -> Result<Side<'_>, PipelineError> {
+        let p = self
+            .paper
+            .as_ref()
+            .ok_or(PipelineError::NotPreparedFor(Method::Paper))?;
+        Ok(Side {
+            descriptors: &p.descriptors,
             labels: &self.attachment.labels,
-            profile: &self.profile,
-            halves: Some(&self.halves),
-            sagittal: Some(&self.sagittal),
+            profile: &p.profile,
+            halves: Some(&p.halves),
+            sagittal: Some(&p.sagittal),
             positions: Some(&self.mesh.positions),
+        })
+    }
+}
+
+/// Per-mesh data of the paper's method (§3.1–3.3) and its sagittal constraint.
+#[derive(Debug, Clone)]
+pub struct PaperData {
+    /// si-HKS descriptor per vertex (§3.1).
+    pub descriptors: Descriptors,
+    /// Gaussian curvature per vertex (eq. 4).
+    pub curvature: Vec<f64>,
+    /// The base vertex set (§3.3).
+    pub base_set: Vec<u32>,
+    /// `D̂(v)`: mean edge-geodesic distance to the base set over √area (eq. 7).
+    pub profile: Vec<f64>,
+    /// Sagittal half per vertex of the midline segments ([`midline_halves`]).
+    pub halves: Vec<i8>,
+    /// Sagittal coordinate per vertex of the midline segments ([`midline_sagittal`]).
+    pub sagittal: Vec<f64>,
+}
+
+/// Which per-mesh stages a set of methods needs.
+#[derive(Debug, Clone, Copy, Default)]
+struct Needs {
+    paper: bool,
+    refine: bool,
+}
+
+impl Needs {
+    fn of(methods: &[Method]) -> Needs {
+        Needs {
+            paper: methods.contains(&Method::Paper),
+            refine: methods.contains(&Method::Refined),
         }
+    }
+
+    fn spectral(self) -> bool {
+        self.paper || self.refine
     }
 }
 
@@ -426,11 +450,16 @@ fn midline_signed_distances(mesh: &TriMesh, labels: &[Segment], joints: &Skeleto
 const SKULL_START: f64 = 0.5;
 
 struct Spectral {
-    descriptors: Descriptors,
     curvature: Vec<f64>,
-    base_set: Vec<u32>,
-    profile: Vec<f64>,
-    refine: Option<(symcorr_spectral::Eigenpairs, Vec<f64>, HeatGeodesics)>,
+    /// Descriptors, base set and profile (the paper's).
+    paper: Option<(Descriptors, Vec<u32>, Vec<f64>)>,
+    /// Eigenpairs, mass, heat geodesics and descriptors (the refined method's).
+    refine: Option<(
+        symcorr_spectral::Eigenpairs,
+        Vec<f64>,
+        HeatGeodesics,
+        Descriptors,
+    )>,
 }
 
 /// Per-mesh data of the refined method ([`Method::Refined`], DESIGN.md Algorithm 7).
@@ -449,13 +478,20 @@ pub struct RefineData {
     pub halves: Vec<i8>,
     /// The edge graph (geodesic bands around segments).
     pub graph: EdgeGraph,
+    /// si-HKS descriptor per vertex (joined to the landmark coordinates).
+    pub descriptors: Descriptors,
 }
 
 impl RefineData {
     fn new(
         mesh: &TriMesh,
         attachment: &Attachment,
-        (eig, mass, heat): (symcorr_spectral::Eigenpairs, Vec<f64>, HeatGeodesics),
+        (eig, mass, heat, descriptors): (
+            symcorr_spectral::Eigenpairs,
+            Vec<f64>,
+            HeatGeodesics,
+            Descriptors,
+        ),
         timings: &mut Timings,
     ) -> Result<RefineData, PipelineError> {
         let t = Instant::now();
@@ -492,6 +528,7 @@ impl RefineData {
             landmarks,
             halves,
             graph: EdgeGraph::new(mesh),
+            descriptors,
         })
     }
 }
@@ -544,17 +581,15 @@ type Timings = Vec<(String, f64)>;
 
 fn spectral_stages(
     mesh: &TriMesh,
+    needs: Needs,
     options: &PrepareOptions,
 ) -> Result<(Spectral, Timings), PipelineError> {
     let mut timings = Vec::new();
-    if !options.spectral_data {
-        let n = mesh.num_vertices();
+    if !needs.spectral() {
         return Ok((
             Spectral {
-                descriptors: Descriptors::new(n, 1, vec![0.0; n])?,
                 curvature: Vec::new(),
-                base_set: Vec::new(),
-                profile: Vec::new(),
+                paper: None,
                 refine: None,
             },
             timings,
@@ -595,29 +630,27 @@ fn spectral_stages(
     lap("si_hks", &mut timings);
     let curvature = gaussian_curvature(mesh);
     lap("curvature", &mut timings);
-    let (base_set, profile) = if options.paper_data {
+    let paper = if needs.paper {
         let base_set = base_vertex_set(mesh, &curvature, options.base_radius)?;
         lap("base_set", &mut timings);
         let rows = EdgeGraph::new(mesh).distances_many(&base_set)?;
         let profile = base_profile(&rows, mesh.total_area());
         lap("base_profile", &mut timings);
-        (base_set, profile)
+        Some((descriptors.clone(), base_set, profile))
     } else {
-        (Vec::new(), Vec::new())
+        None
     };
-    let refine = if options.refine_data {
+    let refine = if needs.refine {
         let heat = HeatGeodesics::with_laplacian(mesh, &laplacian, 1.0)?;
         lap("heat_factor", &mut timings);
-        Some((eig, laplacian.mass.clone(), heat))
+        Some((eig, laplacian.mass.clone(), heat, descriptors))
     } else {
         None
     };
     Ok((
         Spectral {
-            descriptors,
             curvature,
-            base_set,
-            profile,
+            paper,
             refine,
         },
         timings,
@@ -691,25 +724,81 @@ pub enum Method {
     Refined,
 }
 
-/// A correspondence between two prepared meshes.
+/// A correspondence between two prepared meshes: one pair per template point (sparse: the
+/// sample; dense: every vertex), and what its method knows about it.
 #[derive(Debug, Clone)]
 pub struct Correspondence {
-    /// One match per template point (sparse: the sample; dense: every vertex).
-    pub matches: Vec<Match>,
-    /// What the skeleton filter did.
-    pub filter: FilterStats,
-    /// Mean candidates per point before the filter.
-    pub mean_candidates: f64,
-    /// Seconds per pair stage (`sampling`, `candidates`, `skeleton_filter`, `selection`; for
-    /// the refined method `segment_pools`, `initial_map`, `zoomout`).
+    /// One pair per template point, in template-point order.
+    pub pairs: Vec<Pair>,
+    /// Seconds per pair stage (`sampling`, then the method's own: `candidates`,
+    /// `skeleton_filter`, `selection` for the paper's; `segment_pools`, `initial_map`, `zoomout`
+    /// for the refined one; `segment_pools`, `articulated_icp`, `nonrigid`, `map` for the
+    /// articulated one).
     pub timings: Vec<(String, f64)>,
-    /// Articulated and refined methods: fraction of target vertices hit by the dense map
-    /// (`None` for the paper's).
-    pub coverage: Option<f64>,
-    /// Partial targets (articulated method): per match, whether the target shows the template
-    /// point at all (`false`: no counterpart; the match is then only the nearest guess).
-    /// `None` when the target is a whole surface.
-    pub has_counterpart: Option<Vec<bool>>,
+    /// What the method reports beside the pairs.
+    pub report: MethodReport,
+}
+
+/// What each method knows about its correspondence beyond the pairs.
+#[derive(Debug, Clone)]
+pub enum MethodReport {
+    /// The paper's pipeline.
+    Paper {
+        /// What the skeleton filter did.
+        filter: FilterStats,
+        /// Mean candidates per point before the filter.
+        mean_candidates: f64,
+        /// The selected matches with what eq. 8 knows about each (same order as the pairs).
+        matches: Vec<Match>,
+    },
+    /// The refined method.
+    Refined {
+        /// Fraction of target vertices hit by the dense map.
+        coverage: f64,
+    },
+    /// The articulated method.
+    Articulated {
+        /// Fraction of target vertices hit by the matches of template points it shows.
+        coverage: f64,
+        /// Partial targets only (a single-view scan): per pair, whether the target shows the
+        /// template point at all (`false`: no counterpart; the pair is then only the nearest
+        /// guess). `None` for a whole surface, where every point has one.
+        has_counterpart: Option<Vec<bool>>,
+    },
+}
+
+impl Correspondence {
+    /// The skeleton filter's statistics: the paper's, or all zero for the methods whose
+    /// segment pools replace the filter (the `symcorr.correspondence/1` file always carries
+    /// the block).
+    pub fn filter_stats(&self) -> FilterStats {
+        match &self.report {
+            MethodReport::Paper { filter, .. } => filter.clone(),
+            _ => FilterStats::default(),
+        }
+    }
+
+    /// Fraction of target vertices hit (articulated and refined methods).
+    pub fn coverage(&self) -> Option<f64> {
+        match self.report {
+            MethodReport::Paper { .. } => None,
+            MethodReport::Refined { coverage } | MethodReport::Articulated { coverage, .. } => {
+                Some(coverage)
+            }
+        }
+    }
+
+    /// Per pair, whether the target shows the template point (partial targets of the
+    /// articulated method; `None` otherwise).
+    pub fn has_counterpart(&self) -> Option<&[bool]> {
+        match &self.report {
+            MethodReport::Articulated {
+                has_counterpart: Some(h),
+                ..
+            } => Some(h),
+            _ => None,
+        }
+    }
 }
 
 /// The articulated method: skeleton-driven articulated alignment of the
@@ -770,7 +859,7 @@ fn articulated(
 /// let a = pipeline.prepare(mesh_a, &joints_a).unwrap();
 /// let b = pipeline.prepare(mesh_b, &joints_b).unwrap();
 /// let corr = pipeline.run(&a, &b).unwrap();
-/// println!("{} matches", corr.matches.len());
+/// println!("{} matches", corr.pairs.len());
 /// ```
 #[derive(Debug, Clone, Default)]
 pub struct Pipeline {
@@ -784,26 +873,18 @@ impl Pipeline {
         Pipeline { options }
     }
 
-    /// Per-mesh stages ([`PreparedMesh::new`]) with this pipeline's options.
+    /// Per-mesh stages ([`PreparedMesh::new`]) for this pipeline's method and options.
     pub fn prepare(
         &self,
         mesh: TriMesh,
         skeleton: &Skeleton,
     ) -> Result<PreparedMesh, PipelineError> {
-        let mut o = self.options.prepare.clone();
-        match self.options.method {
-            Method::Refined => {
-                o.refine_data = true;
-                o.paper_data = false;
-            }
-            Method::Articulated => {
-                o.spectral_data = false;
-                o.refine_data = false;
-                o.paper_data = false;
-            }
-            Method::Paper => {}
-        }
-        PreparedMesh::new(mesh, skeleton, &o)
+        PreparedMesh::new(
+            mesh,
+            skeleton,
+            &[self.options.method],
+            &self.options.prepare,
+        )
     }
 
     /// The template points this pipeline matches on `template` (sample or all vertices).
@@ -814,7 +895,11 @@ impl Pipeline {
         }
     }
 
-    /// Matches `template` onto `target`: candidates, skeleton filter, selection.
+    /// Matches `template` onto `target` with this pipeline's method.
+    ///
+    /// Errors: [`PipelineError::NotPreparedFor`] when a mesh lacks the method's data,
+    /// [`PipelineError::InvalidOption`] for options [`PipelineOptions::check`] refuses, and the
+    /// method's own errors.
     pub fn run(
         &self,
         template: &PreparedMesh,
@@ -824,89 +909,130 @@ impl Pipeline {
         let t = Instant::now();
         let points = self.points(template);
         let mut timings = vec![("sampling".to_string(), t.elapsed().as_secs_f64())];
-        if self.options.method == Method::Articulated {
-            let out = articulated(template, target, &self.options.articulated)?;
-            timings.extend(out.timings.iter().map(|(n, s)| (n.to_string(), *s)));
-            fn pick<T: Copy>(mode: Mode, points: &[u32], v: Vec<T>) -> Vec<T> {
-                match mode {
-                    Mode::Dense => v,
-                    Mode::Sparse { .. } => points.iter().map(|&p| v[p as usize]).collect(),
-                }
-            }
-            // Only a partial view leaves template points without a counterpart; on a whole
-            // surface every point has one, however far the fit left it.
-            let partial = target.is_partial();
-            let coverage = coverage(
-                &out.matches
-                    .iter()
-                    .zip(&out.has_counterpart)
-                    .filter(|(_, &h)| h || !partial)
-                    .map(|(m, _)| m.target)
-                    .collect::<Vec<_>>(),
-                target.num_vertices(),
-            );
-            let has_counterpart =
-                partial.then(|| pick(self.options.mode, &points, out.has_counterpart));
-            return Ok(Correspondence {
-                matches: pick(self.options.mode, &points, out.matches),
-                filter: FilterStats::default(),
-                mean_candidates: 1.0,
-                timings,
-                coverage: Some(coverage),
-                has_counterpart,
-            });
-        }
-        if self.options.method == Method::Refined {
-            fn side(m: &PreparedMesh) -> Result<RefineSide<'_>, PipelineError> {
-                let r = m.refine.as_ref().ok_or_else(|| {
-                    PipelineError::InvalidOption(
-                        "the refined method needs meshes prepared with refine_data (Pipeline::prepare does this)".into(),
-                    )
-                })?;
-                Ok(RefineSide {
-                    basis: SpectralBasis {
-                        vectors: r.basis.as_ref(),
-                        mass: &r.mass,
-                    },
-                    landmarks: r.landmarks.as_ref(),
-                    descriptors: &m.descriptors,
-                    labels: &m.attachment.labels,
-                    halves: Some(&r.halves),
-                    graph: &r.graph,
-                    area: m.area,
-                })
-            }
-            let out = refine_dense(&side(template)?, &side(target)?, &self.options.refine)?;
-            timings.extend(out.timings.iter().map(|(n, s)| (n.to_string(), *s)));
-            let matches = match self.options.mode {
-                Mode::Dense => out.matches,
-                Mode::Sparse { .. } => points.iter().map(|&p| out.matches[p as usize]).collect(),
-            };
-            return Ok(Correspondence {
-                matches,
-                filter: FilterStats::default(),
-                mean_candidates: 1.0,
-                timings,
-                coverage: Some(out.coverage),
-                has_counterpart: None,
-            });
-        }
-        let out = match_points(
-            &template.side(),
-            &target.side(),
-            &points,
-            &self.options.matching,
-        )?;
-        timings.extend(out.timings.iter().map(|(n, s)| (n.to_string(), *s)));
+        let (pairs, report, stage_timings) = match self.options.method {
+            Method::Articulated => run_articulated(
+                template,
+                target,
+                &self.options.articulated,
+                &points,
+                self.options.mode,
+            )?,
+            Method::Refined => run_refined(
+                template,
+                target,
+                &self.options.refine,
+                &points,
+                self.options.mode,
+            )?,
+            Method::Paper => run_paper(template, target, &self.options.matching, &points)?,
+        };
+        timings.extend(stage_timings);
         Ok(Correspondence {
-            matches: out.matches,
-            filter: out.filter,
-            mean_candidates: out.mean_candidates,
+            pairs,
             timings,
-            coverage: None,
-            has_counterpart: None,
+            report,
         })
     }
+}
+
+type MethodOutput = (Vec<Pair>, MethodReport, Timings);
+
+/// The dense per-vertex values `v` restricted to the sparse sample `points` (dense: all).
+fn pick<T: Copy>(mode: Mode, points: &[u32], v: Vec<T>) -> Vec<T> {
+    match mode {
+        Mode::Dense => v,
+        Mode::Sparse { .. } => points.iter().map(|&p| v[p as usize]).collect(),
+    }
+}
+
+fn stage_timings(t: &[(&'static str, f64)]) -> Timings {
+    t.iter().map(|(n, s)| (n.to_string(), *s)).collect()
+}
+
+fn run_articulated(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    options: &ArticulatedOptions,
+    points: &[u32],
+    mode: Mode,
+) -> Result<MethodOutput, PipelineError> {
+    let out = articulated(template, target, options)?;
+    // Only a partial view leaves template points without a counterpart; on a whole surface
+    // every point has one, however far the fit left it.
+    let partial = target.is_partial();
+    let shown: Vec<u32> = out
+        .pairs
+        .iter()
+        .zip(&out.has_counterpart)
+        .filter(|(_, &h)| h || !partial)
+        .map(|(m, _)| m.target)
+        .collect();
+    let report = MethodReport::Articulated {
+        coverage: coverage(&shown, target.num_vertices()),
+        has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
+    };
+    Ok((
+        pick(mode, points, out.pairs),
+        report,
+        stage_timings(&out.timings),
+    ))
+}
+
+fn run_refined(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    options: &RefineOptions,
+    points: &[u32],
+    mode: Mode,
+) -> Result<MethodOutput, PipelineError> {
+    fn side(m: &PreparedMesh) -> Result<RefineSide<'_>, PipelineError> {
+        let r = m
+            .refine
+            .as_ref()
+            .ok_or(PipelineError::NotPreparedFor(Method::Refined))?;
+        Ok(RefineSide {
+            basis: SpectralBasis {
+                vectors: r.basis.as_ref(),
+                mass: &r.mass,
+            },
+            landmarks: r.landmarks.as_ref(),
+            descriptors: &r.descriptors,
+            labels: &m.attachment.labels,
+            halves: Some(&r.halves),
+            graph: &r.graph,
+            area: m.area,
+        })
+    }
+    let out = refine_dense(&side(template)?, &side(target)?, options)?;
+    let report = MethodReport::Refined {
+        coverage: out.coverage,
+    };
+    Ok((
+        pick(mode, points, out.pairs),
+        report,
+        stage_timings(&out.timings),
+    ))
+}
+
+fn run_paper(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    options: &MatchOptions,
+    points: &[u32],
+) -> Result<MethodOutput, PipelineError> {
+    let out = match_points(
+        &template.paper_side()?,
+        &target.paper_side()?,
+        points,
+        options,
+    )?;
+    let pairs = out.matches.iter().map(Pair::from).collect();
+    let report = MethodReport::Paper {
+        filter: out.filter,
+        mean_candidates: out.mean_candidates,
+        matches: out.matches,
+    };
+    Ok((pairs, report, stage_timings(&out.timings)))
 }
 
 #[cfg(test)]
@@ -955,18 +1081,14 @@ mod tests {
         let q = pipeline.prepare(target_mesh.clone(), &tsk).unwrap();
         let graph = EvalGraph::new(&target_mesh);
         let corr = pipeline.run(&p, &q).unwrap();
-        assert_eq!(corr.matches.len(), 200);
-        let pairs: Vec<(u32, u32)> = corr
-            .matches
-            .iter()
-            .map(|m| (m.template, m.target))
-            .collect();
+        assert_eq!(corr.pairs.len(), 200);
+        let pairs: Vec<(u32, u32)> = corr.pairs.iter().map(|m| (m.template, m.target)).collect();
         let e = evaluate(&graph, q.area, &pairs, |v| v, Some(&mirror));
         let mut off = pipeline.clone();
         off.options.matching.skeleton_filter = false;
         let corr_off = off.run(&p, &q).unwrap();
         let pairs: Vec<(u32, u32)> = corr_off
-            .matches
+            .pairs
             .iter()
             .map(|m| (m.template, m.target))
             .collect();
@@ -1088,45 +1210,39 @@ mod tests {
             ..PipelineOptions::default()
         });
         // Both methods' data, so that the paper's method can run on the same meshes.
-        let both = PrepareOptions {
-            refine_data: true,
-            ..PrepareOptions::default()
-        };
-        let a = PreparedMesh::new(mesh.clone(), &sk, &both).unwrap();
-        let b = PreparedMesh::new(target_mesh.clone(), &tsk, &both).unwrap();
-        // The refined pipeline's own preparation skips the paper's base set.
+        let both = [Method::Refined, Method::Paper];
+        let opts = PrepareOptions::default();
+        let a = PreparedMesh::new(mesh.clone(), &sk, &both, &opts).unwrap();
+        let b = PreparedMesh::new(target_mesh.clone(), &tsk, &both, &opts).unwrap();
+        // The refined pipeline's own preparation skips the paper's data.
         let lean = refined.prepare(mesh.clone(), &sk).unwrap();
-        assert!(lean.refine.is_some() && lean.profile.is_empty());
+        assert!(lean.refine.is_some() && lean.paper.is_none());
         assert!(paper_rejects(&lean));
         assert!(a.refine.is_some() && b.refine.is_some());
         let graph = EvalGraph::new(&target_mesh);
         let corr = refined.run(&a, &b).unwrap();
-        assert_eq!(corr.matches.len(), n);
-        assert!(corr.matches.iter().all(|m| m.confidence > 0.0));
-        let pairs: Vec<(u32, u32)> = corr
-            .matches
-            .iter()
-            .map(|m| (m.template, m.target))
-            .collect();
+        assert_eq!(corr.pairs.len(), n);
+        assert!(corr.pairs.iter().all(|m| m.confidence > 0.0));
+        let pairs: Vec<(u32, u32)> = corr.pairs.iter().map(|m| (m.template, m.target)).collect();
         let e = evaluate(&graph, b.area, &pairs, |v| perm[v as usize], Some(&tmirror));
         // The paper's method, dense, on the same prepared meshes.
         let mut paper = refined.clone();
         paper.options.method = Method::Paper;
         let cp = paper.run(&a, &b).unwrap();
-        let pp: Vec<(u32, u32)> = cp.matches.iter().map(|m| (m.template, m.target)).collect();
+        let pp: Vec<(u32, u32)> = cp.pairs.iter().map(|m| (m.template, m.target)).collect();
         let ep = evaluate(&graph, b.area, &pp, |v| perm[v as usize], Some(&tmirror));
         eprintln!(
             "n = {n}: refined mean {:.4} flips {:?} coverage {:?}; paper mean {:.4} flips {:?}",
             e.mean_error(),
             e.flip_rate(),
-            corr.coverage,
+            corr.coverage(),
             ep.mean_error(),
             ep.flip_rate()
         );
         assert_eq!(e.flip_counts().1, 0, "no flips");
         assert!(e.mean_error() < 0.03, "mean error {}", e.mean_error());
         assert!(e.mean_error() < ep.mean_error());
-        assert!(corr.coverage.unwrap() > 0.3);
+        assert!(corr.coverage().unwrap() > 0.3);
     }
 
     fn paper_rejects(m: &PreparedMesh) -> bool {

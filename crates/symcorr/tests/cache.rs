@@ -4,7 +4,7 @@
 
 use std::path::Path;
 use std::sync::{Arc, Mutex};
-use symcorr::{PrepareOptions, PreparedMesh};
+use symcorr::{Method, PrepareOptions, PreparedMesh};
 use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_mesh::TriMesh;
 use symcorr_spectral::cache::{CacheLocation, CacheOutcome, CachePolicy};
@@ -15,8 +15,6 @@ type Log = Arc<Mutex<Vec<(bool, Option<String>)>>>;
 fn options(location: CacheLocation, log: &Log) -> PrepareOptions {
     let log = log.clone();
     PrepareOptions {
-        refine_data: true,
-        paper_data: false,
         cache: Some(
             CachePolicy::new(location).with_notify(move |o: &CacheOutcome| {
                 log.lock().unwrap().push((o.is_hit(), o.warning()))
@@ -40,9 +38,9 @@ fn same_spectral_bits(a: &PreparedMesh, b: &PreparedMesh) -> bool {
         && (0..va.ncols())
             .all(|j| (0..va.nrows()).all(|i| va[(i, j)].to_bits() == vb[(i, j)].to_bits()))
         && bits(&ra.mass) == bits(&rb.mass)
-        && a.descriptors.len() == b.descriptors.len()
-        && (0..a.descriptors.len())
-            .all(|v| bits(a.descriptors.row(v)) == bits(b.descriptors.row(v)))
+        && ra.descriptors.len() == rb.descriptors.len()
+        && (0..ra.descriptors.len())
+            .all(|v| bits(ra.descriptors.row(v)) == bits(rb.descriptors.row(v)))
 }
 
 fn body() -> (TriMesh, symcorr_attach::Skeleton) {
@@ -66,7 +64,7 @@ fn cached_preparation_is_bit_identical_and_skips_the_eigensolver() {
     let log: Log = Arc::default();
     let opts = options(CacheLocation::File(file.clone()), &log);
 
-    let cold = PreparedMesh::new(mesh.clone(), &sk, &opts).unwrap();
+    let cold = PreparedMesh::new(mesh.clone(), &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&cold).contains(&"eigenpairs"));
     assert!(!stage_names(&cold).contains(&"eigenpairs_cached"));
     assert!(file.is_file());
@@ -74,6 +72,7 @@ fn cached_preparation_is_bit_identical_and_skips_the_eigensolver() {
     let plain = PreparedMesh::new(
         mesh.clone(),
         &sk,
+        &[Method::Refined],
         &PrepareOptions {
             cache: None,
             ..opts.clone()
@@ -82,7 +81,7 @@ fn cached_preparation_is_bit_identical_and_skips_the_eigensolver() {
     .unwrap();
     assert!(same_spectral_bits(&cold, &plain));
 
-    let warm = PreparedMesh::new(mesh.clone(), &sk, &opts).unwrap();
+    let warm = PreparedMesh::new(mesh.clone(), &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&warm).contains(&"eigenpairs_cached"));
     assert!(!stage_names(&warm).contains(&"eigenpairs"));
     assert!(same_spectral_bits(&cold, &warm));
@@ -96,19 +95,19 @@ fn a_changed_mesh_invalidates_the_file() {
     let file = dir.path().join("body.off.symcorr-eigs");
     let log: Log = Arc::default();
     let opts = options(CacheLocation::File(file.clone()), &log);
-    let first = PreparedMesh::new(mesh.clone(), &sk, &opts).unwrap();
+    let first = PreparedMesh::new(mesh.clone(), &sk, &[Method::Refined], &opts).unwrap();
     // One vertex moved by 1 µm: another mesh, so the file is stale (no warning: this is the
     // normal life of a cache next to a mesh that was edited).
     let mut moved = mesh.clone();
     moved.positions[10][0] += 1e-6;
-    let second = PreparedMesh::new(moved.clone(), &sk, &opts).unwrap();
+    let second = PreparedMesh::new(moved.clone(), &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&second).contains(&"eigenpairs"));
     assert!(!same_spectral_bits(&first, &second));
     // The file now holds the moved mesh's pairs: the moved mesh hits, the original does not.
-    let third = PreparedMesh::new(moved, &sk, &opts).unwrap();
+    let third = PreparedMesh::new(moved, &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&third).contains(&"eigenpairs_cached"));
     assert!(same_spectral_bits(&second, &third));
-    let fourth = PreparedMesh::new(mesh, &sk, &opts).unwrap();
+    let fourth = PreparedMesh::new(mesh, &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&fourth).contains(&"eigenpairs"));
     assert!(same_spectral_bits(&first, &fourth));
     assert_eq!(
@@ -124,7 +123,7 @@ fn a_corrupted_or_truncated_file_is_recomputed_with_a_warning_never_used() {
     let log: Log = Arc::default();
     // A directory location: the file is named by the mesh's hash.
     let opts = options(CacheLocation::Dir(dir.path().join("eigs")), &log);
-    let cold = PreparedMesh::new(mesh.clone(), &sk, &opts).unwrap();
+    let cold = PreparedMesh::new(mesh.clone(), &sk, &[Method::Refined], &opts).unwrap();
     let files: Vec<_> = std::fs::read_dir(dir.path().join("eigs"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -135,17 +134,17 @@ fn a_corrupted_or_truncated_file_is_recomputed_with_a_warning_never_used() {
 
     // One flipped bit in the middle of the eigenvectors.
     flip_byte(file, std::fs::metadata(file).unwrap().len() as usize / 2);
-    let again = PreparedMesh::new(mesh.clone(), &sk, &opts).unwrap();
+    let again = PreparedMesh::new(mesh.clone(), &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&again).contains(&"eigenpairs"));
     assert!(same_spectral_bits(&cold, &again));
     // Truncated (an interrupted copy).
     let b = std::fs::read(file).unwrap();
     std::fs::write(file, &b[..b.len() - 8]).unwrap();
-    let again = PreparedMesh::new(mesh.clone(), &sk, &opts).unwrap();
+    let again = PreparedMesh::new(mesh.clone(), &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&again).contains(&"eigenpairs"));
     assert!(same_spectral_bits(&cold, &again));
     // The rewritten file is good again.
-    let warm = PreparedMesh::new(mesh, &sk, &opts).unwrap();
+    let warm = PreparedMesh::new(mesh, &sk, &[Method::Refined], &opts).unwrap();
     assert!(stage_names(&warm).contains(&"eigenpairs_cached"));
     assert!(same_spectral_bits(&cold, &warm));
 

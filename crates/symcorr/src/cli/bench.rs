@@ -82,8 +82,8 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "table1_row": p.table1_row,
                 "seconds": p.seconds,
                 "match_seconds": p.match_seconds,
-                "skeleton_filter_fallbacks": p.correspondence.filter.fallbacks,
-                "coverage": p.correspondence.coverage,
+                "skeleton_filter_fallbacks": p.correspondence.filter_stats().fallbacks,
+                "coverage": p.correspondence.coverage(),
             })
         })
         .collect();

@@ -76,19 +76,15 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         },
         ..PipelineOptions::default()
     };
-    // Both methods run on the same prepared meshes: keep the data of each.
-    let prepare = symcorr::PrepareOptions {
-        refine_data: true,
-        paper_data: true,
-        ..options.prepare.clone()
-    };
+    // Every method runs on the same prepared meshes: prepare the data of each.
+    let methods = [Method::Articulated, Method::Refined, Method::Paper];
     let start = Instant::now();
     let spin = Spinner::new("preparing meshes");
     let load = |name: &str| -> Result<(symcorr::PreparedMesh, f64), CliError> {
         let t = Instant::now();
         let mesh = read_mesh(&ds.meshes[name]).map_err(|e| CliError(e.to_string()))?;
         let sk = read_skeleton(&ds.joints[name], None).map_err(|e| CliError(e.to_string()))?;
-        let p = symcorr::PreparedMesh::new(mesh, &sk, &prepare)
+        let p = symcorr::PreparedMesh::new(mesh, &sk, &methods, &options.prepare)
             .map_err(|e| CliError::with(ds.meshes[name].display(), e))?;
         Ok((p, t.elapsed().as_secs_f64()))
     };

@@ -339,18 +339,17 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         files.extend(write_coloured(dir, &a, &b, &corr)?);
     }
     let seconds = start.elapsed().as_secs_f64();
-    let points = corr.filter.points.max(corr.matches.len());
+    let points = corr.filter_stats().points.max(corr.pairs.len());
     let unseen = corr
-        .has_counterpart
-        .as_ref()
+        .has_counterpart()
         .map(|h| h.iter().filter(|&&x| !x).count());
-    let matched = corr.matches.len() - unseen.unwrap_or(0);
+    let matched = corr.pairs.len() - unseen.unwrap_or(0);
     if args.json {
         let doc = serde_json::json!({
             "matches": matched,
             "no_counterpart": unseen,
             "template_points": points,
-            "fallbacks": corr.filter.fallbacks,
+            "fallbacks": corr.filter_stats().fallbacks,
             "seconds": seconds,
             "timings_s": timings.iter().map(|(n, s)| (n.clone(), serde_json::json!(s))).collect::<serde_json::Map<_, _>>(),
             "repair": {
@@ -373,7 +372,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         ),
         None => println!(
             "{matched} matches ({points} template points, {} skeleton-filter fallbacks) in {seconds:.2} s",
-            corr.filter.fallbacks,
+            corr.filter_stats().fallbacks,
         ),
     }
     if let Some(s) = counts.summary() {
