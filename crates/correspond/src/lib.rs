@@ -5,7 +5,7 @@
 //!
 //! # Three methods
 //! * **The paper's** ("Symmetry-Aware Human Shape Correspondence Using Skeleton"):
-//!   [`candidates`] (§3.1, the nearest si-HKS descriptors) → [`skeleton_filter`] (§3.2, drop
+//!   [`candidates()`] (§3.1, the nearest si-HKS descriptors) → [`skeleton_filter`] (§3.2, drop
 //!   candidates on another segment; beyond the paper also another sagittal half of a midline
 //!   segment, and the [`sagittal_band`]) → [`select`] (§3.3, eq. 7–8 with [`base_profile`]).
 //!   [`match_points`] runs them for a set of template points; [`farthest_point_sample`] picks

@@ -31,7 +31,7 @@
 //!   scene instancing more than max(4 Mi, 64 × input bytes) vertices or triangles (a small
 //!   file can otherwise describe an arbitrarily large scene).
 //!
-//! **Writers** ([`write`], [`write_with`], [`write_to_bytes`]) produce OFF/COFF,
+//! **Writers** ([`write()`], [`write_with`], [`write_to_bytes`]) produce OFF/COFF,
 //! OBJ, PLY (binary little-endian by default — doubles, so exact — or ascii) and glTF 2.0 (GLB,
 //! or `.gltf` with an embedded buffer) with per-vertex colours. Text formats print f64 in the
 //! shortest round-trip form, so write → read is bit-exact; glTF stores f32 positions (exact
