@@ -46,6 +46,8 @@
 //! * **Randomness**: ChaCha8 streams with explicit seeds and per-body/per-frame stream numbers:
 //!   output is bit-for-bit reproducible and independent of generation order (a test checks the
 //!   committed fixtures).
+//!
+//! Measured with these bodies: `docs/decisions/` (attachment and correspondence records).
 
 pub mod assets;
 pub mod body;
