@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Generates the benchmark datasets behind the README's correspondence figures (issues 6 and 7:
-# "20+ pose pairs, same shape and different shapes", exact and noisy joints) into
+# Generates the benchmark datasets behind the README's correspondence figures (20+ pose pairs,
+# same shape and different shapes, exact and noisy joints, scans, larger meshes) into
 # target/bench-data/ (inside the clone, never committed):
 #   bodies20/        20 poses x 2 shapes, exact joints            (58 pairs)
 #   bodies20_noisy/  the same meshes, joints with sigma = 3 cm and 10 % on the surface
@@ -25,16 +25,16 @@ common=(--shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" --poses "$
 for d in bodies20 bodies20_noisy; do
   echo "$out/$d: $(ls "$out/$d/meshes" | wc -l) meshes, $(wc -l < "$out/$d/pairs.txt") pairs"
 done
-# Single-view scans (issue 7): every pair's target is a virtual-Kinect view (sensor noise on)
+# Single-view scans: every pair's target is a virtual-Kinect view (sensor noise on)
 # of the target body, with truth/NAME_scan.txt (body vertex per scan vertex).
 "$synth" dataset --out "$out/bodies20_scans" "${common[@]}" --scans --scan-realism kinect
 echo "$out/bodies20_scans: $(wc -l < "$out/bodies20_scans/pairs.txt") scan pairs"
-# Larger meshes (issue 7: "50k <-> 50k"): the same bodies Loop-subdivided once (53,514 vertices),
+# Larger meshes ("50k <-> 50k"): the same bodies Loop-subdivided once (53,514 vertices),
 # 4 poses x 2 shapes, for timing and for accuracy at a finer triangulation.
 "$synth" dataset --out "$out/bodies50k" --shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" \
   --poses rest,t-pose,walk-30,random-3 --subdivide 1
 echo "$out/bodies50k: $(wc -l < "$out/bodies50k/pairs.txt") pairs of $(wc -l < "$out/bodies50k/mirror.txt")-vertex meshes"
-# Different triangulations (issue 7, peer comparison): each target is its body subdivided once
+# Different triangulations (peer comparison): each target is its body subdivided once
 # (53,514 vertices) while the template keeps 13,380; truth/NAME_fine.txt = body vertex ids.
 "$synth" dataset --out "$out/bodies20_fine" "${common[@]}" --finer-targets 1
 echo "$out/bodies20_fine: $(wc -l < "$out/bodies20_fine/pairs.txt") pairs, targets one Loop level finer"

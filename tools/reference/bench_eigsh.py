@@ -11,7 +11,7 @@ needs the spectral crate; `symcorr` runs the CLI `symcorr spectrum MESH --k K --
 Both print the same `timings_s` keys, so the table below is the same ("symcorr" column).
 
 scipy: builds the cotan stiffness L and lumped mass M with numpy (tools/reference/meshutil.py),
-then times scipy.sparse.linalg.eigsh(L, k, M=M, sigma=-1e-8) exactly as issue 2 writes it (ARPACK's
+then times scipy.sparse.linalg.eigsh(L, k, M=M, sigma=-1e-8) exactly as the speed target states it (ARPACK's
 default start vector; best of --repeats; the SuperLU factorisation of L - sigma M happens inside
 eigsh and is included). The Laplacian build and a stand-alone splu factorisation are reported too.
 
@@ -100,7 +100,7 @@ def scipy_setup(mesh, repeats):
 
 
 def scipy_eigsh_once(s, k):
-    """Exactly the call of issue 2: eigsh(L, k, M=M, sigma=-1e-8) (default which='LM', ARPACK's own start vector)."""
+    """Exactly the call of the speed target: eigsh(L, k, M=M, sigma=-1e-8) (default which='LM', ARPACK's own start vector)."""
     t0, c0 = time.perf_counter(), time.process_time()
     lam, _ = spla.eigsh(s["L"], k, M=s["M"], sigma=SIGMA)
     return time.perf_counter() - t0, time.process_time() - c0, np.sort(lam)

@@ -1,5 +1,10 @@
 //! Frame alignment: bring the skeleton into the mesh's units and frame (DESIGN.md, Algorithm 1:
 //! "express the skeleton in the mesh's frame").
+//!
+//! Scale by a power of ten when the skeleton's and the mesh's extents disagree (mm, cm, dm, m,
+//! km; any other mismatch is refused, not guessed), then, only if the joints do not already sit
+//! in the mesh, the best of the 24 axis rotations about the bounding-box centres. Refused when
+//! nothing fits ([`FIT_LIMIT`], [`COVER_LIMIT`]).
 
 use crate::geom::mat_vec;
 use crate::repair::{extent, skeleton_height};

@@ -1,5 +1,19 @@
 //! Bone heat (Baran & Popović 2007, "Automatic rigging and animation of 3D characters", §4):
 //! `(L + M·H) w_b = M·H·p_b` for every bone `b`, one factorisation for all of them.
+//!
+//! For each vertex the nearest *visible* bone(s) get `H_ii = c/d²` (`c` =
+//! [`AttachOptions::heat_constant`](crate::AttachOptions)). Visible: the segment from the
+//! vertex to the bone crosses no triangle (a small BVH), and the bone lies behind the vertex's
+//! tangent plane (`n·(q − x) ≤ 0`, outward normals) — where two limbs touch, the segment to the
+//! *other* limb's bone crosses no triangle either. A mesh wound inwards is recognised by a
+//! majority vote over the nearest bones and its normals turned round. Only bones within `FAR` ×
+//! the nearest bone's distance are tried. `L` is symcorr-spectral's cotan Laplacian (PSD);
+//! the mass `M` makes the system unit-free, as Pinocchio's area-normalised Laplacian does.
+//! Weights are clipped to [0, 1], those below [`AttachOptions::min_weight`](crate::AttachOptions)
+//! dropped, rows normalised. A component from which no bone is visible gets the nearest bone
+//! (ignoring visibility) as its heat source instead of an empty row, and is reported
+//! ([`ComponentReport::fallback`]); vertices in no non-degenerate triangle get the nearest
+//! bone's label.
 
 use crate::bvh::TriangleBvh;
 use crate::geom::closest_on_segment;

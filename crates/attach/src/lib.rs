@@ -1,9 +1,19 @@
-//! The canonical Kinect skeleton, its 17 segments, and skeleton attachment.
+//! The canonical Kinect skeleton, its 17 body segments, and skeleton attachment.
 //!
-//! [`Skeleton`], [`Joint`], [`Segment`] (with [`Segment::mirror`]) are the types every joint
+//! [`Skeleton`], [`Joint`] and [`Segment`] (with [`Segment::mirror`]) are the types every joint
 //! importer in symcorr produces. [`attach`] fits a skeleton into a triangle mesh and computes
 //! Baran & Popović (2007) bone-heat weights and one of the 17 segment labels per vertex;
-//! [`label`] is the one-call version with default options.
+//! [`label`] is the one-call version with default options. The crate is usable on its own.
+//!
+//! # Data flow (DESIGN.md, Algorithm 1)
+//! mesh + skeleton → joint repair (untracked joints rebuilt along their chain or dropped) →
+//! frame alignment ([`FrameAlignment`]: units by a power of ten, then one of 24 axis rotations)
+//! → handedness check ([`MirrorCheck`], [`MirrorPolicy`]) → joint refinement (limb joints to
+//! their cross-section's centre) → bone heat (`(L + M·H) W = M·H·P`, one sparse Cholesky for
+//! all 19 bones; [`BoneWeights`]) → labels: the segment with the largest weight, side first;
+//! joint planes between neighbouring segments ([`AttachOptions::joint_planes`]); the midline
+//! guard ([`AttachOptions::midline_band`]); optionally a learned [`BoundaryConvention`] →
+//! [`Attachment`] with its [`Diagnostics`]. The module sources explain each step.
 //!
 //! ```
 //! use symcorr_attach::{attach, AttachOptions, Segment};
@@ -16,196 +26,25 @@
 //! assert!(a.labels.contains(&Segment::ForearmLeft));
 //! ```
 //!
-//! # Pipeline (DESIGN.md, Algorithm 1)
-//! 1. **Joint repair**: non-finite or untracked (confidence 0, not interpolated) joints are
-//!    rebuilt from their chain (midpoint of neighbours, or an extrapolation for hand/head) or,
-//!    failing that, the bones touching them are dropped; everything is reported.
-//! 2. **Frame alignment** ([`FrameAlignment`]): scale by a power of ten when the skeleton's and the
-//!    mesh's extents disagree (units), then, only if the joints do not already sit in the mesh,
-//!    the best of the 24 axis rotations about the bounding-box centres. Refused when nothing fits.
-//! 3. **Mirror check** ([`MirrorCheck`]): the torso frame (up = hip→shoulder centre, left =
-//!    right→left shoulders and hips) gives the facing direction `left × up`; the feet (ankle→foot
-//!    joints, and the mesh around the ankles: toes reach further forward than heels) must point
-//!    the same way, and bent knees must lie in front of the hip–ankle line (knees are hinges
-//!    that bend forward); otherwise the skeleton's sides are swapped ([`MirrorPolicy`]).
-//!    [`check_handedness`] is the same check on its own (symcorr-kinect uses it).
-//! 4. **Joint refinement**: each limb joint moves to the centre of the mesh cross-section
-//!    perpendicular to its limb (algebraic circle fit, which also works on the half-rings of a
-//!    single-view scan), restricted to the connected piece of that cross-section nearest the
-//!    joint so that a joint never jumps to another limb, and only a circle passing within
-//!    0.05 × the skeleton's height of the joint counts (a joint lies near its limb's axis; on
-//!    the Kinect-realism scan a wrist hidden against the hip was otherwise fitted to a few
-//!    noisy hip pixels and moved 12 cm onto the hip); shoulder and hip joints are only
-//!    re-centred in depth; moves are capped; left/right bone lengths that differ by more than
-//!    [`AttachOptions::bone_length_tolerance`] are set to their mean.
-//! 5. **Bone heat**: for each vertex the nearest *visible* bone(s) (the segment from vertex to
-//!    bone crosses no triangle; a small BVH; and the bone lies behind the vertex's tangent
-//!    plane, see below) gets `H_ii = c/d²`; `(L + M·H) W = M·H·P` is solved
-//!    for all bones with one sparse Cholesky factorisation (symcorr-spectral's cotan Laplacian,
-//!    PSD convention; the mass `M` makes the system unit-free, as Pinocchio's area-normalised
-//!    Laplacian does). Weights are clipped to [0, 1], weights below
-//!    [`AttachOptions::min_weight`] dropped, rows normalised. The provisional label is the
-//!    segment with the largest summed weight of its bones, on the side (left, right) with the
-//!    larger total weight.
-//! 6. **Joint planes** ([`AttachOptions::joint_planes`], the rigid-skinning convention): every two
-//!    segments A, B that share a joint J are separated by the plane through J whose normal
-//!    bisects the bone directions (`d_A` into J, `d_B` out of it); a vertex labelled A or B goes
-//!    to the side it lies on (two sweeps over the 20 pairs, so thigh → hip → pelvis can chain;
-//!    a vertex changes side only into the twin root, hip or clavicle, see below).
-//!    Between siblings leaving the same joint (pelvis/hips, head/clavicles) this is the angle
-//!    bisector; between the left and right twins it is the sagittal plane through the midline
-//!    joint, made to contain the trunk axis (hip centre → shoulder centre). Bone heat still decides *which limb* (it is visibility-aware); the planes decide
-//!    where along the limb a segment ends. Weights are left as bone heat computed them.
-//! 7. **Midline guard** ([`AttachOptions::midline_band`]): a vertex labelled hip (clavicle) that
-//!    lies within the band of the left/right plane gets the midline segment instead (pelvis; head
-//!    or torso by their plane): there the side is decided by centimetres of joint error, and a
-//!    midline label is only a disagreement where a twin label would be a left/right swap.
-//! 8. **Learned boundaries** (optional, [`AttachOptions::convention`]): a
-//!    [`BoundaryConvention`] replaces each joint plane by a plane learned from bodies labelled
-//!    in a rig's convention, in a frame that moves with the skeleton (the joint, the bisector
-//!    normal, the torso's facing direction; trunk length as unit), bent by bone heat's vote
-//!    between the two segments. Sides stay bone heat's: the
-//!    two left/right twin planes are never learned, no rule moves a vertex across the body, a
-//!    midline vertex takes a side label only with a clear bone-heat side and outside a band
-//!    around the left/right plane whose width follows the joints' noise (measured as the
-//!    skeleton's left/right asymmetry, [`Diagnostics::joint_asymmetry`]), and the midline
-//!    guard runs again afterwards with that band ([`Diagnostics::convention_changes`] counts
-//!    what moved). [`BoundaryConvention::fit`] learns a
-//!    convention from any labelled bodies; [`BoundaryConvention::makehuman`] is fitted on the
-//!    MakeHuman rig's skinning (tools/synth `convention`: three shapes in 13 poses, each body
-//!    also as a single-view scan). Against those reference labels on 40 generated bodies
-//!    (20 poses × 2 shapes, one shape not trained on) it raises area agreement from 0.859 to
-//!    0.937 (exact joints), 0.816 to 0.856 (σ = 3 cm joints) and 0.870 / 0.867 to 0.950 /
-//!    0.948 (virtual-Kinect scans, ideal / Kinect realism), with mirrored area unchanged (0
-//!    exact, ≤ 0.0003 noisy). It is off by
-//!    default because the correspondence pipeline measured no gain from it (see
-//!    [`BoundaryConvention`]).
+//! # Invariants
+//! * Every vertex gets a label and a weight row (bones of [`BONES`], weights in (0, 1] summing
+//!   to 1). A component no bone is visible from gets the nearest bone
+//!   ([`ComponentReport::fallback`]); nothing is left empty.
+//! * Sides come from bone heat and the skeleton: joint planes move a vertex across the body only
+//!   into a twin root (hip, clavicle), the midline guard turns such labels near the sagittal
+//!   plane into midline ones, and a convention never moves a vertex to the other side.
+//! * The skeleton's sides are swapped only on clear evidence ([`MIRROR_MARGIN`]).
+//! * Nothing is guessed silently: repairs, moves, refused moves and fallbacks are reported in
+//!   [`Diagnostics`]; a scale mismatch other than a power of ten, a skeleton that fits nowhere
+//!   and out-of-range options are errors ([`AttachError`]).
 //!
-//! # Left/right: where cross-side labels came from
-//! A label of the other side than the vertex's anatomical side is what lets a correspondence
-//! map a vertex onto the mirror side. Two mechanisms produced them (measured on the generated
-//! bodies, tools/synth/tests/attach_labels.rs, which reports "cross-side" area against each
-//! vertex's rest-pose side):
-//! * **A tilted sagittal plane.** The left/right plane at the hip (shoulder) centre bisects the
-//!   two twin bones. A noisy joint moved onto the surface close to the hip centre makes its hip
-//!   bone point up, and the bisector tilted by up to 45°, cutting through the other thigh: 0.5 %
-//!   of one noisy body (right mid-thigh, 10–14 cm from the midline) became `hip_left` /
-//!   `thigh_left`. The plane now keeps only the part of the bisector normal perpendicular to the
-//!   trunk axis: the body's sagittal plane contains the spine whatever the twin bones do.
-//! * **Bone heat across a contact.** Where two limbs touch or interpenetrate (inner thighs of
-//!   the heavy shape, a skinned groin) the segment from a vertex to the *other* limb's bone can
-//!   cross no triangle, so the other bone counted as visible. A heat source must now also lie
-//!   behind the vertex's tangent plane (`n·(q − x) ≤ 0`, outward normals; a mesh wound inwards is
-//!   recognised by a majority vote over the nearest bones and its normals turned round). This
-//!   also raised agreement everywhere (exact 0.857 → 0.859, noisy 0.812 → 0.816, scans
-//!   0.851 → 0.861 mean).
-//!
-//! * **Chained planes and a split majority at the groin.** With a noisy hip joint 10 cm off,
-//!   groin vertices of the right thigh went thigh_right → hip_right (hip/thigh plane) →
-//!   hip_left (a slightly tilted sagittal plane, within millimetres) → thigh_left (the left
-//!   hip/thigh plane): joint planes now change a vertex's side only into the twin *root* (hip,
-//!   clavicle), where the midline guard can still make it pelvis (`planes::keep_limb_sides`).
-//!   And the provisional label decides the side first: a vertex with 0.34 of the left thigh but
-//!   0.30 + 0.24 of the right hip and thigh is a right-side vertex. Noisy mirrored area
-//!   0.0019 → 0.0003, cross-side area beyond 3 cm 0.0007 → 0, agreement unchanged.
-//!
-//! What remains (exact joints): no mirrored area; 0.03 % of one extreme random pose beyond 3 cm
-//! of the midline, where linear-blend skinning carries neck vertices 1.5–3 cm right of the rest
-//! midline to 9 cm left of the shoulder centre, next to the left clavicle (geometrically that
-//! label is right). Noisy joints: ≤ 0.03 % mirrored (one groin vertex 2.5 cm from the midline
-//! whose side weights are 0.46 / 0.48), nothing beyond 3 cm of the midline.
-//! Tried and dropped: a side guard that gave wrong-side hip/thigh/clavicle labels near the trunk
-//! the midline label (or, beyond the midline band, the mirror segment): with noisy joints the
-//! sagittal plane itself is uncertain by several centimetres 20 cm from the joint, and it
-//! *created* mirrored area (noisy 0.0019 → 0.0126) and lowered agreement.
-//!
-//! # What limits agreement with noisy joints (measured 2026-12-02)
-//! On the 40 generated bodies with the MakeHuman convention (the table trained on the rest pose
-//! only, as of session 5), σ = 3 cm joints (10 % on the surface) give 0.845 strict agreement
-//! against 0.927 with exact joints (0.848 / 0.932 with the posed-trained table of session 6,
-//! 0.856 / 0.937 with session 7's heat vote and scans). Taking parts of the
-//! noise away in the test harness (tools/synth/tests/attach_labels.rs, the noisy skeleton with
-//! one component replaced by the exact value; harness edits not kept) shows where the 8 % go:
-//!
-//! | noise removed | strict | tolerant (3 cm) |
-//! |---|---|---|
-//! | none | 0.845 | 0.903 |
-//! | the component along each joint's parent bone, every joint | 0.877 | 0.927 |
-//! | the hip centre and both hips (all of it) | 0.872 | 0.926 |
-//! | the hips' component along the trunk (up) only | 0.861 | 0.917 |
-//! | the hips' left/right component only | 0.851 | 0.908 |
-//! | the hips' depth component only | 0.846 | 0.904 |
-//! | the hips entirely and every joint's along-bone component | 0.902 | 0.947 |
-//!
-//! Refinement already centres joints across their limbs; what is left is where along the limb
-//! a joint sits (the knee, elbow, ankle and neck boundaries move with it) and the three hip
-//! joints, whose height sets every boundary around the pelvis. Neither is visible in a
-//! straight limb's or the pelvis's cross-section: only anatomical landmarks (the crotch, a
-//! bent knee's crease) would carry it. The issue's 0.90 for noisy joints is therefore out of
-//! reach of joint refinement alone — it is reached only when the hips and the along-bone
-//! positions are as good as exact. Always evening out left/right bone lengths (tolerance 0
-//! instead of 0.15) moved noisy agreement 0.845 → 0.846 and exact 0.927 → 0.925: not kept.
-//!
-//! # Decisions the design leaves open
-//! * Components of the mesh from which no bone is visible get the nearest bone (ignoring
-//!   visibility) as their heat source instead of an empty row, and are reported
-//!   ([`ComponentReport::fallback`]); vertices in no non-degenerate triangle get the nearest
-//!   bone's label.
-//! * Unit detection only considers powers of ten (mm, cm, dm, m, km); other scale mismatches
-//!   are refused, not guessed.
-//! * [`AttachOptions::segment_reach`] scales each segment's bone distances (default 1: plain
-//!   Baran–Popović). Reference labels from a rig's skinning weights follow other conventions
-//!   (fixtures/synth: the pelvis band reaches above the Kinect spine joint, the hip segments take
-//!   the buttocks, the clavicles are small); a pelvis reach of 1.3, hips 1.2 and clavicles 0.75
-//!   raised the mean area agreement there only from 0.820 to 0.826, so the default stays 1.
-//! * Measured on generated MakeHuman bodies (tools/synth/tests/attach_labels.rs: 20 poses ×
-//!   2 shapes). The reference labels are the rig's dominant skinning bone mapped to the 17
-//!   segments (tools/synth mapping.rs): a *skinning* convention, not a geometric one — the rig's
-//!   clavicle region is a small patch in front of the shoulder, its pelvis band reaches above
-//!   the Kinect spine joint, its buttocks belong to the hips, and its pelvis-bone vertices are
-//!   split between pelvis and hips by the nearest Kinect bone. Attachment instead cuts segments
-//!   at planes through the Kinect joints, so the two disagree along every boundary by a band a
-//!   few centimetres wide. Area agreement (2026-11-23): exact joints mean 0.859 / worst 0.828
-//!   (bone heat alone 0.823 / 0.796 before the joint planes), σ = 3 cm + 10 % surface-biased
-//!   joints 0.816 / 0.757, virtual-Kinect scans 0.870 (ideal) / 0.851 (Kinect realism); counting
-//!   neighbouring-segment disagreements within 3 cm of the reference boundary as agreeing:
-//!   0.914 / 0.879 / 0.946 and 0.920. Mirrored area 0 (exact, scans), ≤ 0.0003 (noisy).
-//!   Issue 5's 0.95 / 0.90 strict agreement is not reached. Residual confusion (exact, mean
-//!   share of the body's area): hip → pelvis 2.8 % (the midline band, and the rig's hips
-//!   reaching the buttocks), torso → upper arm 1.8 % (armpit), hip → thigh 1.7 %, pelvis → hip
-//!   1.5 %, torso → clavicle 1.5 %, pelvis → torso 1.0 % — all boundary bands.
-//! * Midline band 0.05 × skeleton height (≈ 8.5 cm each side for a 1.7 m body): measured 0.02 →
-//!   exact mirrored 0.0004, noisy 0.0053; 0.03 → 0, 0.0036; 0.04 → 0, 0.0023; 0.05 → 0, 0.0013
-//!   with strict agreement *up* (0.8557 → 0.8570: the rig's pelvis reaches between the hips);
-//!   0.07 gave no further mirror gain and lower scan agreement. Re-measured after the side fixes
-//!   (side-first argmax, twin-root planes, tangent-plane heat): 0.03 → exact strict 0.8567,
-//!   cross-side area beyond 3 cm 0.0059 (clavicle labels across the neck), noisy mirrored
-//!   0.0032; 0.04 → 0.8569, 0.0021, 0.0009; 0.05 → 0.8585, 0.0003, 0.0003: the band still
-//!   earns its width.
-//! * Tried and dropped (measured on the same bodies): deciding the side of hip/clavicle vertices
-//!   by the geodesically nearer thigh/upper arm (without the guard, mirrored area up from 0.0074
-//!   to 0.012 — one leg forward pulls the buttock cleft towards it), by the nearer hip+thigh
-//!   bone chain (no change),
-//!   and the sagittal plane from the whole torso frame instead of the two twin bones (worse:
-//!   0.0104); moving the hip centre sideways halfway to the hips' midpoint (noisy mirrored
-//!   0.0053 → 0.0064). Per-segment reach scaling (below) moved bone heat alone 0.820 → 0.826;
-//!   with joint planes the boundaries between neighbouring segments no longer depend on it
-//!   (clavicle reach 0.7: 0.8557 → 0.8557).
-//! * The hip centre is refined in depth only (like the hips): its cross-section runs into the
-//!   tops of the thighs, and with a flexed leg the circle-fit centre moved it 5 cm sideways,
-//!   which moved the pelvis's left/right boundary with it.
-//! * The handedness check compares each foot with the torso's facing direction carried into
-//!   that shin's frame (made perpendicular to the shin): with a flexed hip and a bent knee the
-//!   toes point down, not forward, and the plain comparison swapped the sides of 3 of 13 random
-//!   poses (half the body mirrored). The sides are swapped only on clear evidence (combined
-//!   evidence below −0.45): with σ = 3 cm joints a contorted random pose scored −0.34 and a
-//!   margin of 0.15 mirrored every label of it. A second cue, independent of the feet, is the
-//!   knees' flexion (a bent knee lies in front of its hip–ankle line; offsets under 5 % of the
-//!   thigh are ignored as noise): with it every correct skeleton of the 40 bodies, exact and
-//!   noisy (two seeds), scores ≥ +0.33 (see [`MIRROR_MARGIN`]). Weak evidence leaves the
-//!   skeleton as given; [`MirrorCheck`] reports it.
-//! * Weights are per bone in [`BONES`] order (19 bones; the forearm segment has two), so the
-//!   wrist can be skinned separately; [`BoneWeights::segment_weights`] sums them per segment.
+//! # Measured choices
+//! Measured against a rig's reference labels on generated MakeHuman bodies (tools/synth), in
+//! `docs/decisions/`: `2026-11-23-attach-joint-planes.md` (and the agreement baseline),
+//! `2026-11-23-attach-midline-guard-band.md`, `2026-11-23-attach-left-right-labels.md`,
+//! `2026-11-23-attach-handedness-check.md`, `2026-12-02-attach-refinement-off-circle.md`,
+//! `2026-12-01-attach-learned-boundary-convention.md` (with its two `2026-12-02-attach-convention-*`
+//! follow-ups) and `2026-12-02-attach-noisy-joint-limit.md`.
 
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN as well.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -263,11 +102,14 @@ pub struct AttachOptions {
     /// divided by the reach, so a segment with reach 2 claims vertices twice as far away.
     /// See [`DEFAULT_SEGMENT_REACH`].
     pub segment_reach: [f64; 17],
-    /// Decide the boundary between two segments that share a joint by the joint plane (see the
-    /// crate docs) instead of the bone-heat argmax. Default `true`.
+    /// Decide the boundary between two segments that share a joint by the joint plane — the
+    /// plane through the joint whose normal bisects the two bone directions; between left and
+    /// right twins the sagittal plane, made to contain the trunk axis — instead of the
+    /// bone-heat argmax. Bone heat still decides which limb a vertex belongs to. Default `true`.
     pub joint_planes: bool,
-    /// Half-width of the midline guard band, as a fraction of the skeleton's height (see the
-    /// crate docs); 0 disables it. With a [`AttachOptions::convention`] it is also the widest
+    /// Half-width of the midline guard band, as a fraction of the skeleton's height: a vertex
+    /// labelled hip (clavicle) within it of the left/right plane gets the midline segment
+    /// (pelvis; torso or head); 0 disables it. With a [`AttachOptions::convention`] it is also the widest
     /// side band of the convention's rules and of the guard that runs after them (narrower
     /// for less noisy joints, see [`MIN_SIDE_BAND`]). Only used with
     /// [`AttachOptions::joint_planes`].

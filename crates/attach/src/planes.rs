@@ -9,7 +9,19 @@
 //! a vertex labelled `A` or `B` goes to `B` iff `(x − J)·unit(d̂_A + d̂_B) > 0`. For two bones
 //! leaving the same joint (siblings: pelvis/hips at the hip centre, head/clavicles at the shoulder
 //! centre) this is the plane bisecting the angle between them — between the left and right
-//! siblings it is the sagittal plane through the midline joint.
+//! siblings it is the sagittal plane through the midline joint, made to contain the trunk axis
+//! (hip centre → shoulder centre) so that a noisy twin bone cannot tilt it through a thigh.
+//!
+//! Two sweeps over the pairs, so thigh → hip → pelvis can chain; a plane changes a vertex's side
+//! only into the twin *root* (hip, clavicle: [`keep_limb_sides`]), where the midline guard can
+//! still make it midline. The midline guard ([`midline_guard`]): a vertex labelled hip
+//! (clavicle) within the band of the left/right plane gets the midline segment instead (pelvis;
+//! head or torso by their plane) — there the side is decided by centimetres of joint error, and
+//! a midline label is only a disagreement where a twin label would be a left/right swap.
+//!
+//! Measured: `docs/decisions/2026-11-23-attach-joint-planes.md`,
+//! `docs/decisions/2026-11-23-attach-midline-guard-band.md`,
+//! `docs/decisions/2026-11-23-attach-left-right-labels.md`.
 
 use crate::geom::unit;
 use crate::{BodySide, Bone, Joint, Segment};

@@ -1,5 +1,29 @@
 //! Handedness check and joint refinement (DESIGN.md, Algorithm 1: "move each joint to the
 //! interior, toward the medial axis of its cross-section, keep bone lengths plausible").
+//!
+//! **Handedness.** The torso frame (up = hip → shoulder centre, left = right → left shoulders
+//! and hips) gives the facing direction `left × up`. The feet must point the same way — the
+//! ankle→foot joints, and the mesh around the ankles (toes reach further forward than heels) —
+//! each foot compared with the facing direction carried into that shin's frame (with a flexed
+//! hip and a bent knee the toes point down, not forward); and bent knees must lie in front of
+//! the hip–ankle line (knees are hinges that bend forward). The combined evidence is exactly
+//! antisymmetric under a side swap; the sides are swapped only below `-`[`MIRROR_MARGIN`], and
+//! weak evidence leaves the skeleton as given (reported in [`MirrorCheck`]).
+//!
+//! **Refinement.** Each limb joint moves to the centre of the mesh cross-section perpendicular
+//! to its limb: an algebraic circle fit, which also works on the half-rings of a single-view
+//! scan, restricted to the connected piece of that cross-section nearest the joint so that a
+//! joint never jumps to another limb, and only a circle passing within `OFF_CIRCLE` × the
+//! skeleton's height of the joint counts (a joint lies near its limb's axis; a centre far out
+//! belongs to another surface the slab caught, such as a hip the hand rests on). Shoulder,
+//! hip and hip-centre joints are only re-centred in depth: the hip centre's cross-section runs
+//! into the tops of the thighs, and a circle-fit centre moves sideways with a flexed leg. Moves
+//! are capped ([`AttachOptions::max_joint_move`]); left/right bone lengths that differ by more
+//! than [`AttachOptions::bone_length_tolerance`] are set to their mean.
+//!
+//! Measured: `docs/decisions/2026-11-23-attach-handedness-check.md`,
+//! `docs/decisions/2026-12-02-attach-refinement-off-circle.md`,
+//! `docs/decisions/2026-12-02-attach-noisy-joint-limit.md`.
 
 use crate::geom::{closest_on_segment, unit};
 use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
@@ -9,11 +33,9 @@ use symcorr_mesh::TriMesh;
 /// A swap needs the combined facing evidence ([`crate::MirrorCheck::evidence`]) below
 /// `-MIRROR_MARGIN`. The evidence is exactly antisymmetric under a side swap, so the margin
 /// trades missed fixes for wrong swaps, and a wrong swap mirrors every label (a whole map
-/// flipped). Measured on 40 generated bodies (20 poses × 2 shapes), exact joints and σ = 3 cm
-/// joints with two noise seeds (tools/synth/tests/attach_labels.rs, `handedness_of_the_40_bodies`):
-/// without the knee cue a correct noisy random pose scored −0.344; with it every correct
-/// skeleton scores ≥ +0.33, so no correct skeleton is swapped and 118 of 120 swapped ones are
-/// detected (the other two score −0.43 and −0.33: left as given, reported).
+/// flipped). On 40 generated bodies, exact and σ = 3 cm joints, every correct skeleton scores
+/// ≥ +0.33 (tools/synth/tests/attach_labels.rs, `handedness_of_the_40_bodies`; measured:
+/// `docs/decisions/2026-11-23-attach-handedness-check.md`).
 pub const MIRROR_MARGIN: f64 = 0.45;
 
 /// The torso frame `(up, left, facing)`: up = hip centre → shoulder centre, left = right → left

@@ -1,4 +1,4 @@
-//! Bad input: clear errors or reported repairs, never a panic (issue 5).
+//! Bad input: clear errors or reported repairs, never a panic.
 
 use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_attach::{attach, label, AttachError, AttachOptions, Joint, JointRepair, Skeleton};

@@ -1,27 +1,50 @@
-//! Skeleton-driven articulated alignment for partial targets (single-view scans; DESIGN.md,
-//! Algorithm 7, "partial, noisy single-view scans").
+//! Skeleton-driven articulated alignment: symcorr's default method, for whole bodies and
+//! partial targets (single-view scans) alike (DESIGN.md, Algorithm 7).
 //!
 //! Intrinsic descriptors (si-HKS, Laplace–Beltrami bases, geodesic landmark coordinates) change
 //! wholesale when half of the surface is missing: a single-view scan has a long boundary, holes
 //! at every occlusion, and geodesics that run around them. The skeleton does not: both meshes
 //! come with their joints in their own frames. [`articulated_match`] therefore works
-//! *extrinsically*:
+//! *extrinsically* (lengths in √area units, see [`ArticulatedOptions`]):
 //!
-//! 1. **Pose the template** onto the target's skeleton by linear blend skinning with the
-//!    template's bone-heat weights (symcorr-attach): each bone gets a rigid transform from the
-//!    two skeletons ([`bone_transforms`]: the pelvis and the chest get full frames from the hips
-//!    and shoulders, every other bone the smallest rotation taking its direction in the
-//!    template onto the target's, composed down the kinematic chain).
-//! 2. **Articulated ICP**: every template vertex is matched to the nearest target vertex of its
-//!    segment pool ([`SegmentPools`]: never the other side of the body) in position + normal
-//!    space; pairs too far apart or facing away are rejected (the template's back side has no
-//!    counterpart on a front view); each bone's transform is re-fitted by weighted Kabsch
-//!    (Arun et al. 1987) to its vertices' pairs plus its two joints as anchors, then the
-//!    template is re-skinned. Distance gates shrink over the iterations.
-//! 3. **Map**: each template vertex takes the nearest target vertex of its pool; it *has a
-//!    counterpart* when that vertex is within the final gate and faces the same way.
+//! 1. **Pools and trees.** Each template segment's pool is the target region of that segment
+//!    and of its skeleton neighbours ([`SegmentPools::with_adjacent`]), grown by a geodesic band
+//!    ([`ArticulatedOptions::band`]) and never on the other side of the body; no sagittal
+//!    halves. One exact k-d tree per pool over position ⊕ β·normal (6-D, β =
+//!    [`ArticulatedOptions::normal_weight`]) answers every nearest-neighbour query below.
+//! 2. **Pose the template** onto the target's skeleton by linear blend skinning with the
+//!    template's bone-heat weights ([`bone_transforms`]: the pelvis and the chest get full frames
+//!    from the hips and shoulders, every other bone the smallest rotation taking its direction
+//!    onto the target's, composed down the kinematic chain; [`skin`]).
+//! 3. **Head twist search.** The joints fix a bone's direction, not its roll, and a roughly
+//!    round head can sit in a wrong roll that ICP does not leave: the head bone is started at
+//!    each of [`TWISTS`] about the target's neck → head axis, refined by a few rigid ICP steps on
+//!    at most 600 of its vertices, and the start with the lowest truncated residual wins.
+//! 4. **Articulated ICP** ([`ArticulatedOptions::iterations`] rounds, on an even stride sample
+//!    of at most [`ArticulatedOptions::icp_points`] template vertices): every sampled vertex is
+//!    paired with its nearest pool vertex; a pair holds when it is within the round's gate
+//!    (shrinking geometrically from [`ArticulatedOptions::gate_start`] to
+//!    [`ArticulatedOptions::gate_end`]), its normals agree
+//!    ([`ArticulatedOptions::min_normal_cosine`]: the template's back has no counterpart on a
+//!    front view) and its target point is not on the target's border beyond
+//!    [`ArticulatedOptions::boundary_gate`]. Each bone with at least 20 pairs of weight > 0.1 is
+//!    re-fitted by weighted Kabsch (Arun et al. 1987) to them plus its two joints as anchors
+//!    ([`ArticulatedOptions::joint_anchor`]), then the template is re-skinned.
+//! 5. **Non-rigid step** (needs the template's edge graph, [`ArticulatedSide::neighbors`]):
+//!    what rigid bones blended by skinning weights cannot express (another rig's skinning, soft
+//!    tissue, body shape) is pulled in by a smooth displacement field — the held pairs' offsets
+//!    spread over the edge graph by Jacobi iterations of
+//!    `min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²` — over
+//!    [`ArticulatedOptions::nonrigid_rounds`] rounds whose gates run coarse to fine from
+//!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end`.
+//! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
+//!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`.
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
+//! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
+//! `docs/decisions/2026-11-23-articulated-nonrigid-step.md`,
+//! `docs/decisions/2026-12-01-articulated-adjacent-pools.md`,
+//! `docs/decisions/2026-12-01-articulated-kdtrees.md`.
 
 use crate::kdtree::PoolTrees;
 use crate::{CorrespondError, SegmentPools};
@@ -435,7 +458,8 @@ pub struct ArticulatedMatches {
     pub posed: Vec<[f64; 3]>,
     /// The final bone transforms (template frame → target frame).
     pub transforms: [BoneTransform; 19],
-    /// Seconds per stage: `segment_pools`, `articulated_icp`, `map`.
+    /// Seconds per stage: `segment_pools`, `articulated_icp` (with the k-d trees and the head's
+    /// twist search), `nonrigid`, `map`.
     pub timings: Vec<(&'static str, f64)>,
 }
 
@@ -623,11 +647,11 @@ pub fn articulated_match(
     let mut timings = Vec::new();
     let t = Instant::now();
     // No sagittal halves on the midline segments: the alignment already puts each side on its
-    // side, and a symmetry plane fitted to a turned head is often off by tens of degrees —
-    // with halves, 12 pairs went 0.0050 → 0.0108 mean, 0.01 % → 0.32 % flips (whole meshes).
+    // side, and a symmetry plane fitted to a turned head is often off by tens of degrees.
     // Adjacent segments join each pool: a label boundary that moved between the meshes (a
     // neck the target's attachment gave to a clavicle) no longer cuts the true vertex out of
-    // the pool — 58 whole-body pairs 0.0026 → 0.0025 mean, 0.008 % → 0 flips.
+    // the pool. Measured: docs/decisions/2026-11-23-articulated-alignment.md and
+    // docs/decisions/2026-12-01-articulated-adjacent-pools.md.
     let pools = SegmentPools::with_adjacent(
         (template.labels, None),
         (target.labels, None),

@@ -98,7 +98,8 @@ pub struct CandidateOptions {
 }
 
 impl Default for CandidateOptions {
-    /// `nearest: Some(DEFAULT_NEAREST)`, no threshold (chosen by measurement, see the crate docs).
+    /// `nearest: Some(DEFAULT_NEAREST)`, no threshold (chosen by measurement:
+    /// `docs/decisions/2026-11-23-paper-pipeline-defaults.md`).
     fn default() -> Self {
         CandidateOptions {
             nearest: Some(crate::DEFAULT_NEAREST),

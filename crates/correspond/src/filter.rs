@@ -14,7 +14,7 @@ pub struct FilterStats {
     /// Candidates removed (different segment).
     pub removed: usize,
     /// Points where no candidate survived and the nearest target vertex *of the same segment*
-    /// by descriptor was used instead (the fallback).
+    /// by descriptor was used instead (the filter's fallback).
     pub fallbacks: usize,
     /// Points whose segment does not occur on the target at all (attachment gave it no
     /// vertex, or a partial scan misses it); for them only candidates on the *other side* are
@@ -135,8 +135,8 @@ pub struct BandStats {
 /// Why: the paper's filter keeps every candidate of the right segment, and the midline halves
 /// ([`skeleton_filter`]'s `halves`) every candidate of the right half; but a candidate on the
 /// plane itself (the navel, the spine, the chin) is about as far from the true point as from
-/// its mirror image, and eq. 8's selection picks such vertices often. Measured on the
-/// generated bodies (58 pairs, exact joints, sparse): flips 0.172 % → see the crate docs.
+/// its mirror image, and eq. 8's selection picks such vertices often (measured:
+/// `docs/decisions/2026-11-23-sagittal-band.md`).
 ///
 /// `cands[i]` are the (already skeleton-filtered) candidates of `points[i]`; `sagittal` gives
 /// the coordinate per vertex of each mesh (0 on limb segments, which the band ignores). When

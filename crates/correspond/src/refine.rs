@@ -2,6 +2,32 @@
 //! to the template point's body segment ([`SegmentPools`]), an initial dense map from any
 //! per-vertex descriptor ([`nearest_in_pools`]), and ZoomOut refinement (Melzi et al. 2019)
 //! whose every point-map recovery is restricted the same way ([`zoomout`]).
+//!
+//! The refined method ([`refine_dense`]) matches every template vertex in three steps:
+//!
+//! 1. **Skeleton landmark coordinates.** Per mesh, one landmark source set per joint
+//!    ([`skeleton_landmarks`](crate::skeleton_landmarks)): the *ring* where the plane through
+//!    the joint, normal to its bone, cuts the surface of the segments meeting there, and the
+//!    surface *tip* beyond each end joint; plus the vertex nearest each refined joint
+//!    ([`joint_landmarks`](crate::joint_landmarks)) — 40 columns. Every vertex's heat-method
+//!    geodesic distance to each of them over √area
+//!    ([`landmark_coordinates`](crate::landmark_coordinates)) gives coordinates that
+//!    correspond by joint name, survive isometries and tell left from right.
+//! 2. **Initial map** ([`nearest_in_pools`]): nearest neighbour in landmark ⊕ si-HKS space
+//!    (si-HKS columns scaled to unit standard deviation over both meshes, weight
+//!    [`RefineOptions::descriptor_weight`]) within the point's pool: the target region of its
+//!    segment grown by a geodesic band ([`RefineOptions::band`], so label boundaries that moved
+//!    between meshes do not cut good matches off), never on the other side of the body; midline
+//!    segments are split by sagittal halves refined by the surface's own symmetry
+//!    ([`refine_symmetry_plane`](crate::refine_symmetry_plane)), because a noisy shoulder line
+//!    or a turned head tilts the joint plane by many degrees.
+//! 3. **Segment-constrained ZoomOut** ([`zoomout`]): functional map `C = Φ_kᵀ M Π Ψ_k` from the
+//!    current map, then the point map recovered by nearest neighbour of rows of `Φ_k C` among
+//!    rows of `Ψ_k` within the same pools; `k` 20 → 60 by 8; every iteration but the last on an
+//!    even stride sample of at most [`DEFAULT_ZOOMOUT_POINTS`] template vertices (masses
+//!    rescaled to the total area).
+//!
+//! Measured: `docs/decisions/2026-11-23-refined-method.md`.
 
 use crate::CorrespondError;
 use faer::linalg::matmul::matmul;
@@ -401,7 +427,7 @@ pub struct ZoomOutOptions {
 }
 
 impl Default for ZoomOutOptions {
-    /// 20 → 60 in steps of 8 (see the crate docs for the measurements).
+    /// 20 → 60 in steps of 8 (measured: `docs/decisions/2026-11-23-refined-method.md`).
     fn default() -> Self {
         ZoomOutOptions {
             k_start: 20,
@@ -658,8 +684,8 @@ pub struct RefineOptions {
 }
 
 impl Default for RefineOptions {
-    /// Measured on the generated bodies (see the crate docs): weight 1, band 0.02, ZoomOut
-    /// 20 → 60 by 8.
+    /// Weight 1, band 0.02, ZoomOut 20 → 60 by 8 (measured on the generated bodies:
+    /// `docs/decisions/2026-11-23-refined-method.md`).
     fn default() -> Self {
         RefineOptions {
             descriptor_weight: 1.0,

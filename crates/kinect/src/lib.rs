@@ -1,38 +1,48 @@
 //! Kinect ingestion for symcorr: joint dumps and logs → canonical [`Skeleton`]s, depth frames →
 //! scan meshes, and (feature `openni2`) OpenNI2 devices and `.oni` recordings.
 //!
-//! * [`joints`]: `symcorr.joints/1` JSON (read/write; skeletons `kinect_v1`, `nite`, `kinect_v2`),
-//!   Kinect SDK v1 text dumps, NTU RGB+D `.skeleton` files; format detected from the content.
-//! * [`mapping`]: the NiTE 15-joint and Kinect v2 25-joint tables and the interpolation rules.
-//! * [`camera`]: [`Intrinsics`] and the single projection/unprojection convention.
-//! * [`depth`]: [`DepthFrame`] and PNG-16 reading/writing.
-//! * [`replay`]: a frame by index/time, robust window average, bone-length consistency.
-//! * [`handedness`]: is a skeleton's left/right consistent with a mesh?
-//! * [`scan`]: depth frame → organised cloud → scan mesh (floor, background, discontinuities).
-//! * `openni2` (feature `openni2`): safe OpenNI2 wrapper; devices, `.oni` playback, recorder.
+//! # Data flow
+//! * Joints: a file in any supported format ([`joints`]: `symcorr.joints/1` JSON with
+//!   skeletons `kinect_v1`, `nite` or `kinect_v2`; Kinect SDK v1 text dumps, [`sdk_text`]; NTU
+//!   RGB+D `.skeleton` files, [`ntu`]; detected from the content) → [`mapping`] onto the 20
+//!   Kinect v1 joints (missing joints interpolated along their chain and flagged) → a
+//!   [`JointLog`] in metres → [`replay`]: a frame by index or time, or a robust average over a
+//!   window ([`FrameSelect`]) → one [`Skeleton`] for symcorr-attach.
+//! * Depth: a PNG-16 frame ([`depth`]) or an OpenNI2 stream (`openni2`) + [`Intrinsics`]
+//!   ([`camera`]) → organised point cloud → [`scan_mesh`] (background, floor and depth
+//!   discontinuities removed; [`scan`]). [`handedness`] checks a skeleton's left/right against
+//!   a mesh (symcorr-attach's check).
 //!
-//! ## Decisions the design leaves open
+//! ```
+//! use symcorr_attach::Joint;
+//! use symcorr_kinect::{read_joints, FrameSelect, Intrinsics, SkeletonKind};
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/kinect/standing_nite.json");
+//! let log = read_joints(path).unwrap(); // NiTE's 15 joints, in millimetres
+//! assert_eq!(log.skeleton_kind, SkeletonKind::Nite);
+//! let skeleton = log.select(FrameSelect::Index(0)).unwrap(); // 20 joints, metres
+//! let head = skeleton.position(Joint::Head);
+//! assert!((head[2] - 2.5).abs() < 1e-9);
+//! // NiTE has no wrists: interpolated 80 % of the way elbow → hand, and flagged.
+//! assert!(skeleton.interpolated[Joint::WristLeft.index()]);
+//! let [u, v] = Intrinsics::kinect_v1().project(head); // pixel of the head in the depth image
+//! assert!(u.is_finite() && v.is_finite());
+//! ```
 //!
-//! * Joint logs are always held in metres; `symcorr.joints/1` may say `"units": "mm"` and is
-//!   converted on reading. The writer always writes the canonical 20 joints (`kinect_v1`, `m`),
-//!   and an extra per-frame `"interpolated": [joint names]` list when an importer interpolated any.
-//! * A `kinect_v1` JSON frame must name all 20 joints (missing → error); `nite` and `kinect_v2`
-//!   frames may lack joints, which are interpolated ([`mapping`]).
-//! * Files without timestamps get `time_s = frame / 30`.
-//! * Writes are atomic: a temporary file next to the target, then a rename.
-//! * Camera conventions ([`camera`]): Kinect camera space (+x to the sensor's left, +y up, +z
-//!   into the scene) and the Kinect SDK v1 projection `u = cx + fx·x/z`, `v = cy − fy·y/z`
-//!   (SDK v1's mirrored depth image). [`Intrinsics::kinect_v1`] is the SDK's nominal
-//!   571.26 px focal length at 640×480.
-//! * Kinect SDK text dumps write untracked joints as `0 0 0`; they are interpolated and flagged.
-//! * NTU files: frames without the selected body are skipped (some clips start without one).
-//! * Replay's robust average: coordinate-wise median, outlier frames (median joint deviation
-//!   > 3× typical + 1 cm) dropped, then confidence-weighted median ([`replay`]).
-//! * Scan meshing thresholds ([`ScanOptions`]): 5 cm depth discontinuity, 2 cm floor distance,
-//!   30 cm background margin around the skeleton, floor within 35° of horizontal and ≥ 30 cm
-//!   below the hips.
-//! * OpenNI2 is initialised once per process and never shut down (`oniShutdown` crashes on this
-//!   machine's OpenNI 2.2; see `openni2`).
+//! # Invariants and conventions
+//! * Joint logs are held in metres in Kinect camera space (+x to the sensor's left, +y up, +z
+//!   into the scene); `"units": "mm"` is converted on reading. The writer always writes the
+//!   canonical 20 joints (`kinect_v1`, `m`) and lists interpolated joints per frame. A
+//!   `kinect_v1` frame must name all 20 joints; files without timestamps get
+//!   `time_s = frame / 30`; SDK text dumps' untracked `0 0 0` joints are interpolated.
+//! * One projection convention ([`Intrinsics::project`]): the Kinect SDK v1's
+//!   `u = cx + fx·x/z`, `v = cy − fy·y/z` (its mirrored depth image);
+//!   [`Intrinsics::kinect_v1`] is the nominal 571.26 px focal length at 640×480.
+//! * Every failure is a typed [`KinectError`] naming the file and the line (text formats) or
+//!   frame (JSON); nothing panics on bad input (fuzzed: `crates/kinect/fuzz`). Writes are atomic.
+//! * Defaults of the robust average ([`replay`]) and of scan meshing ([`ScanOptions`]: 5 cm
+//!   depth discontinuity, 2 cm floor distance, 30 cm background margin) are documented there.
+//! * OpenNI2 is initialised once per process and never shut down (`oniShutdown` crashes on
+//!   this machine's OpenNI 2.2).
 //!
 //! [`Skeleton`]: symcorr_attach::Skeleton
 

@@ -1,69 +1,44 @@
 //! Triangle meshes for symcorr: the [`TriMesh`] type, readers and writers ([`io`]),
-//! validation and repair ([`validate`], [`repair`]), and per-element geometry and adjacency
-//! ([`geometry`]).
+//! validation and repair ([`validate()`], [`repair()`]), per-element geometry and adjacency
+//! ([`geometry`], [`TriMesh::boundary_loops`], [`TriMesh::vertex_areas`]) and Loop
+//! subdivision ([`subdivide`]).
 //!
-//! [`TriMesh`] holds f64 positions and u32 triangles. Vertex `i` of a mesh read from a file is
-//! vertex `i` of that file: correspondence ground truth is the vertex index, so no reader or
-//! repair ever renumbers silently (repairs return a map back to the input's ids).
+//! # Data flow
+//! file (OFF, OBJ, PLY ascii/binary, glTF/GLB) → [`io::read`] → [`TriMesh`] (f64 positions,
+//! u32 counter-clockwise triangles) → [`validate()`] (a report, never a failure) →
+//! [`repair()`] (degenerate, zero-area and duplicate triangles, unreferenced vertices, optionally
+//! non-manifold elements and small components removed; a map back to the input's ids) → the
+//! other crates → [`io::write`] (OFF, OBJ, PLY, glTF/GLB with per-vertex colours, atomically).
 //!
 //! ```
-//! use symcorr_mesh::TriMesh;
+//! use symcorr_mesh::{io, repair, RepairOptions, TriMesh};
+//! // Two triangles and a stray vertex (3) that no triangle uses.
 //! let mesh = TriMesh::new(
-//!     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-//!     vec![[0, 1, 2]],
+//!     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [5.0, 5.0, 5.0], [1.0, 1.0, 0.0]],
+//!     vec![[0, 1, 2], [1, 4, 2]],
 //! ).unwrap();
-//! assert!((mesh.total_area() - 0.5).abs() < 1e-12);
+//! assert!((mesh.total_area() - 1.0).abs() < 1e-12);
+//! let fixed = repair(&mesh, &RepairOptions::default()).unwrap();
+//! assert_eq!(fixed.vertex_map, vec![0, 1, 2, 4]); // new id → input id
+//! // Text formats round-trip f64 exactly; vertex order is the file's.
+//! let bytes = io::write_to_bytes(&mesh, None, io::Format::Off, io::PlyEncoding::default()).unwrap();
+//! assert_eq!(io::read_from_bytes(&bytes, io::Format::Off).unwrap().mesh, mesh);
 //! ```
 //!
-//! # Decisions
+//! # Invariants
+//! * Vertex `i` of a mesh read from a file is vertex `i` of that file: correspondence ground
+//!   truth is the vertex index, so no reader or repair renumbers silently. Readers are our own
+//!   for OFF, OBJ and PLY (tobj renumbers vertices in face order; see
+//!   `docs/decisions/2026-11-23-dependencies-and-own-parsers.md`).
+//! * [`TriMesh::new`] guarantees finite coordinates and in-range indices; readers reject
+//!   NaN/inf and out-of-range indices with an error naming the line or element, and never size
+//!   an allocation from a header count the input could not hold.
+//! * `Repaired::vertex_map[new_id] = input_id`: kept vertices keep their relative order (the
+//!   map is increasing over them), split copies are appended at the end; `triangle_map` does
+//!   the same for triangles. Results on the repaired mesh are reported in input ids.
+//! * Writes are atomic: a temporary file in the target directory, synced and renamed.
 //!
-//! **Readers.** [`io::read`] picks the format by extension (case-insensitive: `.off`, `.obj`,
-//! `.ply`, `.gltf`, `.glb`); [`io::read_with_format`] overrides it; [`io::read_from_bytes`]
-//! parses memory (used by the fuzz targets in `fuzz/`). Every reader keeps file vertex order,
-//! fan-triangulates polygons `(v0, vk, vk+1)`, rejects NaN/inf coordinates and out-of-range
-//! indices with an error naming the line (text) or element (binary), and never sizes an
-//! allocation from a header count without checking that the input could hold that many
-//! elements. A file without faces is [`MeshError::Empty`] (wrapped with the file name).
-//! - OFF, OBJ and PLY are hand-written. OBJ: tobj renumbers vertices in face order, so it is
-//!   not used; f64 throughout; `v/vt/vn` corners and negative (relative) indices; the
-//!   `v x y z r g b` colour extension is kept only if every vertex has it. PLY: a small parser
-//!   instead of ply-rs-bw — the reader needs only `x y z`, `red green blue` and one index list,
-//!   and owning it lets every count and list length be checked against the bytes present
-//!   (ascii, binary little/big endian; any property order and types; `vertex_indices` or
-//!   `vertex_index`; other properties/elements skipped).
-//! - glTF/GLB: the `gltf` crate parses and validates the JSON document (its GLB container
-//!   parser is replaced by a checked one, and one validation panic is pre-empted — both fuzz
-//!   findings); buffers (GLB chunk, base64 `data:` URIs, files next to the `.gltf`) and
-//!   accessor bytes are read here with checked offsets. All triangle primitives (incl. strips
-//!   and fans) of the default scene (else scene 0; with no scene, every mesh untransformed) are
-//!   concatenated in depth-first node order with world transforms applied; a mirroring
-//!   transform flips winding. Sparse and bufferView-less accessors are rejected, and so is a
-//!   scene instancing more than max(4 Mi, 64 × input bytes) vertices or triangles (a small
-//!   file can otherwise describe an arbitrarily large scene).
-//!
-//! **Writers** ([`io::write`], [`io::write_with`], [`io::write_to_bytes`]) produce OFF/COFF,
-//! OBJ, PLY (binary little-endian by default — doubles, so exact — or ascii) and glTF 2.0 (GLB,
-//! or `.gltf` with an embedded buffer) with per-vertex colours. Text formats print f64 in the
-//! shortest round-trip form, so write → read is bit-exact; glTF stores f32 positions (exact
-//! for f32 values; beyond f32's range is [`MeshError::NotRepresentable`]). GLB output carries
-//! `asset.version` 2.0, 4-byte-aligned views, POSITION min/max, unit NORMALs and COLOR_0 as
-//! normalized u8 RGB (stride 4; colour bytes are stored unconverted). All writes are atomic:
-//! a temporary file in the target directory is synced and renamed over the target.
-//!
-//! **Validation and repair.** [`validate`] reports (never fails): non-finite vertices,
-//! out-of-range triangles, repeated-vertex and zero-area triangles (area ≤
-//! [`DEFAULT_ZERO_AREA_REL`] × bbox diagonal²), duplicate triangles (same vertex set in any
-//! order), unreferenced vertices, non-manifold edges (> 2 triangles) and vertices (> 1 fan),
-//! inconsistently oriented edges, components (triangles joined through shared vertices, with
-//! triangle counts) and boundary loops. [`repair`] refuses invalid input (non-finite,
-//! out-of-range, empty are errors — it does not guess), then per [`RepairOptions`] removes
-//! degenerate/zero-area triangles, duplicates (first kept), optionally the triangles beyond
-//! the first two at a non-manifold edge, small components or all but the largest, optionally
-//! splits non-manifold vertices (one copy per extra fan), and drops unreferenced vertices.
-//! **vertex_map convention:** `Repaired::vertex_map[new_id] = input_id`; kept vertices keep
-//! their relative order (the map is increasing over them) and split copies are appended at the
-//! end, mapping to the vertex they copy; `triangle_map` does the same for triangles. Results
-//! computed on the repaired mesh are reported in input ids through these maps.
+//! The [`io`] module documents each format's choices (glTF scenes, colours, f32 positions).
 
 mod error;
 pub mod geometry;

@@ -1,4 +1,19 @@
 //! Validation ([`validate`]) and repair ([`repair`]) of triangle meshes, with reports.
+//!
+//! **Validation and repair.** [`validate`] reports (never fails): non-finite vertices,
+//! out-of-range triangles, repeated-vertex and zero-area triangles (area ≤
+//! [`DEFAULT_ZERO_AREA_REL`] × bbox diagonal²), duplicate triangles (same vertex set in any
+//! order), unreferenced vertices, non-manifold edges (> 2 triangles) and vertices (> 1 fan),
+//! inconsistently oriented edges, components (triangles joined through shared vertices, with
+//! triangle counts) and boundary loops. [`repair`] refuses invalid input (non-finite,
+//! out-of-range, empty are errors — it does not guess), then per [`RepairOptions`] removes
+//! degenerate/zero-area triangles, duplicates (first kept), optionally the triangles beyond
+//! the first two at a non-manifold edge, small components or all but the largest, optionally
+//! splits non-manifold vertices (one copy per extra fan), and drops unreferenced vertices.
+//! **vertex_map convention:** `Repaired::vertex_map[new_id] = input_id`; kept vertices keep
+//! their relative order (the map is increasing over them) and split copies are appended at the
+//! end, mapping to the vertex they copy; `triangle_map` does the same for triangles. Results
+//! computed on the repaired mesh are reported in input ids through these maps.
 
 use std::fmt;
 

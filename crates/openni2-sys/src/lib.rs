@@ -2,13 +2,34 @@
 //! from Debian's `libopenni2-dev` (parsed as C++11, linked with `-lOpenNI2` via pkg-config
 //! `libopenni2`).
 //!
-//! Without the feature this crate is empty, so the default workspace build needs no system
-//! library. Use the safe wrapper in `symcorr-kinect` (feature `openni2`) instead of these.
+//! # Data flow
+//! `build.rs` (feature `openni2` only) asks pkg-config for `libopenni2`, runs bindgen over
+//! `wrapper.h` (which includes `OniCAPI.h`, with `-x c++ -std=c++11`) and writes the bindings
+//! to `OUT_DIR`; this crate re-exports them unchanged. symcorr-kinect's `openni2` module is the
+//! safe wrapper (devices, `.oni` playback, the recorder): use it instead of these.
 //!
-//! `ONI_API_VERSION` is a function-like macro in `OniVersion.h`
-//! (`ONI_VERSION_MAJOR*1000 + ONI_VERSION_MINOR`) that bindgen skips; [`ONI_API_VERSION`] is
-//! its value for the OpenNI 2.2 headers, checked against the generated `ONI_VERSION_*` constants
-//! in this crate's tests.
+//! ```
+//! // The version to pass to `oniInitialize`, with or without the feature.
+//! assert_eq!(symcorr_openni2_sys::ONI_API_VERSION, 2002);
+//! #[cfg(feature = "openni2")]
+//! {
+//!     // SAFETY: oniGetVersion has no preconditions and returns a plain struct.
+//!     let v = unsafe { symcorr_openni2_sys::oniGetVersion() };
+//!     assert_eq!((v.major, v.minor), (2, 2));
+//! }
+//! ```
+//!
+//! # Invariants
+//! * Without the feature the crate holds only [`ONI_API_VERSION`], so the default workspace
+//!   build needs no system library. With it, the build needs `libopenni2-dev`, `libclang-dev`
+//!   and `pkg-config` (`.ci/run` installs them).
+//! * `ONI_API_VERSION` is a function-like macro in `OniVersion.h`
+//!   (`ONI_VERSION_MAJOR*1000 + ONI_VERSION_MINOR`) that bindgen skips; [`ONI_API_VERSION`] is
+//!   its value for the OpenNI 2.2 headers, checked against the generated `ONI_VERSION_*`
+//!   constants in this crate's tests.
+//! * NiTE (skeleton tracking) is proprietary and not bound: joints always come from files.
+//!
+//! The choice of bindgen over a hand-written binding is DESIGN.md's ("Chosen dependencies").
 
 #![cfg_attr(
     feature = "openni2",

@@ -1,4 +1,4 @@
-//! Benchmarks of the spectral core (DESIGN.md / issue 2 "Performance").
+//! Benchmarks of the spectral core (the speed targets of the README's "Spectral core" table).
 //!
 //! Inputs: the 13,380-vertex body fixture, and a 100,002-vertex deformed geodesic sphere
 //! (icosahedron, each face split 100×100, projected, then stretched and bumped so the spectrum

@@ -96,9 +96,8 @@ impl SiHksParams {
     /// Why relative: the paper's absolute window (`τ ∈ [1, 25]`, `t ≥ 2`) suits meshes
     /// normalised to a small scale; on a body in metres it lies where every non-constant
     /// eigenfunction has decayed (`e^{-λt}` with `λ·area ≈ 4πk`), leaving no detail (mean error
-    /// ≈ 0.10 on the generated bodies). Sweeping the relative window on a 6-pair subset of
-    /// symcorr's generated bodies (500 samples, the paper's pipeline): `[−12, 0]` 0.067,
-    /// `[−10, 2]` 0.059, `[−8, 3]` 0.053, `[−8, 5]` 0.057, `[−6, 4]` 0.062, `[−4, 4]` 0.078.
+    /// ≈ 0.10 on the generated bodies). `[−8, 3]` was the best of six relative windows swept
+    /// (measured: `docs/decisions/2026-11-23-paper-pipeline-defaults.md`).
     ///
     /// ```
     /// use symcorr_spectral::SiHksParams;

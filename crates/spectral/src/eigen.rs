@@ -32,13 +32,12 @@
 //!    error, so they agree with scipy to ~1e-13). A dense Rayleigh–Ritz rotation with `L` gave
 //!    the same values and cost three `n × k × k` products (1.4 s at 100k vertices).
 //!
-//! Why these choices (measured on a 2-core AMD EPYC, k = 100, issue 2): before this design the
-//! time went to faer's per-supernode parallel solve (100k sphere: 14 of 20 s) and to the
-//! re-orthogonalisation products (13k body: ~70 %). Block size 8 is the fastest of 4, 6, 8,
-//! 10 on the body (fewer steps with smaller blocks — 312 for b = 4, 384 for b = 8 — but each
-//! block product and solve is less efficient); the basis size `max(2k+20, k+40)` and keeping
-//! half of the surplus Ritz vectors at a restart were within noise of the alternatives tried
-//! (basis 160–352, keep 30–70 %): about 384 Lanczos steps for k = 100 in every case.
+//! Why these choices: before this design the time went to faer's per-supernode parallel
+//! solve (100k vertices) and to the re-orthogonalisation products (13k body). Block size 8 was
+//! the fastest of 4, 6, 8, 10 on the body (smaller blocks take fewer steps, but each block
+//! product and solve is less efficient); the basis size `max(2k+20, k+40)` and keeping half of
+//! the surplus Ritz vectors at a restart were within noise of the alternatives tried.
+//! Measured: `docs/decisions/2026-11-23-eigensolver-shift-invert-block-lanczos.md`.
 
 mod factor;
 mod ortho;

@@ -1,19 +1,14 @@
-//! Spectral geometry for symcorr (the paper's §3.1 and §3.3 machinery).
+//! Spectral geometry for symcorr: the machinery of the paper's §3.1 (descriptors) and §3.3
+//! (curvature, geodesics, base vertex set), and the bases of the refined method.
 //!
-//! * [`Laplacian`]: cotan stiffness `L` (positive semi-definite convention, `L·1 = 0`) and lumped
-//!   barycentric mass `M`; [`SystemFactor`] factors `L + a·M + diag(h)` once (faer sparse
-//!   Cholesky) and solves many right-hand sides.
-//! * [`eigenpairs`]: the k smallest pairs of `L φ = λ M φ` by shift-invert block Lanczos (own
-//!   blocked triangular solves on faer's Cholesky factor, full re-orthogonalisation by fused
-//!   block Gram–Schmidt, per-component deflation of the constant, early convergence tests, thick
-//!   restart, Rayleigh quotients with the exact `L`); agrees with scipy's
-//!   `eigsh(L, k, M=M, sigma=-1e-8)` to ~1e-13 relative. See the `eigen` module docs (source)
-//!   for the method and the measurements behind each choice.
-//! * Descriptors: [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010), [`wks`] (Aubry et al. 2011).
-//! * [`gaussian_curvature`] (paper eq. 4), geodesics by [`dijkstra`] / [`EdgeGraph`] (paper
-//!   eq. 5–6) and the heat method ([`HeatGeodesics`]), and the paper's [`base_vertex_set`] (§3.3).
-//! * [`cache`]: eigenpairs on disk (`*.symcorr-eigs`, versioned, keyed by a SHA-256 of the mesh
-//!   and the solver settings, checksummed), [`cache::eigenpairs_cached`] around [`eigenpairs`].
+//! # Data flow
+//! mesh → [`Laplacian`] (cotan stiffness `L`, PSD with `L·1 = 0`, and lumped barycentric mass
+//! `M`; the one owner of both) → [`eigenpairs`] of `L φ = λ M φ` (shift-invert block Lanczos on
+//! faer's sparse Cholesky, own blocked triangular solves and Gram–Schmidt; optionally cached on
+//! disk by [`cache`]) → descriptors [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010), [`wks`]
+//! (Aubry et al. 2011). Beside them: [`gaussian_curvature`] (paper eq. 4), geodesics by
+//! [`dijkstra`] / [`EdgeGraph`] (paper eq. 5–6) and the heat method ([`HeatGeodesics`], on a
+//! prefactored [`SystemFactor`]), and the paper's [`base_vertex_set`] (§3.3).
 //!
 //! ```
 //! use symcorr_mesh::TriMesh;
@@ -31,31 +26,26 @@
 //! assert_eq!((desc.nrows(), d.len()), (6, base.len()));
 //! ```
 //!
-//! # Decisions the design leaves open
-//! * Sign convention: `L` is PSD; eigenpairs solve `L φ = λ M φ`, `λ ≥ 0`.
-//! * Cotangents are clamped to ±1e5 (angles within ~1e-5 rad of 0 or π); numerically
-//!   degenerate triangles (doubled area < 1e-12·longest edge²) are ignored. A vertex left with
-//!   zero mass is an error ([`SpectralError::ZeroMass`]) — repair the mesh first.
-//! * Eigenvectors are M-orthonormal; the constant pair of each connected component is returned
-//!   exactly (λ = 0, `1/√area_c` on the component); signs make the largest-magnitude entry
-//!   positive. Default shift `ε = 1e-8·n/area` (scale-invariant), tolerance 1e-10 on the
-//!   shift-inverted residual, block size 8, basis `max(2k+20, k+40)` columns capped by a 1 GiB
-//!   budget. Convergence is tested every 2–4 blocks (not only when the basis is full); the
-//!   eigenvalues are per-vector Rayleigh quotients (no dense Rayleigh–Ritz rotation: same values
-//!   to ~1e-13, ~1.4 s less at 100k vertices).
-//! * Gaussian curvature at boundary vertices uses `π − Σα` (geodesic-curvature convention).
-//! * Heat method: `t = h²` by default (h the mean edge length), Neumann boundary conditions in
-//!   both solves, Poisson solved with one pinned vertex per component (no regularisation), then
-//!   shifted so the source is 0; other components are infinitely far.
-//! * si-HKS defaults (Bronstein & Kokkinos 2010): `t = 2^τ`, τ = 1..25 step 1/16, 6 frequencies;
-//!   times are in the mesh's own length units².
-//! * WKS defaults (Aubry et al. 2011): 100 energies, σ = 6× their spacing, constant pairs excluded.
-//! * Base vertex set radius is in units of `√(total area)`; geodesics there are Dijkstra.
-//! * Source indices out of range are errors, not panics (so [`dijkstra`] returns a `Result`).
-//! * Eigenpair cache: a file is used only when its key (mesh bits, `k`, every [`EigenOptions`]
-//!   field, the Laplacian constants, [`cache::SOLVER_REVISION`]) and the lumped mass match bit
-//!   for bit; anything else (stale, corrupted, another format version) is recomputed and the
-//!   file rewritten. Timings stored in a file are those of the original solve.
+//! # Invariants and conventions
+//! * Eigenvectors are M-orthonormal, `λ ≥ 0` ascending; the constant pair of each connected
+//!   component is returned exactly (λ = 0, `1/√area_c` on it); signs make the
+//!   largest-magnitude entry positive. Agreement with scipy's `eigsh(L, k, M=M, sigma=-1e-8)`:
+//!   ~1e-13 relative (tests against `fixtures/spectral/reference.json`).
+//! * Cotangents are clamped to ±1e5; numerically degenerate triangles (doubled area
+//!   < 1e-12·longest edge²) are ignored; a vertex left with zero mass is an error
+//!   ([`SpectralError::ZeroMass`]) — repair the mesh first. Bad indices are errors, not panics.
+//! * Default shift `ε = 1e-8·n/area` (scale-invariant), tolerance 1e-10 on the shift-inverted
+//!   residual, block size 8, basis `max(2k+20, k+40)` columns capped by a 1 GiB budget.
+//! * Curvature at boundary vertices uses `π − Σα`. Heat method: `t = h²` (mean edge length),
+//!   Neumann boundary conditions, one pinned vertex per component; other components are
+//!   infinitely far. Base-set radius in `√(total area)` units, its geodesics Dijkstra.
+//! * si-HKS defaults are the paper's absolute window (`t = 2^τ`, τ = 1..25 step 1/16, 6
+//!   frequencies); [`SiHksParams::area_relative`] is the window the pipeline uses.
+//! * The eigenpair cache uses a file only when its key (mesh bits, `k`, every [`EigenOptions`]
+//!   field, the Laplacian constants, [`cache::SOLVER_REVISION`]) and the mass match bit for bit.
+//!
+//! Measured: `docs/decisions/2026-11-23-eigensolver-shift-invert-block-lanczos.md` and
+//! `docs/decisions/2026-11-23-paper-pipeline-defaults.md` (si-HKS window).
 
 pub mod cache;
 mod curvature;

@@ -1,68 +1,54 @@
 //! symcorr: skeleton-aware human shape correspondence — the pipeline API behind the `symcorr`
-//! command.
+//! command. Given two meshes of human bodies and the skeletons a depth camera tracked beside
+//! them, it matches template vertices to target vertices without mapping a left limb onto a
+//! right one.
 //!
-//! The paper's pipeline ("Symmetry-Aware Human Shape Correspondence Using Skeleton";
-//! DESIGN.md, Algorithms 1–6) in two halves:
+//! # Data flow
+//! * [`PreparedMesh::new`] — everything about one mesh, computed once and reused for every pair
+//!   it is in: the default mesh repair (`symcorr_mesh::repair`), skeleton attachment and segment
+//!   labels (symcorr-attach), and, for the methods that need them and in parallel with the
+//!   attachment, the cotan Laplacian, eigenpairs, si-HKS, curvature, base vertex set and its
+//!   geodesic profile (symcorr-spectral).
+//! * [`Pipeline::run`] — one pair, with one of three [`Method`]s (symcorr-correspond):
+//!   [`Method::Articulated`], **the default**: the template, skinned with its bone-heat weights,
+//!   posed onto the target's skeleton, fitted bone by bone and pulled onto the target; every
+//!   template vertex takes the nearest target vertex of its segment pool. It needs no spectral
+//!   stage, handles single-view scans ([`PreparedMesh::is_partial`]) and says which template
+//!   points a scan does not show ([`Correspondence::has_counterpart`]).
+//!   [`Method::Refined`]: skeleton landmark coordinates + si-HKS within segment pools, then
+//!   segment-constrained ZoomOut. [`Method::Paper`]: the paper's si-HKS candidates, skeleton
+//!   filter and eq. 8 selection (DESIGN.md, Algorithms 1–6).
+//! * [`dataset`] runs a benchmark folder in DESIGN.md's layout; [`output`] writes the
+//!   `symcorr.correspondence/1` JSON, coloured meshes and the error-curve plot.
 //!
-//! * [`PreparedMesh::new`] — everything about one mesh: cotan Laplacian, eigenpairs, si-HKS,
-//!   Gaussian curvature, base vertex set and its geodesic profile (symcorr-spectral), and,
-//!   in parallel, skeleton attachment and segment labels (symcorr-attach). Computed once per
-//!   mesh and reused for every pair it is in.
-//! * [`Pipeline::run`] — one pair: template points (farthest-point sample or every vertex),
-//!   si-HKS candidates, the skeleton filter, eq. 8 selection (symcorr-correspond).
+//! ```
+//! use symcorr::{Mode, Pipeline, PipelineOptions};
+//! // A small capsule body in a T-pose and its skeleton, matched onto itself.
+//! let (mesh, joints) = symcorr_attach::doc_example();
+//! let pipeline = Pipeline::new(PipelineOptions { mode: Mode::Dense, ..Default::default() });
+//! let template = pipeline.prepare(mesh.clone(), &joints).unwrap();
+//! let target = pipeline.prepare(mesh, &joints).unwrap();
+//! let corr = pipeline.run(&template, &target).unwrap();
+//! assert_eq!(corr.matches.len(), template.num_vertices());
+//! ```
 //!
-//! Three methods share these halves ([`Method`]):
-//! * [`Method::Articulated`], the default: the template, skinned with its bone-heat weights,
-//!   is posed onto the target's skeleton and fitted bone by bone (ICP within segment pools,
-//!   the head's twist searched); every template vertex then takes the nearest target vertex of
-//!   its pool (symcorr-correspond's `articulated_match`). It needs only the attachment (no
-//!   spectral stage), handles single-view scans ([`PreparedMesh::is_partial`]) and says which
-//!   template points a scan does not show ([`Correspondence::has_counterpart`]).
-//! * [`Method::Refined`]: skeleton landmark coordinates + si-HKS initial map within segment
-//!   pools, then segment-constrained ZoomOut (DESIGN.md Algorithm 7, `refine_dense`).
-//! * [`Method::Paper`], the paper's pipeline above.
+//! # Invariants
+//! * Every output speaks the input file's vertex ids ([`PreparedMesh::input_id`]), whatever
+//!   the repair removed; the stages work on the repaired mesh.
+//! * Options that would silently run something other than asked are errors
+//!   ([`PipelineOptions::check`]: the skeleton-filter ablation exists only for the paper).
+//! * Stage timings are wall clock per stage; attachment runs concurrently with the spectral
+//!   stages, so they overlap. `symcorr bench` reports `seconds_per_pair` as the standalone cost
+//!   of a pair (both meshes prepared plus matching) and `wall_seconds` for the whole run.
+//! * The demo reads its fixtures from `--fixtures DIR`, else `$SYMCORR_FIXTURES`, else the
+//!   repository's `fixtures/synth/bodies` (path fixed at compile time).
 //!
-//! Why the articulated method is the default (58 pairs of generated bodies, dense, README):
-//! exact joints 0.0025 mean error and no flip vs 0.025 for the refined method; single-view scans 0.018 vs
-//! 0.11 (measured on the template's surface). Intrinsic descriptors change wholesale when half
-//! the surface is missing; the skeleton does not.
-//!
-//! Every mesh first goes through the default repair
-//! (`symcorr_mesh::repair`); the stages work on the repaired mesh and every output speaks the
-//! input file's vertex ids ([`PreparedMesh::input_id`]).
-//!
-//! [`dataset`] runs a benchmark folder in DESIGN.md's layout and [`output`] writes the
-//! `symcorr.correspondence/1` JSON, coloured meshes and the error-curve plot.
-//!
-//! # Decisions the design leaves open
-//! * **si-HKS window relative to the area**: times `t = area·2^τ`, `τ ∈ [−8, 3]`, step 1/16,
-//!   6 frequencies, from [`DEFAULT_EIGENPAIRS`] = 60 eigenpairs. Bronstein & Kokkinos's absolute
-//!   window (`t = 2^1…2^25`) lies, for a body in metres, where every non-constant
-//!   eigenfunction has decayed, and gave mean error ≈ 0.10; sweeping the window on a 6-pair
-//!   subset of `fixtures/synth/bodies` (500 samples): `[−12, 0]` 0.067, `[−10, 2]` 0.059,
-//!   `[−8, 3]` 0.053, `[−8, 5]` 0.057, `[−6, 4]` 0.062, `[−4, 4]` 0.078.
-//! * **Candidates**: the N = 5 nearest si-HKS descriptors (same subset: N = 1 0.0625,
-//!   5 0.062, 10 0.064, 20 0.067, 100 0.078, 800 0.114 at the `[−12, 0]` window): eq. 8's
-//!   scalar selects poorly among many candidates, so few are best.
-//! * **Base set radius** 0.1·√area ([`DEFAULT_BASE_RADIUS`]).
-//! * **Midline halves**: the skeleton filter also splits pelvis, torso and head by the
-//!   skeleton's sagittal plane ([`midline_halves`]); without it those segments flip freely.
-//! * **Confidence** from the spread of the filtered candidates (see
-//!   [`symcorr_correspond::assign_confidence`]); it makes the Table 1 row increase
-//!   monotonically (0.028 for the best 10 % to 0.045 for all, exact joints).
-//! * Attachment runs concurrently with the spectral stages (rayon::join); stage timings are
-//!   wall-clock per stage, so they overlap and do not add up to the total.
-//! * Metrics use edge-path Dijkstra geodesics stopped at the ground truth (see
-//!   [`symcorr_correspond::evaluate`]).
-//! * `symcorr bench` reports `seconds_per_pair` as the standalone cost of a pair (preparing
-//!   both meshes plus matching, wall clock while the other pairs run in parallel), and
-//!   `wall_seconds` for the whole run (meshes prepared once each).
-//! * The demo reads its fixtures at run time from `$SYMCORR_FIXTURES`, else the repository's
-//!   `fixtures/synth/bodies` (path fixed at compile time), or `--fixtures DIR`.
-//! * **Default method**: refined, because it measured better than the paper's pipeline on
-//!   every generated dataset except single-view scans (README, Measured); `--method paper`
-//!   reproduces the paper, and its ablation `--no-skeleton-filter` is refused with the refined
-//!   method rather than ignored.
+//! # Measured choices
+//! In `docs/decisions/`: the default method (`2026-11-23-default-method-articulated.md`), the
+//! si-HKS window, candidates, eigenpairs ([`DEFAULT_EIGENPAIRS`]), base radius
+//! ([`DEFAULT_BASE_RADIUS`]) and confidence (`2026-11-23-paper-pipeline-defaults.md`), the
+//! midline halves ([`midline_halves`]; `2026-11-23-midline-halves-and-skull-plane.md`) and
+//! partial targets ([`PARTIAL_BOUNDARY_RATIO`]; `2026-11-23-partial-targets-scored-on-template.md`).
 
 pub mod dataset;
 pub mod output;

@@ -6,18 +6,18 @@
 //! muscular man), each in the rest pose and the [`TRAINING_POSES`], with exact joints (39
 //! bodies). tools/synth/tests/attach_labels.rs evaluates on 20 poses of the base shape and of a
 //! heavy young man that is not among them, so 39 of its 40 bodies (all but the base shape's
-//! rest pose) and both scans are held out. Training on the rest pose only (session 5) gave
-//! 0.927 / 0.845 / 0.922 and 0.919 (exact, noisy, the two scans); with the posed bodies
-//! 0.932 / 0.848 / 0.936 and 0.923 (2026-12-02); ten more random poses (22): 0.931 / 0.849 /
-//! 0.930 scan mean, no further gain.
+//! rest pose) and both scans are held out.
 //!
 //! Every training body is also seen as a single-view scan ([`scan_target`] with the fixture
 //! camera and Kinect realism, seed [`TRAINING_SCAN_SEED`]; a scan vertex's reference is the
 //! label of the body vertex seen at its pixel): the rules use bone heat's vote, and bone heat
-//! on an open, half-seen surface differs from bone heat on a closed body. With the scans and
-//! the vote (session 7): 0.937 / 0.856 / 0.950 and 0.948. The committed test scans show the
-//! base shape from the same camera, but in a pose (walk-10) and with sensor noise (seed 11)
-//! the training does not use.
+//! on an open, half-seen surface differs from bone heat on a closed body. The committed test
+//! scans show the base shape from the same camera, but in a pose (walk-10) and with sensor
+//! noise (seed 11) the training does not use.
+//!
+//! Measured (rest pose only vs posed training bodies, 22 poses, scans in the training):
+//! `docs/decisions/2026-12-02-attach-convention-posed-training.md` and
+//! `docs/decisions/2026-12-02-attach-convention-heat-vote-and-scans.md`.
 
 use std::fmt::Write;
 

@@ -78,7 +78,7 @@ impl Rng {
     }
 }
 
-/// Exact joints perturbed as in issue 5: Gaussian noise of `sigma` per coordinate, and a
+/// Exact joints perturbed as in the benchmark datasets: Gaussian noise of `sigma` per coordinate, and a
 /// fraction `biased` of the joints moved onto the surface (to the nearest mesh vertex).
 pub fn noisy(sk: &Skeleton, mesh: &TriMesh, sigma: f64, biased: f64, rng: &mut Rng) -> Skeleton {
     let mut out = sk.clone();

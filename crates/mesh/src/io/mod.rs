@@ -6,6 +6,39 @@
 //! extension (case-insensitive) unless given explicitly. Writers are atomic: they write a
 //! temporary file in the target's directory and rename it over the target, so a failed write
 //! never leaves a half-written file.
+//!
+//! **Readers.** [`read`] picks the format by extension (case-insensitive: `.off`, `.obj`,
+//! `.ply`, `.gltf`, `.glb`); [`read_with_format`] overrides it; [`read_from_bytes`]
+//! parses memory (used by the fuzz targets in `fuzz/`). Every reader keeps file vertex order,
+//! fan-triangulates polygons `(v0, vk, vk+1)`, rejects NaN/inf coordinates and out-of-range
+//! indices with an error naming the line (text) or element (binary), and never sizes an
+//! allocation from a header count without checking that the input could hold that many
+//! elements. A file without faces is [`MeshError::Empty`] (wrapped with the file name).
+//! - OFF, OBJ and PLY are hand-written. OBJ: tobj renumbers vertices in face order, so it is
+//!   not used; f64 throughout; `v/vt/vn` corners and negative (relative) indices; the
+//!   `v x y z r g b` colour extension is kept only if every vertex has it. PLY: a small parser
+//!   instead of ply-rs-bw — the reader needs only `x y z`, `red green blue` and one index list,
+//!   and owning it lets every count and list length be checked against the bytes present
+//!   (ascii, binary little/big endian; any property order and types; `vertex_indices` or
+//!   `vertex_index`; other properties/elements skipped).
+//! - glTF/GLB: the `gltf` crate parses and validates the JSON document (its GLB container
+//!   parser is replaced by a checked one, and one validation panic is pre-empted — both fuzz
+//!   findings); buffers (GLB chunk, base64 `data:` URIs, files next to the `.gltf`) and
+//!   accessor bytes are read here with checked offsets. All triangle primitives (incl. strips
+//!   and fans) of the default scene (else scene 0; with no scene, every mesh untransformed) are
+//!   concatenated in depth-first node order with world transforms applied; a mirroring
+//!   transform flips winding. Sparse and bufferView-less accessors are rejected, and so is a
+//!   scene instancing more than max(4 Mi, 64 × input bytes) vertices or triangles (a small
+//!   file can otherwise describe an arbitrarily large scene).
+//!
+//! **Writers** ([`write()`], [`write_with`], [`write_to_bytes`]) produce OFF/COFF,
+//! OBJ, PLY (binary little-endian by default — doubles, so exact — or ascii) and glTF 2.0 (GLB,
+//! or `.gltf` with an embedded buffer) with per-vertex colours. Text formats print f64 in the
+//! shortest round-trip form, so write → read is bit-exact; glTF stores f32 positions (exact
+//! for f32 values; beyond f32's range is [`MeshError::NotRepresentable`]). GLB output carries
+//! `asset.version` 2.0, 4-byte-aligned views, POSITION min/max, unit NORMALs and COLOR_0 as
+//! linear f32 RGB (converted from symcorr's sRGB bytes and back on reading, so the round trip
+//! is exact; see the `gltf` submodule's source docs).
 
 use std::path::{Path, PathBuf};
 

@@ -19,6 +19,8 @@
 //! extensions through `pulp`'s runtime dispatch). Column groups of a block run as separate rayon
 //! tasks (no synchronisation inside a solve). The scaling `M^½ · K⁻¹ · M^½` of the operator and
 //! the fill-reducing permutation are folded into the gather/scatter.
+//!
+//! Measured: `docs/decisions/2026-11-23-eigensolver-shift-invert-block-lanczos.md`.
 
 use crate::SpectralError;
 use faer::dyn_stack::{MemBuffer, MemStack};

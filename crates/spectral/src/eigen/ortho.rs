@@ -12,8 +12,7 @@
 //! the tall operand, ~2× faster than `QᵀW` here). Rows are split
 //! into one contiguous part per rayon thread; the b × j partial sums are added afterwards.
 //!
-//! Measured on the 2-core EPYC (n = 100,000, j = 200, b = 8, one thread): 107 ms → 67 ms per
-//! CGS2 before the split over threads.
+//! Measured: `docs/decisions/2026-11-23-eigensolver-shift-invert-block-lanczos.md`.
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
