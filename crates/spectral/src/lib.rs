@@ -9,7 +9,7 @@
 //!   restart, Rayleigh quotients with the exact `L`); agrees with scipy's
 //!   `eigsh(L, k, M=M, sigma=-1e-8)` to ~1e-13 relative. See the `eigen` module docs (source)
 //!   for the method and the measurements behind each choice.
-//! * Descriptors: [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010), [`wks`] (Aubry et al. 2011).
+//! * Descriptors: [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010).
 //! * [`gaussian_curvature`] (paper eq. 4), geodesics by [`dijkstra`] / [`EdgeGraph`] (paper
 //!   eq. 5–6) and the heat method ([`HeatGeodesics`]), and the paper's [`base_vertex_set`] (§3.3).
 //! * [`cache`]: eigenpairs on disk (`*.symcorr-eigs`, versioned, keyed by a SHA-256 of the mesh
@@ -49,7 +49,6 @@
 //!   shifted so the source is 0; other components are infinitely far.
 //! * si-HKS defaults (Bronstein & Kokkinos 2010): `t = 2^τ`, τ = 1..25 step 1/16, 6 frequencies;
 //!   times are in the mesh's own length units².
-//! * WKS defaults (Aubry et al. 2011): 100 energies, σ = 6× their spacing, constant pairs excluded.
 //! * Base vertex set radius is in units of `√(total area)`; geodesics there are Dijkstra.
 //! * Source indices out of range are errors, not panics (so [`dijkstra`] returns a `Result`).
 //! * Eigenpair cache: a file is used only when its key (mesh bits, `k`, every [`EigenOptions`]
@@ -68,7 +67,7 @@ mod sampling;
 pub mod testmesh;
 
 pub use curvature::gaussian_curvature;
-pub use descriptors::{hks, hks_times, si_hks, wks, SiHksParams, WksParams};
+pub use descriptors::{hks, hks_times, si_hks, SiHksParams};
 pub use eigen::{eigenpairs, EigenOptions, Eigenpairs};
 pub use geodesic::{dijkstra, dijkstra_many, DijkstraScratch, EdgeGraph, HeatGeodesics};
 pub use laplacian::{Laplacian, SystemFactor, COT_CLAMP, DEGENERATE_REL};

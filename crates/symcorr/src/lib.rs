@@ -57,8 +57,8 @@
 //! * `symcorr bench` reports `seconds_per_pair` as the standalone cost of a pair (preparing
 //!   both meshes plus matching, wall clock while the other pairs run in parallel), and
 //!   `wall_seconds` for the whole run (meshes prepared once each).
-//! * The demo reads its fixtures at run time from `$SYMCORR_FIXTURES`, else the repository's
-//!   `fixtures/synth/bodies` (path fixed at compile time), or `--fixtures DIR`.
+//! * The demo reads its fixtures at run time from the repository's `fixtures/synth/bodies`
+//!   (path fixed at compile time), or `--fixtures DIR`.
 //! * **Default method**: refined, because it measured better than the paper's pipeline on
 //!   every generated dataset except single-view scans (README, Measured); `--method paper`
 //!   reproduces the paper, and its ablation `--no-skeleton-filter` is refused with the refined
