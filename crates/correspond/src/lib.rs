@@ -57,8 +57,8 @@
 //! planes refined by the surface's own symmetry ([`refine_symmetry_plane`]), because a noisy
 //! shoulder line or a turned head tilts the joint plane by many degrees.
 //!
-//! Measured choices (generated bodies, 16 pairs of 13,380 vertices; developer harness
-//! `examples/refine_eval.rs`, whose landmark/plane options mirror the pipeline's):
+//! Measured choices (generated bodies, 16 pairs of 13,380 vertices; developer experiment
+//! `symcorr-experiments --bin refine_eval`, whose landmark/plane options mirror the pipeline's):
 //! * si-HKS weight: landmarks alone 0.0276 → weight 1: 0.0094 on the two walk pairs
 //!   (0.1: 0.0169, 3 and 10: 0.0093); all 16 pairs: weight 1 0.0245, 3 0.0242, si-HKS alone
 //!   (weight 1000) 0.0242 but with 10× more initial-map flips (0.45 % vs 0.23 %).
@@ -150,7 +150,8 @@
 //!   0.0526 / 0.24 % — the flips it removed were all fallbacks, and the fallback is what costs
 //!   the noisy mean. Applied to the pelvis, torso and hips too: 27 flips (landmarks near the
 //!   groin move with the thighs).
-//!   What the 11 remaining exact-joint flips are (session 6, `examples/paper_flips` VERBOSE):
+//!   What the 11 remaining exact-joint flips are (session 6, experiment `paper_flips --verbose`
+//!   of experiments/README.md):
 //!   gross errors, not side confusions. Seven are head points of shape s0 matched on shape s1
 //!   (the s0 → s1 random pairs) with errors 0.11–0.19 √area, on the *correct* half: the
 //!   si-HKS of the true vertex is 0.23–0.27 away, while a few target vertices on the back of
@@ -170,7 +171,7 @@
 //!   but 12 flips; w = 0.5: 0.0423, 10 flips; k = 30, w = 1: 0.0398, 12 flips. Not kept (the
 //!   flip rate is what is open; the mean is already far under the paper's 0.083), but the
 //!   mean-error gain is worth having if the candidate stage is revisited.
-//!   Candidate-stage variants measured in session 7 (`examples/paper_flips`, 58 pairs, sparse,
+//!   Candidate-stage variants measured in session 7 (`paper_flips`, 58 pairs, sparse,
 //!   exact joints, same build; base 0.0437 / 11 flips of 47,622), none kept: *filter first*
 //!   (the N nearest descriptors among the compatible target vertices instead of the survivors
 //!   of the N nearest overall; variant `f`) N = 5: 0.0472 / 8, N = 10: 0.0523 / 8 — the
@@ -184,7 +185,8 @@
 //!   0.0434–0.0437 / 11 (at K = 20 the same segments as the base); with 20 raw candidates
 //!   K = 50 / 200: 0.0512 / 10, 0.0517 / 8. More candidates let eq. 8's single scalar pick
 //!   more gross errors, as in session 1's N sweep. *si-HKS frequencies* (symcorr's
-//!   `PrepareOptions::si_hks`, harness env `SIHKS_FREQ`, `EIG`, `SIHKS_START`): 6 → 16:
+//!   `PrepareOptions::si_hks`, `paper_flips --si-hks-frequencies`, `--eigenpairs`,
+//!   `--si-hks-tau-start`): 6 → 16:
 //!   0.0432 / 9 (σ = 3 cm joints 0.0524 / 117 → 0.0519 / 116 flips), 32: 0.0431 / 9, 16 with
 //!   100 eigenpairs: 0.0429 / 9, 16 with the window from τ = −10: 0.0472 / 25. A small gain on
 //!   both, not taken into the defaults because it moves every refined and paper figure for
