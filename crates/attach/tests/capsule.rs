@@ -176,21 +176,6 @@ fn single_view_scan_labels_its_visible_surface() {
         let mask: Vec<bool> = (0..used.len()).map(|v| used[v] && core[v]).collect();
         let (agree, mirror) = agreement(&scan, &a.labels, &reference, &mask);
         eprintln!("capsule scan {name}: visible core {agree:.4} mirror {mirror}");
-        if std::env::var("ATTACH_DEBUG").is_ok() {
-            for m in &a.diagnostics.joint_moves {
-                eprintln!("  {:?} {:.4} {}", m.joint, m.distance(), m.reason);
-            }
-            eprintln!("  components {}", a.diagnostics.components.len());
-            let mut conf = std::collections::BTreeMap::new();
-            for v in 0..mask.len() {
-                if mask[v] && a.labels[v] != reference[v] {
-                    *conf
-                        .entry((reference[v].name(), a.labels[v].name()))
-                        .or_insert(0) += 1;
-                }
-            }
-            eprintln!("  {conf:?}");
-        }
         assert!(agree >= 0.9, "{name}: {agree}");
         assert_eq!(mirror, 0.0);
         assert!(!a.diagnostics.mirror.swapped);

@@ -72,13 +72,7 @@ fn run(set: &str) -> (f64, f64) {
     let all = bodies(set);
     assert!(all.len() >= 12, "{set}: {} bodies", all.len());
     for (name, mesh, sk, reference) in &all {
-        let mut o = AttachOptions::default();
-        if let Ok(r) = std::env::var("ATTACH_SEGMENT_REACH") {
-            for (k, x) in r.split(',').enumerate() {
-                o.segment_reach[k] = x.parse().unwrap();
-            }
-        }
-        let a = attach(mesh, sk, &o).unwrap();
+        let a = attach(mesh, sk, &AttachOptions::default()).unwrap();
         let mask = vec![true; mesh.num_vertices()];
         let (agree, mirror) = agreement(mesh, &a.labels, reference, &mask);
         eprintln!(
@@ -86,16 +80,6 @@ fn run(set: &str) -> (f64, f64) {
             a.diagnostics.mirror.swapped,
             a.diagnostics.joint_moves.len()
         );
-        if std::env::var("ATTACH_DEBUG").is_ok() {
-            eprintln!("  timings {:?}", a.diagnostics.timings_s);
-            let mut conf = std::collections::BTreeMap::new();
-            for (got, want) in a.labels.iter().zip(reference) {
-                if got != want {
-                    *conf.entry((want.name(), got.name())).or_insert(0) += 1;
-                }
-            }
-            eprintln!("  {conf:?}");
-        }
         worst = worst.min(agree);
         worst_mirror = worst_mirror.max(mirror);
         sum += agree;

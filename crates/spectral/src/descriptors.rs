@@ -1,5 +1,5 @@
-//! Spectral point descriptors: HKS (Sun, Ovsjanikov, Guibas 2009), scale-invariant HKS
-//! (Bronstein & Kokkinos 2010) and WKS (Aubry, Schlickewei, Cremers 2011).
+//! Spectral point descriptors: HKS (Sun, Ovsjanikov, Guibas 2009) and scale-invariant HKS
+//! (Bronstein & Kokkinos 2010).
 
 use crate::{Eigenpairs, SpectralError};
 use faer::linalg::matmul::matmul;
@@ -186,67 +186,4 @@ pub fn si_hks(e: &Eigenpairs, params: &SiHksParams) -> Result<Mat<f64>, Spectral
         }
     }
     Ok(out)
-}
-
-/// Parameters of [`wks`]. Defaults are Aubry et al. 2011: 100 energies, variance factor 6.
-#[derive(Debug, Clone)]
-pub struct WksParams {
-    /// Number of log-energy samples.
-    pub energies: usize,
-    /// σ = `variance` × (spacing of the energy samples).
-    pub variance: f64,
-}
-
-impl Default for WksParams {
-    fn default() -> Self {
-        WksParams {
-            energies: 100,
-            variance: 6.0,
-        }
-    }
-}
-
-/// Wave kernel signature (Aubry, Schlickewei, Cremers 2011), `n × energies`.
-///
-/// Over the non-zero eigenvalues λ_1..λ_max: `e_min = log λ_1`, `e_max = log λ_max`,
-/// `δ = (e_max − e_min)/energies`, `σ = variance·δ`, energies `e_j` evenly spaced in
-/// `[e_min + 2σ, e_max − 2σ]`; `WKS(x, e) = Σ_i φ_i(x)² exp(−(e − log λ_i)²/2σ²) / C_e` with
-/// `C_e = Σ_i exp(−(e − log λ_i)²/2σ²)`. Constant (λ = 0) pairs are excluded.
-///
-/// Errors: fewer than two distinct non-zero eigenvalues, or `energies == 0`.
-pub fn wks(e: &Eigenpairs, params: &WksParams) -> Result<Mat<f64>, SpectralError> {
-    let nz: Vec<usize> = (0..e.len()).filter(|&i| e.values[i] > 0.0).collect();
-    if nz.len() < 2 || params.energies == 0 || params.variance.is_nan() || params.variance <= 0.0 {
-        return Err(SpectralError::InvalidArgument(
-            "WKS needs at least two non-zero eigenvalues, energies > 0 and variance > 0".into(),
-        ));
-    }
-    let loge: Vec<f64> = nz.iter().map(|&i| e.values[i].ln()).collect();
-    let (e_min, e_max) = (loge[0], loge[loge.len() - 1]);
-    let delta = (e_max - e_min) / params.energies as f64;
-    let sigma = params.variance * delta;
-    let (lo, hi) = (e_min + 2.0 * sigma, e_max - 2.0 * sigma);
-    let ne = params.energies;
-    let grid: Vec<f64> = (0..ne)
-        .map(|j| {
-            if ne == 1 {
-                0.5 * (lo + hi)
-            } else {
-                lo + (hi - lo) * j as f64 / (ne - 1) as f64
-            }
-        })
-        .collect();
-    let mut w = Mat::<f64>::zeros(e.len(), ne);
-    for (j, &en) in grid.iter().enumerate() {
-        let mut c = 0.0;
-        for (&i, &l) in nz.iter().zip(&loge) {
-            let g = (-(en - l).powi(2) / (2.0 * sigma * sigma)).exp();
-            w[(i, j)] = g;
-            c += g;
-        }
-        for &i in &nz {
-            w[(i, j)] /= c;
-        }
-    }
-    Ok(weighted_sum(e, &w))
 }

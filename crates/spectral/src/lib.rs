@@ -5,8 +5,8 @@
 //! mesh → [`Laplacian`] (cotan stiffness `L`, PSD with `L·1 = 0`, and lumped barycentric mass
 //! `M`; the one owner of both) → [`eigenpairs`] of `L φ = λ M φ` (shift-invert block Lanczos on
 //! faer's sparse Cholesky, own blocked triangular solves and Gram–Schmidt; optionally cached on
-//! disk by [`cache`]) → descriptors [`hks`], [`si_hks`] (Bronstein & Kokkinos 2010), [`wks`]
-//! (Aubry et al. 2011). Beside them: [`gaussian_curvature`] (paper eq. 4), geodesics by
+//! disk by [`cache`]) → descriptors [`hks`] and [`si_hks`] (Bronstein & Kokkinos 2010).
+//! Beside them: [`gaussian_curvature`] (paper eq. 4), geodesics by
 //! [`dijkstra`] / [`EdgeGraph`] (paper eq. 5–6) and the heat method ([`HeatGeodesics`], on a
 //! prefactored [`SystemFactor`]), and the paper's [`base_vertex_set`] (§3.3).
 //!
@@ -58,7 +58,7 @@ mod sampling;
 pub mod testmesh;
 
 pub use curvature::gaussian_curvature;
-pub use descriptors::{hks, hks_times, si_hks, wks, SiHksParams, WksParams};
+pub use descriptors::{hks, hks_times, si_hks, SiHksParams};
 pub use eigen::{eigenpairs, EigenOptions, Eigenpairs};
 pub use geodesic::{dijkstra, dijkstra_many, DijkstraScratch, EdgeGraph, HeatGeodesics};
 pub use laplacian::{Laplacian, SystemFactor, COT_CLAMP, DEGENERATE_REL};

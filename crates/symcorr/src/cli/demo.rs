@@ -22,8 +22,8 @@ pub struct DemoArgs {
     /// Output folder.
     #[arg(long, default_value = "symcorr-demo")]
     pub out: PathBuf,
-    /// Bundled dataset folder (default: $SYMCORR_FIXTURES, else the repository's fixtures/synth/bodies).
-    #[arg(long)]
+    /// Bundled dataset folder (default: the repository's fixtures/synth/bodies).
+    #[arg(long, value_name = "DIR")]
     pub fixtures: Option<PathBuf>,
     /// Match every template vertex instead of a 1,000-point sample.
     #[arg(long)]
@@ -33,13 +33,9 @@ pub struct DemoArgs {
     pub samples: usize,
 }
 
-/// The demo's default fixture folder: `$SYMCORR_FIXTURES`, else the repository's copy.
+/// The demo's default fixture folder: the repository's copy (path fixed at compile time).
 fn default_fixtures() -> PathBuf {
-    std::env::var_os("SYMCORR_FIXTURES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies")
-        })
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies")
 }
 
 /// The pair shown: the first pair of the fixtures' pairs file whose two bodies have different

@@ -173,15 +173,6 @@ pub struct MethodArgs {
     /// Base vertex set radius, in units of sqrt(area).
     #[arg(long, default_value_t = symcorr::DEFAULT_BASE_RADIUS)]
     pub base_radius: f64,
-    /// si-HKS window start: log2 of the smallest diffusion time over the area.
-    #[arg(long, hide = true)]
-    pub si_hks_tau_start: Option<f64>,
-    /// si-HKS window end: log2 of the largest diffusion time over the area.
-    #[arg(long, hide = true)]
-    pub si_hks_tau_end: Option<f64>,
-    /// si-HKS frequencies kept.
-    #[arg(long, hide = true)]
-    pub si_hks_frequencies: Option<usize>,
 }
 
 impl MethodArgs {
@@ -226,15 +217,6 @@ impl MethodArgs {
         };
         o.prepare.eigenpairs = self.eigenpairs;
         o.prepare.base_radius = self.base_radius;
-        if let Some(t) = self.si_hks_tau_start {
-            o.prepare.si_hks.tau_start = t;
-        }
-        if let Some(t) = self.si_hks_tau_end {
-            o.prepare.si_hks.tau_end = t;
-        }
-        if let Some(f) = self.si_hks_frequencies {
-            o.prepare.si_hks.frequencies = f;
-        }
         // The library's rule, checked before any file is read; the message names the flags.
         if o.check().is_err() {
             return Err(CliError(

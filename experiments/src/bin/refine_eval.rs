@@ -1,25 +1,98 @@
-//! Developer experiment: landmark initial map + segment-constrained ZoomOut on a dataset in
-//! DESIGN.md's layout (ground truth = identity), without the `symcorr` driver.
-//!
-//! `cargo run --release -p symcorr-correspond --example refine_eval -- DATASET [MAX_PAIRS]`
-//! Environment knobs: `K` (eigenpairs, 60), `KS`/`KE`/`STEP` (ZoomOut), `BAND` (√area units),
-//! `WH` (si-HKS weight), `PERMUTE=1` (shuffle target vertex ids, ground truth follows).
+//! The refined method's stages without the `symcorr` driver: landmark initial map, then
+//! segment-constrained ZoomOut, on a dataset whose ground truth is the identity. See `--help`
+//! and experiments/README.md.
 
 use faer::Mat;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::error::Error;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr_attach::{attach, AttachOptions};
+use symcorr_attach::{attach, AttachOptions, Joint, Segment, Skeleton};
 use symcorr_correspond::*;
 use symcorr_mesh::TriMesh;
-use symcorr_skeleton::{Joint, Segment, Skeleton};
 use symcorr_spectral::*;
 
-fn env<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(default)
+/// The refined method's stages: landmark initial map, then segment-constrained ZoomOut.
+///
+/// Reads a dataset in DESIGN.md's layout whose ground truth is the identity (meshes/NAME.ply,
+/// joints/NAME.json, pairs.txt, mirror.txt), prepares each mesh (eigenpairs, si-HKS over the
+/// area-relative window τ = −8..3, attachment, heat-geodesic landmark coordinates, midline
+/// halves) and, for each pair, prints the mean geodesic error (over the target's √area) and
+/// the flip rate of the initial map (nearest landmark/si-HKS features within segment pools)
+/// and of the ZoomOut map, the ZoomOut map's coverage of the target, and timings; the last
+/// line (`ALL`) is over every pair.
+#[derive(clap::Parser, Debug)]
+#[command(name = "refine_eval", verbatim_doc_comment)]
+struct Args {
+    /// Dataset folder.
+    dataset: PathBuf,
+    /// Only the first MAX_PAIRS pairs of pairs.txt.
+    max_pairs: Option<usize>,
+    /// Laplace–Beltrami eigenpairs per mesh.
+    #[arg(long, value_name = "K", default_value_t = 60)]
+    eigenpairs: usize,
+    /// ZoomOut: size of the first functional map.
+    #[arg(long, value_name = "K", default_value_t = 20)]
+    k_start: usize,
+    /// ZoomOut: size of the last functional map.
+    #[arg(long, value_name = "K", default_value_t = 60)]
+    k_end: usize,
+    /// ZoomOut: basis growth per iteration.
+    #[arg(long, default_value_t = 4)]
+    step: usize,
+    /// ZoomOut: weight of the anchor (landmark/si-HKS) features in every point-map recovery
+    /// (0 = plain ZoomOut).
+    #[arg(long, value_name = "W", default_value_t = 0.0)]
+    anchor_weight: f64,
+    /// ZoomOut: at most this many template vertices in the iterations.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_ZOOMOUT_POINTS)]
+    max_points: usize,
+    /// Segment pools: a target vertex within BAND·√area (geodesic) of a segment also serves it.
+    #[arg(long, default_value_t = 0.02)]
+    band: f64,
+    /// Weight of the si-HKS columns (each scaled by its standard deviation over all meshes)
+    /// next to the landmark coordinates in the initial map's features.
+    #[arg(long, value_name = "W", default_value_t = 0.0)]
+    si_hks_weight: f64,
+    /// Landmarks: `ring` (skeleton rings and tips), `point` (the vertex nearest each joint) or
+    /// `both`.
+    #[arg(long, value_enum, default_value_t = Landmarks::Ring)]
+    landmarks: Landmarks,
+    /// Ring landmarks: slab half-width in mean edge lengths.
+    #[arg(long, default_value_t = 1.0)]
+    slab: f64,
+    /// Midline halves from joint planes refined by the surface's symmetry: `none`, `head`, or
+    /// `all` (head, torso and pelvis).
+    #[arg(long, value_enum, default_value_t = Symmetry::None)]
+    symmetry: Symmetry,
+    /// Drop the halves from ZoomOut's pools (the initial map keeps them): `none`, `head`, `all`.
+    #[arg(long, value_enum, default_value_t = Symmetry::None)]
+    zoomout_free_halves: Symmetry,
+    /// Shuffle the target meshes' vertex ids with a fixed permutation (ground truth and mirror
+    /// map follow): the method must not rely on shared vertex order.
+    #[arg(long)]
+    permute: bool,
+    /// After each pair, the mean error per template segment: `name:initial/zoomout(points)`.
+    #[arg(long)]
+    segments: bool,
+    /// Write PREFIX_A_B.txt per pair: `vertex match error segment` per template vertex.
+    #[arg(long, value_name = "PREFIX")]
+    dump: Option<String>,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum Landmarks {
+    Ring,
+    Point,
+    Both,
+}
+
+/// Which midline segments a half option concerns.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum Symmetry {
+    None,
+    Head,
+    All,
 }
 
 struct Prep {
@@ -35,7 +108,7 @@ struct Prep {
     secs: f64,
 }
 
-fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton) -> Vec<i8> {
+fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton, sym: Symmetry) -> Vec<i8> {
     let p = |x: Joint| -> [f64; 3] { j.position(x).into() };
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let mid =
@@ -50,7 +123,6 @@ fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton) -> Vec<i8> {
     let so = mid(p(Joint::ShoulderLeft), p(Joint::ShoulderRight));
     let tn = unit([hn[0] + sn[0], hn[1] + sn[1], hn[2] + sn[2]]);
     let to = mid(ho, so);
-    let sym: i32 = env("SYM", 0);
     let fit = |seg: Segment, o: [f64; 3], n: [f64; 3]| {
         let pts: Vec<[f64; 3]> = mesh
             .positions
@@ -63,17 +135,17 @@ fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton) -> Vec<i8> {
         let pts: Vec<[f64; 3]> = pts.into_iter().step_by(stride).collect();
         refine_symmetry_plane(&pts, o, n, 10)
     };
-    let (so_h, sn_h) = if sym >= 1 {
+    let (so_h, sn_h) = if sym != Symmetry::None {
         fit(Segment::Head, so, sn)
     } else {
         (so, sn)
     };
-    let (to, tn) = if sym >= 2 {
+    let (to, tn) = if sym == Symmetry::All {
         fit(Segment::Torso, to, tn)
     } else {
         (to, tn)
     };
-    let (ho, hn) = if sym >= 2 {
+    let (ho, hn) = if sym == Symmetry::All {
         fit(Segment::Pelvis, ho, hn)
     } else {
         (ho, hn)
@@ -115,13 +187,13 @@ fn permute_mesh(mesh: &TriMesh, perm: &[u32]) -> TriMesh {
             ]
         })
         .collect();
-    TriMesh::new(pos, tris).unwrap()
+    TriMesh::new(pos, tris).expect("a permutation keeps a valid mesh valid")
 }
 
-fn prepare(mesh: TriMesh, sk: &Skeleton, k: usize) -> Prep {
+fn prepare(mesh: TriMesh, sk: &Skeleton, args: &Args) -> Result<Prep, Box<dyn Error>> {
     let t = Instant::now();
-    let lap = Laplacian::new(&mesh).unwrap();
-    let eig = eigenpairs(&lap, k, &EigenOptions::default()).unwrap();
+    let lap = Laplacian::new(&mesh)?;
+    let eig = eigenpairs(&lap, args.eigenpairs, &EigenOptions::default())?;
     let area = mesh.total_area();
     let shift = area.ln() / 2f64.ln();
     let sihks = si_hks(
@@ -131,10 +203,9 @@ fn prepare(mesh: TriMesh, sk: &Skeleton, k: usize) -> Prep {
             tau_end: 3.0 + shift,
             ..SiHksParams::default()
         },
-    )
-    .unwrap();
-    let att = attach(&mesh, sk, &AttachOptions::default()).unwrap();
-    let heat = HeatGeodesics::with_laplacian(&mesh, &lap, 1.0).unwrap();
+    )?;
+    let att = attach(&mesh, sk, &AttachOptions::default())?;
+    let heat = HeatGeodesics::with_laplacian(&mesh, &lap, 1.0)?;
     let edge = {
         let e = mesh.edges();
         e.iter()
@@ -145,26 +216,20 @@ fn prepare(mesh: TriMesh, sk: &Skeleton, k: usize) -> Prep {
             .sum::<f64>()
             / e.len() as f64
     };
-    let lm_kind: String = env("LM", "ring".to_string());
     let points: Vec<Vec<u32>> = joint_landmarks(&mesh.positions, &att.joints)
         .into_iter()
         .map(|v| vec![v])
         .collect();
-    let rings = skeleton_landmarks(
-        &mesh.positions,
-        &att.labels,
-        &att.joints,
-        env("SLAB", 1.0) * edge,
-    );
-    let lm: Vec<Vec<u32>> = match lm_kind.as_str() {
-        "point" => points,
-        "both" => points.into_iter().chain(rings).collect(),
-        _ => rings,
+    let rings = skeleton_landmarks(&mesh.positions, &att.labels, &att.joints, args.slab * edge);
+    let lm: Vec<Vec<u32>> = match args.landmarks {
+        Landmarks::Point => points,
+        Landmarks::Both => points.into_iter().chain(rings).collect(),
+        Landmarks::Ring => rings,
     };
-    let landmarks = landmark_coordinates(&heat, &lm, area).unwrap();
-    let halves = halves(&mesh, &att.labels, &att.joints);
+    let landmarks = landmark_coordinates(&heat, &lm, area)?;
+    let halves = halves(&mesh, &att.labels, &att.joints, args.symmetry);
     let graph = EdgeGraph::new(&mesh);
-    Prep {
+    Ok(Prep {
         area,
         vectors: eig.vectors,
         mass: lap.mass.clone(),
@@ -175,7 +240,7 @@ fn prepare(mesh: TriMesh, sk: &Skeleton, k: usize) -> Prep {
         graph,
         mesh,
         secs: t.elapsed().as_secs_f64(),
-    }
+    })
 }
 
 fn features(p: &Prep, wh: f64, scale: &[f64]) -> Mat<f64> {
@@ -190,38 +255,50 @@ fn features(p: &Prep, wh: f64, scale: &[f64]) -> Mat<f64> {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let root = Path::new(&args[1]);
-    let max_pairs: usize = args
-        .get(2)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(usize::MAX);
-    let k: usize = env("K", 60);
+    let args = <Args as clap::Parser>::parse();
+    if let Err(e) = run(&args) {
+        eprintln!("refine_eval: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// Reads a text file, naming it in the error.
+fn read_text(path: &Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn run(args: &Args) -> Result<(), Box<dyn Error>> {
+    let root = args.dataset.as_path();
+    let max_pairs = args.max_pairs.unwrap_or(usize::MAX);
     let zo = ZoomOutOptions {
-        k_start: env("KS", 20),
-        k_end: env("KE", 60),
-        step: env("STEP", 4),
-        anchor_weight: env("WA", 0.0),
-        max_points: env("MAXP", DEFAULT_ZOOMOUT_POINTS),
+        k_start: args.k_start,
+        k_end: args.k_end,
+        step: args.step,
+        anchor_weight: args.anchor_weight,
+        max_points: args.max_points,
     };
-    let band: f64 = env("BAND", 0.02);
-    let wh: f64 = env("WH", 0.0);
-    let permute: bool = env("PERMUTE", 0) == 1;
-    let pairs: Vec<(String, String)> = std::fs::read_to_string(root.join("pairs.txt"))
-        .unwrap()
+    let band = args.band;
+    let wh = args.si_hks_weight;
+    let permute = args.permute;
+    let pairs_path = root.join("pairs.txt");
+    let pairs: Vec<(String, String)> = read_text(&pairs_path)?
         .lines()
         .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            let v: Vec<&str> = l.split_whitespace().collect();
-            (v[0].to_string(), v[1].to_string())
+        .map(|l| match l.split_whitespace().collect::<Vec<_>>()[..] {
+            [a, b, ..] => Ok((a.to_string(), b.to_string())),
+            _ => Err(format!("{}: not a pair: {l:?}", pairs_path.display())),
         })
         .take(max_pairs)
-        .collect();
-    let mirror: Vec<u32> = std::fs::read_to_string(root.join("mirror.txt"))
-        .unwrap()
+        .collect::<Result<_, _>>()?;
+    let mirror_path = root.join("mirror.txt");
+    let mirror: Vec<u32> = read_text(&mirror_path)?
         .lines()
-        .map(|l| l.trim().parse().unwrap())
-        .collect();
+        .map(|l| {
+            l.trim()
+                .parse()
+                .map_err(|_| format!("{}: not a vertex id: {l:?}", mirror_path.display()))
+        })
+        .collect::<Result<_, _>>()?;
     let n0 = mirror.len();
     // A fixed permutation of target ids (perm[old] = new).
     let perm: Vec<u32> = {
@@ -245,21 +322,29 @@ fn main() {
     names.dedup();
     let mut prep: BTreeMap<(String, bool), Prep> = BTreeMap::new();
     for (name, perm_it) in &names {
-        let mesh = symcorr_mesh::io::read(root.join("meshes").join(format!("{name}.ply")))
-            .unwrap()
+        let mesh_path = root.join("meshes").join(format!("{name}.ply"));
+        let mesh = symcorr_mesh::io::read(&mesh_path)
+            .map_err(|e| format!("{}: {e}", mesh_path.display()))?
             .mesh;
         let mesh = if *perm_it {
             permute_mesh(&mesh, &perm)
         } else {
             mesh
         };
-        let log =
-            symcorr_kinect::read_joints(root.join("joints").join(format!("{name}.json"))).unwrap();
-        let sk = log.frames[0].skeleton.clone();
-        prep.insert((name.clone(), *perm_it), prepare(mesh, &sk, k));
+        let joints_path = root.join("joints").join(format!("{name}.json"));
+        let log = symcorr_kinect::read_joints(&joints_path)
+            .map_err(|e| format!("{}: {e}", joints_path.display()))?;
+        let sk = log
+            .frames
+            .first()
+            .ok_or_else(|| format!("{}: no frame", joints_path.display()))?
+            .skeleton
+            .clone();
+        let p = prepare(mesh, &sk, args).map_err(|e| format!("{name}: {e}"))?;
+        prep.insert((name.clone(), *perm_it), p);
     }
     // si-HKS column scale: std over all meshes' values.
-    let h = prep.values().next().unwrap().sihks.ncols();
+    let h = prep.values().next().ok_or("no pairs")?.sihks.ncols();
     let scale: Vec<f64> = (0..h)
         .map(|j| {
             let vals: Vec<f64> = prep
@@ -282,16 +367,14 @@ fn main() {
             (&pb.labels, Some(&pb.halves)),
             &pb.graph,
             band * pb.area.sqrt(),
-        )
-        .unwrap();
-        let zh: i32 = env("ZH", 0);
+        )?;
         let strip = |p: &Prep| -> Vec<i8> {
             p.halves
                 .iter()
                 .zip(&p.labels)
-                .map(|(&h, &l)| match zh {
-                    1 if l == Segment::Head => 0,
-                    2 => 0,
+                .map(|(&h, &l)| match args.zoomout_free_halves {
+                    Symmetry::Head if l == Segment::Head => 0,
+                    Symmetry::All => 0,
                     _ => h,
                 })
                 .collect()
@@ -302,12 +385,10 @@ fn main() {
             (&pb.labels, Some(&hb)),
             &pb.graph,
             band * pb.area.sqrt(),
-        )
-        .unwrap();
+        )?;
         let fa = features(pa, wh, &scale);
         let fb = features(pb, wh, &scale);
-        let init: Vec<u32> = nearest_in_pools(fa.as_ref(), fb.as_ref(), &pools)
-            .unwrap()
+        let init: Vec<u32> = nearest_in_pools(fa.as_ref(), fb.as_ref(), &pools)?
             .into_iter()
             .map(|x| x.0)
             .collect();
@@ -325,8 +406,7 @@ fn main() {
             &zpools,
             Some((fa.as_ref(), fb.as_ref())),
             &zo,
-        )
-        .unwrap();
+        )?;
         let t_pair = t.elapsed().as_secs_f64();
         let graph = EvalGraph::new(&pb.mesh);
         let truth = |p: u32| if permute { perm[p as usize] } else { p };
@@ -369,16 +449,17 @@ fn main() {
             pa.secs,
             pb.secs
         );
-        if let Ok(path) = std::env::var("DUMP") {
+        if let Some(path) = &args.dump {
             let text: String = ef
                 .errors
                 .iter()
                 .enumerate()
                 .map(|(p, e)| format!("{p} {} {e} {}\n", z.map[p], pa.labels[p].index()))
                 .collect();
-            std::fs::write(format!("{path}_{a}_{b}.txt"), text).unwrap();
+            let file = format!("{path}_{a}_{b}.txt");
+            std::fs::write(&file, text).map_err(|e| format!("{file}: {e}"))?;
         }
-        if env("SEG", 0) == 1 {
+        if args.segments {
             let mut acc = [(0.0, 0usize, 0.0); 17];
             for (p, (&e0, &e1)) in ei.errors.iter().zip(&ef.errors).enumerate() {
                 let s = pa.labels[p].index();
@@ -416,4 +497,35 @@ fn main() {
         100.0 * f_fin as f64 / fc_f as f64,
         secs / pairs.len() as f64
     );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::{CommandFactory, Parser};
+
+    #[test]
+    fn command_line_is_well_formed() {
+        Args::command().debug_assert();
+    }
+
+    #[test]
+    fn defaults_are_the_former_environment_defaults() {
+        let a = Args::parse_from(["refine_eval", "DS"]);
+        assert_eq!((a.eigenpairs, a.k_start, a.k_end, a.step), (60, 20, 60, 4));
+        assert_eq!(
+            (a.anchor_weight, a.band, a.si_hks_weight, a.slab),
+            (0.0, 0.02, 0.0, 1.0)
+        );
+        assert_eq!(a.max_points, DEFAULT_ZOOMOUT_POINTS);
+        assert_eq!(a.landmarks, Landmarks::Ring);
+        assert_eq!(
+            (a.symmetry, a.zoomout_free_halves),
+            (Symmetry::None, Symmetry::None)
+        );
+        assert!(!a.permute && !a.segments && a.dump.is_none() && a.max_pairs.is_none());
+        let a = Args::parse_from(["refine_eval", "DS", "3", "--symmetry", "all"]);
+        assert_eq!((a.max_pairs, a.symmetry), (Some(3), Symmetry::All));
+    }
 }

@@ -1,35 +1,17 @@
-//! Developer experiment: where the paper pipeline's flips come from, on a dataset in DESIGN.md's
-//! layout with the rig's reference labels (`labels/NAME.txt`, one segment index per line).
-//!
-//! `cargo run --release -p symcorr --example paper_flips -- DATASET [dense] [VARIANT,...]`
-//!
-//! Every mesh is prepared once; each variant of the matching options then runs on every pair
-//! and prints mean error and flip rate. A variant is parts joined by `+` (see `Rule` for the
-//! custom ones): `base`, `paper`, `noband`, `off`, `n<N>` candidates, `band<r>`, `lib` (the
-//! library's sagittal band), `f<N>` filter first, `x<ρ>` diverse candidates, `g<τ>` + `w<M>`
-//! adaptive widening, `k<K>` reverse nearest neighbours, `a<δ>` axial band, `d`/`r`/`l`/`s`/`own`/`w` sagittal-rule variants.
-//! The environment variables `SIHKS_FREQ`, `SIHKS_START`, `SIHKS_END` and `EIG` change the
-//! si-HKS and the eigenpair count of the prepared meshes.
-//!
-//! For the first variant every flip is classified:
-//! * `tmpl_label`: the template point's attachment label differs from its reference label;
-//! * `target_label`: the target's attachment label at the true vertex differs from the
-//!   reference label (the filter cannot keep the true match);
-//! * `halves`: labels right, but the template point and its true vertex got opposite
-//!   sagittal halves (the midline split is wrong on one mesh);
-//! * `selection`: labels and halves right — the candidates / eq. 8 picked the mirror side.
-//!   `in_list` says whether some filtered candidate lay nearer the truth than its mirror.
+//! Where the paper pipeline's flips come from: every variant of the matching options on every
+//! pair of a dataset with the rig's reference labels, flips classified by cause. See `--help`
+//! and experiments/README.md.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr::dataset::{read_mesh, read_skeleton, Dataset};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
+use symcorr_attach::{Joint, Segment};
 use symcorr_correspond::{
     candidates, evaluate, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
     EvalGraph, MatchOptions,
 };
-use symcorr_skeleton::{Joint, Segment};
 
 struct Mesh {
     p: PreparedMesh,
@@ -44,7 +26,7 @@ struct Mesh {
 
 /// The joint planes of `symcorr::midline_halves` (refined by the surface's symmetry with
 /// `sym`), as signed distances over √area.
-fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
+fn signed_distances(m: &PreparedMesh, sym: u8, skull_t: f64) -> Vec<f64> {
     let j = &m.attachment.joints;
     let p = |x: Joint| -> [f64; 3] { j.position(x).into() };
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -93,10 +75,6 @@ fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
         let d = sub(x, sc);
         (d[0] * bone[0] + d[1] * bone[1] + d[2] * bone[2]) / bl2
     };
-    let skull_t: f64 = std::env::var("SKULL_T")
-        .ok()
-        .and_then(|x| x.parse().ok())
-        .unwrap_or(0.5);
     let skull = if sym & 8 != 0 {
         let pts: Vec<[f64; 3]> = m
             .mesh
@@ -133,11 +111,18 @@ fn signed_distances(m: &PreparedMesh, sym: u8) -> Vec<f64> {
         .collect()
 }
 
-fn read_labels(path: &Path) -> Vec<Segment> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .map(|l| Segment::from_index(l.trim().parse().unwrap()).unwrap())
+/// `labels/NAME.txt`: one segment index per line.
+fn read_labels(path: &Path) -> Result<Vec<Segment>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| {
+            l.trim()
+                .parse()
+                .ok()
+                .and_then(Segment::from_index)
+                .ok_or_else(|| format!("{}:{}: not a segment index: {l:?}", path.display(), i + 1))
+        })
         .collect()
 }
 
@@ -197,7 +182,9 @@ fn axial(m: &PreparedMesh) -> Vec<f64> {
         .collect()
 }
 
-fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
+/// Parses a variant (parts joined by `+`, see `Args::variants`) into the library's matching
+/// options and, for the custom parts, a [`Rule`] applied by [`custom`].
+fn variant(name: &str) -> Result<(MatchOptions, Option<Rule>), String> {
     let mut o = MatchOptions::default();
     let mut r = Rule::default();
     let mut custom = false;
@@ -217,12 +204,13 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
             "c" => custom = true,
             "lib" => r.libband = true,
             _ => {
+                let bad = || format!("variant {name:?}: bad part {part:?}");
                 if let Some(x) = part.strip_prefix("band") {
-                    o.sagittal_ratio = Some(x.parse().unwrap());
+                    o.sagittal_ratio = Some(x.parse().map_err(|_| bad())?);
                     continue;
                 }
                 if let Some(n) = part.strip_prefix('n') {
-                    o.candidates.nearest = Some(n.parse().unwrap());
+                    o.candidates.nearest = Some(n.parse().map_err(|_| bad())?);
                     continue;
                 } else if let Some(x) = num("s") {
                     r.sym = x as u8;
@@ -245,7 +233,7 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
                 } else if let Some(x) = num("k") {
                     r.reverse = Some(x as usize);
                 } else {
-                    panic!("unknown variant part {part}");
+                    return Err(format!("variant {name:?}: unknown part {part:?}"));
                 }
             }
         }
@@ -256,7 +244,7 @@ fn variant(name: &str) -> (MatchOptions, Option<Rule>) {
             custom = true;
         }
     }
-    (o, custom.then_some(r))
+    Ok((o, custom.then_some(r)))
 }
 
 /// Every target vertex compatible with template point `p` (same segment, not the other
@@ -272,7 +260,7 @@ fn compatible_by_descriptor(
         .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0)
         .map(|q| Candidate {
             vertex: q as u32,
-            distance: ta.descriptors.distance(p, &tb.descriptors, q),
+            distance: pd(&ta).descriptors.distance(p, &pd(&tb).descriptors, q),
         })
         .collect();
     all.sort_by(|a, b| a.distance.total_cmp(&b.distance));
@@ -308,16 +296,22 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
     let halves = if r.own_halves {
         (&own.0[..], &own.1[..])
     } else {
-        (&ta.halves[..], &tb.halves[..])
+        (&pd(&ta).halves[..], &pd(&tb).halves[..])
     };
-    let mut cands = candidates(&ta.descriptors, &tb.descriptors, points, &o.candidates).unwrap();
+    let mut cands = candidates(
+        &pd(&ta).descriptors,
+        &pd(&tb).descriptors,
+        points,
+        &o.candidates,
+    )
+    .unwrap();
     skeleton_filter(
         &mut cands,
         points,
         (ta.labels(), tb.labels()),
         Some(halves),
-        &ta.descriptors,
-        &tb.descriptors,
+        &pd(&ta).descriptors,
+        &pd(&tb).descriptors,
     );
     if r.first.is_some() || r.diverse.is_some() {
         let n = r
@@ -356,17 +350,17 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             &mut cands,
             points,
             (ta.labels(), tb.labels()),
-            (&ta.sagittal, &tb.sagittal),
+            (&pd(&ta).sagittal, &pd(&tb).sagittal),
             0.5,
-            &ta.descriptors,
-            &tb.descriptors,
+            &pd(&ta).descriptors,
+            &pd(&tb).descriptors,
         );
     }
     if let Some(k) = r.reverse {
         let all: Vec<u32> = (0..tb.num_vertices() as u32).collect();
         let back = candidates(
-            &tb.descriptors,
-            &ta.descriptors,
+            &pd(&tb).descriptors,
+            &pd(&ta).descriptors,
             &all,
             &symcorr_correspond::CandidateOptions {
                 nearest: Some(k),
@@ -393,10 +387,10 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             .zip(points)
             .map(|(list, &p)| {
                 let p = p as usize;
-                let dp = ta.profile[p];
+                let dp = pd(&ta).profile[p];
                 let best = list
                     .iter()
-                    .map(|c| (tb.profile[c.vertex as usize] - dp).abs())
+                    .map(|c| (pd(&tb).profile[c.vertex as usize] - dp).abs())
                     .fold(f64::INFINITY, f64::min);
                 if best <= tau {
                     return None;
@@ -434,7 +428,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                 .filter(|&q| ok(q))
                 .map(|q| Candidate {
                     vertex: q as u32,
-                    distance: ta.descriptors.distance(p, &tb.descriptors, q),
+                    distance: pd(&ta).descriptors.distance(p, &pd(&tb).descriptors, q),
                 })
                 .min_by(|a, b| a.distance.total_cmp(&b.distance));
             if let Some(b) = best {
@@ -461,7 +455,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                 .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0 && ok(q))
                 .map(|q| Candidate {
                     vertex: q as u32,
-                    distance: ta.descriptors.distance(p, &tb.descriptors, q),
+                    distance: pd(&ta).descriptors.distance(p, &pd(&tb).descriptors, q),
                 })
                 .min_by(|a, b| a.distance.total_cmp(&b.distance));
             list.extend(best);
@@ -473,7 +467,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             .zip(points)
             .filter_map(|(list, &p)| {
                 let pu = p as usize;
-                let dp = ta.profile[pu];
+                let dp = pd(&ta).profile[pu];
                 let spn = if midline(ta.labels()[pu]) {
                     norm(ma, sa, pu)
                 } else {
@@ -488,7 +482,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                             0.0
                         };
                         (
-                            (tb.profile[q] - dp).abs() + r.lambda * (sq - spn).abs(),
+                            (pd(&tb).profile[q] - dp).abs() + r.lambda * (sq - spn).abs(),
                             c.vertex,
                         )
                     })
@@ -497,68 +491,170 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             })
             .collect();
     }
-    select(&cands, points, &ta.profile, &tb.profile)
+    select(&cands, points, &pd(&ta).profile, &pd(&tb).profile)
         .iter()
         .map(|m| (m.template, m.target))
         .collect()
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let root = Path::new(&args[0]);
-    let dense = args.iter().any(|a| a == "dense");
-    let variants: Vec<String> = args
-        .iter()
-        .skip(1)
-        .filter(|a| *a != "dense")
-        .flat_map(|a| a.split(',').map(String::from).collect::<Vec<_>>())
-        .collect();
-    let variants = if variants.is_empty() {
-        vec!["base".to_string()]
-    } else {
-        variants
-    };
-    let ds = Dataset::open(root, None).unwrap();
-    let mirror = ds.mirror.clone().unwrap();
-    let mut prepare = symcorr::PrepareOptions::default();
-    let env = |k: &str| std::env::var(k).ok().and_then(|x| x.parse::<f64>().ok());
-    if let Some(x) = env("SIHKS_FREQ") {
-        prepare.si_hks.frequencies = x as usize;
-    }
-    if let Some(x) = env("SIHKS_START") {
-        prepare.si_hks.tau_start = x;
-    }
-    if let Some(x) = env("SIHKS_END") {
-        prepare.si_hks.tau_end = x;
-    }
-    if let Some(x) = env("EIG") {
-        prepare.eigenpairs = x as usize;
-    }
-    let pipeline = Pipeline::new(PipelineOptions {
-        prepare,
-        method: Method::Paper,
-        mode: if dense {
-            Mode::Dense
+/// Where the paper pipeline's flips come from.
+///
+/// Prepares every mesh of DATASET once (DESIGN.md's dataset layout plus the rig's reference
+/// labels, `labels/NAME.txt`, one segment index per line, and `mirror.txt`), then runs each
+/// VARIANT of the paper method's matching options (`--method paper`) on every pair and prints,
+/// per variant, the mean geodesic error (over the target's √area) and the flip rate (matches
+/// nearer the mirror of the true vertex than the true vertex, over the counted matches).
+///
+/// For the first variant (every variant with `--all`) each flip is classified:
+/// `tmpl_label` (the template point's attachment label differs from its reference label),
+/// `target_label` (the target's attachment label at the true vertex differs from its reference
+/// label: the filter cannot keep the true match), `halves` (labels right, but the point and its
+/// true vertex got opposite sagittal halves), `selection` (labels and halves right: the
+/// candidates / eq. 8 picked the mirror side); then the counts by reference segment and the
+/// pairs with flips.
+#[derive(clap::Parser, Debug)]
+#[command(name = "paper_flips", verbatim_doc_comment)]
+struct Args {
+    /// Dataset folder (meshes/, joints/, pairs.txt, mirror.txt, labels/).
+    dataset: PathBuf,
+    /// Variants to run, in order (several per argument joined by `,`; default `base`), and the
+    /// word `dense` for dense mode (every template vertex; default: the sparse sample).
+    ///
+    /// A variant is parts joined by `+`. Library options: `base` (defaults), `paper` (no
+    /// midline halves, no sagittal band), `noband`, `band<r>` (sagittal band ratio r), `off`
+    /// (no skeleton filter), `n<N>` (N candidates). Custom rules (this experiment's own
+    /// filter/selection): `lib` (the library's sagittal band on its coordinates), `f<N>`
+    /// (filter first: the N nearest among compatible target vertices), `x<ρ>` (spatially
+    /// diverse candidates, ρ in √area), `g<τ>` + `w<M>` (adaptive widening: a point whose best
+    /// eq. 8 gap exceeds τ gets M candidates), `k<K>` (reverse nearest neighbours), `a<δ>`
+    /// (axial band on limbs), `sym` / `s<mask>` (symmetry-refined planes: 1 pelvis, 2 torso,
+    /// 4 head, 8 skull), `own` (halves from those planes), `w` (normalise by the segment's
+    /// half-width), `d<x>` / `r<x>` (sagittal difference / ratio rule), `l<λ>` (selection term
+    /// λ·|s(q) − s(p)|), `c` (custom path with no rule). Example: `base,paper,n10+k50`.
+    #[arg(value_name = "VARIANT|dense", verbatim_doc_comment)]
+    variants: Vec<String>,
+    /// Dense mode (same as the positional word `dense`).
+    #[arg(long)]
+    dense: bool,
+    /// Pairs file (default: DATASET/pairs.txt).
+    #[arg(long, value_name = "FILE")]
+    pairs: Option<PathBuf>,
+    /// Print one line per classified flip (pair, point, labels, halves, signed distances).
+    #[arg(long)]
+    verbose: bool,
+    /// Classify the flips of every variant, not only the first.
+    #[arg(long)]
+    all: bool,
+    /// Before the variants, print per mesh the quality of the midline planes: the mean
+    /// |sd(v) + sd(mirror(v))| per segment (pelvis, torso, head) and plane set (0, 7, 8, 12).
+    #[arg(long)]
+    planes: bool,
+    /// Skull plane (plane set bit 8): head vertices beyond this fraction of the shoulder
+    /// centre → head bone get their own symmetry-fitted plane.
+    #[arg(long, value_name = "T", default_value_t = 0.5)]
+    skull_t: f64,
+    /// Laplace–Beltrami eigenpairs behind the si-HKS (default: the pipeline's).
+    #[arg(long, value_name = "K")]
+    eigenpairs: Option<usize>,
+    /// si-HKS frequencies kept (default: the pipeline's).
+    #[arg(long, value_name = "N")]
+    si_hks_frequencies: Option<usize>,
+    /// si-HKS window start: log2 of the smallest diffusion time over the area (default: the
+    /// pipeline's).
+    #[arg(long, value_name = "TAU", allow_hyphen_values = true)]
+    si_hks_tau_start: Option<f64>,
+    /// si-HKS window end: log2 of the largest diffusion time over the area (default: the
+    /// pipeline's).
+    #[arg(long, value_name = "TAU", allow_hyphen_values = true)]
+    si_hks_tau_end: Option<f64>,
+}
+
+impl Args {
+    /// Dense mode, and the variants in order (`base` when none is given).
+    fn variants(&self) -> (bool, Vec<String>) {
+        let dense = self.dense || self.variants.iter().any(|a| a == "dense");
+        let v: Vec<String> = self
+            .variants
+            .iter()
+            .filter(|a| *a != "dense")
+            .flat_map(|a| a.split(',').map(String::from).collect::<Vec<_>>())
+            .collect();
+        if v.is_empty() {
+            (dense, vec!["base".to_string()])
         } else {
-            Mode::DEFAULT_SPARSE
-        },
-        ..PipelineOptions::default()
-    });
+            (dense, v)
+        }
+    }
+
+    /// The pipeline: the paper method, the prepared meshes' si-HKS and eigenpairs from the
+    /// options.
+    fn pipeline(&self, dense: bool) -> Pipeline {
+        let mut prepare = symcorr::PrepareOptions::default();
+        if let Some(x) = self.si_hks_frequencies {
+            prepare.si_hks.frequencies = x;
+        }
+        if let Some(x) = self.si_hks_tau_start {
+            prepare.si_hks.tau_start = x;
+        }
+        if let Some(x) = self.si_hks_tau_end {
+            prepare.si_hks.tau_end = x;
+        }
+        if let Some(x) = self.eigenpairs {
+            prepare.eigenpairs = x;
+        }
+        Pipeline::new(PipelineOptions {
+            prepare,
+            method: Method::Paper,
+            mode: if dense {
+                Mode::Dense
+            } else {
+                Mode::DEFAULT_SPARSE
+            },
+            ..PipelineOptions::default()
+        })
+    }
+}
+
+fn main() {
+    let args = <Args as clap::Parser>::parse();
+    if let Err(e) = run(&args) {
+        eprintln!("paper_flips: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    let root = args.dataset.as_path();
+    let (dense, variants) = args.variants();
+    // Every variant is checked before the (slow) preparation.
+    let parsed: Vec<(MatchOptions, Option<Rule>)> = variants
+        .iter()
+        .map(|v| variant(v))
+        .collect::<Result<_, _>>()?;
+    let ds = Dataset::open(root, args.pairs.as_deref()).map_err(|e| e.to_string())?;
+    let mirror = ds
+        .mirror
+        .clone()
+        .ok_or_else(|| format!("{}: no mirror.txt", root.display()))?;
+    let pipeline = args.pipeline(dense);
+    let skull_t = args.skull_t;
     let t = Instant::now();
     let names = ds.used_names();
     use rayon::prelude::*;
     let meshes: BTreeMap<String, Mesh> = names
         .par_iter()
-        .map(|n| {
-            let mesh = read_mesh(&ds.meshes[n]).unwrap();
-            let sk = read_skeleton(&ds.joints[n], None).unwrap();
-            let p = pipeline.prepare(mesh, &sk).unwrap();
-            let reference = read_labels(&root.join("labels").join(format!("{n}.txt")));
+        .map(|n| -> Result<(String, Mesh), String> {
+            let mesh = read_mesh(&ds.meshes[n]).map_err(|e| e.to_string())?;
+            let sk = read_skeleton(&ds.joints[n], None).map_err(|e| e.to_string())?;
+            let p = pipeline
+                .prepare(mesh, &sk)
+                .map_err(|e| format!("{n}: {e}"))?;
+            let reference = read_labels(&root.join("labels").join(format!("{n}.txt")))?;
             let graph = EvalGraph::new(&p.mesh);
             let sd: Vec<Vec<f64>> = (0..16)
                 .map(|k| {
                     if [0, 4, 7, 8, 12].contains(&k) {
-                        signed_distances(&p, k)
+                        signed_distances(&p, k, skull_t)
                     } else {
                         vec![0.0; p.num_vertices()]
                     }
@@ -580,7 +676,7 @@ fn main() {
                     width[k][seg.index()] = v[v.len() * 9 / 10];
                 }
             }
-            (
+            Ok((
                 n.clone(),
                 Mesh {
                     p,
@@ -589,15 +685,15 @@ fn main() {
                     sd,
                     width,
                 },
-            )
+            ))
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     eprintln!(
         "prepared {} meshes in {:.1} s",
         meshes.len(),
         t.elapsed().as_secs_f64()
     );
-    if std::env::var("PLANES").is_ok() {
+    if args.planes {
         // Plane quality: for a perfect plane sd(v) = −sd(mirror(v)).
         for (n, m) in &meshes {
             let mut line = format!("{n:>14}");
@@ -618,8 +714,8 @@ fn main() {
             println!("{line}");
         }
     }
-    for (vi, v) in variants.iter().enumerate() {
-        let (opts, rule) = variant(v);
+    for (vi, (v, (opts, rule))) in variants.iter().zip(&parsed).enumerate() {
+        let classify = vi == 0 || args.all;
         let mut total = (0.0, 0usize, 0usize, 0usize);
         let mut classes: BTreeMap<&str, usize> = BTreeMap::new();
         let mut by_seg: BTreeMap<(&str, &str), usize> = BTreeMap::new();
@@ -627,14 +723,19 @@ fn main() {
         for (a, b) in &ds.pairs {
             let (ma, mb) = (&meshes[a], &meshes[b]);
             let points = pipeline.points(&ma.p);
-            let pairs: Vec<(u32, u32)> = match &rule {
-                None => match_points(&ma.p.side(), &mb.p.side(), &points, &opts)
-                    .unwrap()
-                    .matches
-                    .iter()
-                    .map(|m| (m.template, m.target))
-                    .collect(),
-                Some(r) => custom(ma, mb, &points, &opts, r),
+            let pairs: Vec<(u32, u32)> = match rule {
+                None => match_points(
+                    &ma.p.paper_side().expect("prepared for the paper method"),
+                    &mb.p.paper_side().expect("prepared for the paper method"),
+                    &points,
+                    opts,
+                )
+                .map_err(|e| format!("{a} -> {b}: {e}"))?
+                .matches
+                .iter()
+                .map(|m| (m.template, m.target))
+                .collect(),
+                Some(r) => custom(ma, mb, &points, opts, r),
             };
             let e = evaluate(&mb.graph, mb.p.area, &pairs, |v| v, Some(&mirror));
             let (c, f) = e.flip_counts();
@@ -643,7 +744,7 @@ fn main() {
             total.2 += c;
             total.3 += f;
             by_pair.push((format!("{a}->{b}"), f, c));
-            if vi > 0 && std::env::var("ALL").is_err() {
+            if !classify {
                 continue;
             }
             for (i, (&(p, q), flip)) in pairs.iter().zip(&e.flips).enumerate() {
@@ -656,23 +757,23 @@ fn main() {
                     "tmpl_label"
                 } else if mb.p.attachment.labels[p] != mb.reference[p] {
                     "target_label"
-                } else if ma.p.halves[p] * mb.p.halves[p] < 0 {
+                } else if pd(&ma.p).halves[p] * pd(&mb.p).halves[p] < 0 {
                     "halves"
                 } else {
                     "selection"
                 };
                 *classes.entry(class).or_default() += 1;
                 *by_seg.entry((class, rp.name())).or_default() += 1;
-                if std::env::var("VERBOSE").is_ok() {
+                if args.verbose {
                     println!(
                         "  {a}->{b} p={p} ref={} tl={} ul={} hp={} hu={} q={q} ql={} qh={} err={:.3} cls={class} sd p {:.3} q* {:.3} q {:.3} m(q*) {}",
                         rp.name(),
                         ma.p.attachment.labels[p].name(),
                         mb.p.attachment.labels[p].name(),
-                        ma.p.halves[p],
-                        mb.p.halves[p],
+                        pd(&ma.p).halves[p],
+                        pd(&mb.p).halves[p],
                         mb.p.attachment.labels[q].name(),
-                        mb.p.halves[q],
+                        pd(&mb.p).halves[q],
                         e.errors[i],
                         ma.sd[0][p],
                         mb.sd[0][p],
@@ -689,11 +790,64 @@ fn main() {
             total.2,
             100.0 * total.3 as f64 / total.2.max(1) as f64
         );
-        if vi == 0 || std::env::var("ALL").is_ok() {
+        if classify {
             println!("  classes {classes:?}");
             println!("  by segment {by_seg:?}");
             let flipped: Vec<_> = by_pair.iter().filter(|x| x.1 > 0).collect();
             println!("  pairs with flips: {flipped:?}");
         }
     }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::{CommandFactory, Parser};
+
+    #[test]
+    fn command_line_is_well_formed() {
+        Args::command().debug_assert();
+    }
+
+    #[test]
+    fn positional_words_keep_their_syntax() {
+        let a = Args::parse_from(["paper_flips", "DS", "base,paper", "dense", "n10+k50"]);
+        let (dense, v) = a.variants();
+        assert!(dense);
+        assert_eq!(v, ["base", "paper", "n10+k50"]);
+        let (dense, v) = Args::parse_from(["paper_flips", "DS"]).variants();
+        assert!(!dense);
+        assert_eq!(v, ["base"]);
+        let a = Args::parse_from(["paper_flips", "DS", "--si-hks-tau-start", "-10"]);
+        assert_eq!(a.si_hks_tau_start, Some(-10.0));
+    }
+
+    #[test]
+    fn variants_parse_as_before() {
+        let (o, r) = variant("base").unwrap();
+        assert!(r.is_none());
+        assert_eq!(
+            o.candidates.nearest,
+            MatchOptions::default().candidates.nearest
+        );
+        let (o, r) = variant("paper+n10").unwrap();
+        assert!(r.is_none() && !o.midline_halves && o.sagittal_ratio.is_none());
+        assert_eq!(o.candidates.nearest, Some(10));
+        let (o, r) = variant("band0.25+k50").unwrap();
+        assert_eq!(o.sagittal_ratio, Some(0.25));
+        assert_eq!(r.unwrap().reverse, Some(50));
+        let (_, r) = variant("g0.05+w50").unwrap();
+        let r = r.unwrap();
+        assert_eq!((r.gap, r.widen), (Some(0.05), 50));
+        assert!(variant("bogus").is_err());
+        assert!(variant("nX").is_err());
+    }
+}
+
+/// The paper's per-mesh data (the experiment prepares every mesh for the paper's method).
+fn pd(m: &PreparedMesh) -> &symcorr::PaperData {
+    m.paper
+        .as_ref()
+        .expect("paper_flips prepares its meshes for the paper's method")
 }
