@@ -24,7 +24,7 @@
 //! assert!((head[2] - 2.5).abs() < 1e-9);
 //! // NiTE has no wrists: interpolated 80 % of the way elbow → hand, and flagged.
 //! assert!(skeleton.interpolated[Joint::WristLeft.index()]);
-//! let [u, v] = Intrinsics::kinect_v1().project(head); // pixel of the head in the depth image
+//! let [u, v] = Intrinsics::kinect_v1().project(head.into()); // pixel of the head in the depth image
 //! assert!(u.is_finite() && v.is_finite());
 //! ```
 //!

@@ -29,7 +29,7 @@
 //! let template = pipeline.prepare(mesh.clone(), &joints).unwrap();
 //! let target = pipeline.prepare(mesh, &joints).unwrap();
 //! let corr = pipeline.run(&template, &target).unwrap();
-//! assert_eq!(corr.matches.len(), template.num_vertices());
+//! assert_eq!(corr.pairs.len(), template.num_vertices());
 //! ```
 //!
 //! # Invariants

@@ -773,7 +773,7 @@ impl Correspondence {
     /// the block).
     pub fn filter_stats(&self) -> FilterStats {
         match &self.report {
-            MethodReport::Paper { filter, .. } => filter.clone(),
+            MethodReport::Paper { filter, .. } => *filter,
             _ => FilterStats::default(),
         }
     }

@@ -260,7 +260,7 @@ fn compatible_by_descriptor(
         .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0)
         .map(|q| Candidate {
             vertex: q as u32,
-            distance: pd(&ta).descriptors.distance(p, &pd(&tb).descriptors, q),
+            distance: pd(ta).descriptors.distance(p, &pd(tb).descriptors, q),
         })
         .collect();
     all.sort_by(|a, b| a.distance.total_cmp(&b.distance));
@@ -296,11 +296,11 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
     let halves = if r.own_halves {
         (&own.0[..], &own.1[..])
     } else {
-        (&pd(&ta).halves[..], &pd(&tb).halves[..])
+        (&pd(ta).halves[..], &pd(tb).halves[..])
     };
     let mut cands = candidates(
-        &pd(&ta).descriptors,
-        &pd(&tb).descriptors,
+        &pd(ta).descriptors,
+        &pd(tb).descriptors,
         points,
         &o.candidates,
     )
@@ -310,8 +310,8 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
         points,
         (ta.labels(), tb.labels()),
         Some(halves),
-        &pd(&ta).descriptors,
-        &pd(&tb).descriptors,
+        &pd(ta).descriptors,
+        &pd(tb).descriptors,
     );
     if r.first.is_some() || r.diverse.is_some() {
         let n = r
@@ -350,17 +350,17 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             &mut cands,
             points,
             (ta.labels(), tb.labels()),
-            (&pd(&ta).sagittal, &pd(&tb).sagittal),
+            (&pd(ta).sagittal, &pd(tb).sagittal),
             0.5,
-            &pd(&ta).descriptors,
-            &pd(&tb).descriptors,
+            &pd(ta).descriptors,
+            &pd(tb).descriptors,
         );
     }
     if let Some(k) = r.reverse {
         let all: Vec<u32> = (0..tb.num_vertices() as u32).collect();
         let back = candidates(
-            &pd(&tb).descriptors,
-            &pd(&ta).descriptors,
+            &pd(tb).descriptors,
+            &pd(ta).descriptors,
             &all,
             &symcorr_correspond::CandidateOptions {
                 nearest: Some(k),
@@ -387,10 +387,10 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             .zip(points)
             .map(|(list, &p)| {
                 let p = p as usize;
-                let dp = pd(&ta).profile[p];
+                let dp = pd(ta).profile[p];
                 let best = list
                     .iter()
-                    .map(|c| (pd(&tb).profile[c.vertex as usize] - dp).abs())
+                    .map(|c| (pd(tb).profile[c.vertex as usize] - dp).abs())
                     .fold(f64::INFINITY, f64::min);
                 if best <= tau {
                     return None;
@@ -428,7 +428,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                 .filter(|&q| ok(q))
                 .map(|q| Candidate {
                     vertex: q as u32,
-                    distance: pd(&ta).descriptors.distance(p, &pd(&tb).descriptors, q),
+                    distance: pd(ta).descriptors.distance(p, &pd(tb).descriptors, q),
                 })
                 .min_by(|a, b| a.distance.total_cmp(&b.distance));
             if let Some(b) = best {
@@ -455,7 +455,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                 .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0 && ok(q))
                 .map(|q| Candidate {
                     vertex: q as u32,
-                    distance: pd(&ta).descriptors.distance(p, &pd(&tb).descriptors, q),
+                    distance: pd(ta).descriptors.distance(p, &pd(tb).descriptors, q),
                 })
                 .min_by(|a, b| a.distance.total_cmp(&b.distance));
             list.extend(best);
@@ -467,7 +467,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             .zip(points)
             .filter_map(|(list, &p)| {
                 let pu = p as usize;
-                let dp = pd(&ta).profile[pu];
+                let dp = pd(ta).profile[pu];
                 let spn = if midline(ta.labels()[pu]) {
                     norm(ma, sa, pu)
                 } else {
@@ -482,7 +482,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                             0.0
                         };
                         (
-                            (pd(&tb).profile[q] - dp).abs() + r.lambda * (sq - spn).abs(),
+                            (pd(tb).profile[q] - dp).abs() + r.lambda * (sq - spn).abs(),
                             c.vertex,
                         )
                     })
@@ -491,7 +491,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             })
             .collect();
     }
-    select(&cands, points, &pd(&ta).profile, &pd(&tb).profile)
+    select(&cands, points, &pd(ta).profile, &pd(tb).profile)
         .iter()
         .map(|m| (m.template, m.target))
         .collect()
@@ -800,6 +800,13 @@ fn run(args: &Args) -> Result<(), String> {
     Ok(())
 }
 
+/// The paper's per-mesh data (the experiment prepares every mesh for the paper's method).
+fn pd(m: &PreparedMesh) -> &symcorr::PaperData {
+    m.paper
+        .as_ref()
+        .expect("paper_flips prepares its meshes for the paper's method")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -843,11 +850,4 @@ mod tests {
         assert!(variant("bogus").is_err());
         assert!(variant("nX").is_err());
     }
-}
-
-/// The paper's per-mesh data (the experiment prepares every mesh for the paper's method).
-fn pd(m: &PreparedMesh) -> &symcorr::PaperData {
-    m.paper
-        .as_ref()
-        .expect("paper_flips prepares its meshes for the paper's method")
 }

@@ -1,4 +1,4 @@
-//! Issue 5 acceptance: symcorr-attach's segment labels, with the MakeHuman boundary convention
+//! Acceptance of symcorr-attach's segment labels, with the MakeHuman boundary convention
 //! ([`BoundaryConvention::makehuman`], fitted on three shapes, only one of them here, in the
 //! rest pose and twelve poses not used here), against the rig's reference labels
 //! ([`symcorr_synth::mapping::reference_labels`]) on bodies generated here (20 poses × 2 shapes,
@@ -11,7 +11,7 @@
 //! * **boundary-tolerant agreement** (reported, not the acceptance number): a disagreement between
 //!   two *neighbouring* segments (sharing a skeleton joint) also counts as agreeing when the vertex
 //!   lies within [`TOLERANCE_M`] of a vertex whose reference label is the one attach gave it —
-//!   issue 5 says "boundaries between neighbouring segments may differ".
+//!   "boundaries between neighbouring segments may differ".
 //!
 //! This file only asserts. The figures themselves (per body and per set, confusions, mirrored
 //! and cross-side vertices, label dumps) are printed by the experiment
@@ -282,17 +282,12 @@ fn run_bodies(noise: Option<JointNoise>) -> Vec<Score> {
         .collect()
 }
 
-// Measured (2 shapes × 20 poses, 2026-12-02, session 7) with the MakeHuman boundary convention
-// (its rules use bone heat's vote and were trained on posed bodies and their single-view scans;
-// [`rig_like`]; symcorr-attach's default joint planes in brackets, 2026-11-23): exact joints
-// strict mean 0.937 / worst 0.910 (0.859 / 0.828), 0.936 on the 39 bodies outside the
-// convention's training set; boundary-tolerant (3 cm) mean 0.974 / worst 0.953 (0.914 /
-// 0.884); mirrored area 0 (0); anatomical cross-side area 0 (≤ 0.0018).
-// Noisy joints strict mean 0.856 / worst 0.805 (0.816 / 0.757), tolerant 0.915 / 0.870
-// (0.879 / 0.827), mirrored ≤ 0.0003 (≤ 0.0003: groin vertices on the midline), no cross-side
-// area beyond 3 cm of the midline. The table before session 7 (planes only, no scans in
-// training): exact 0.932 / 0.893, noisy 0.848 / 0.789. Issue 5's targets are ≥ 0.95 (exact) and ≥ 0.90 (noisy)
-// strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
+// Measured 2026-12-02 (2 shapes × 20 poses; `cargo run --release -p symcorr-experiments --bin
+// attach_report -- --verbose`, history in docs/decisions) with the MakeHuman boundary convention
+// ([`rig_like`]; joint planes in brackets): exact joints strict mean 0.937 / worst 0.910
+// (0.859 / 0.828), boundary-tolerant (3 cm) 0.974 / 0.953; noisy joints strict 0.856 / 0.805
+// (0.816 / 0.757), tolerant 0.915 / 0.870, mirrored ≤ 0.0003. The targets ≥ 0.95 (exact) and
+// ≥ 0.90 (noisy) strict agreement and zero mirrored area: the agreement targets and zero mirrored area with
 // noisy joints are NOT reached. The remaining confusion is printed by
 // `cargo run --release -p symcorr-experiments --bin attach_report -- --verbose` (the
 // bracketed figures: add `--boundaries joint-planes`) and listed in symcorr-attach's docs; its
@@ -324,7 +319,7 @@ fn exact_joints_40_bodies() {
 
 #[test]
 fn noisy_joints_40_bodies() {
-    // Issue 5: σ = 3 cm per coordinate, 10 % of the joints moved onto the surface first.
+    // σ = 3 cm per coordinate, 10 % of the joints moved onto the surface first.
     let noise = JointNoise {
         sigma_cm: 3.0,
         surface_fraction: 0.1,
@@ -389,12 +384,11 @@ fn scan_case(dir: &str) -> (TriMesh, Skeleton, Vec<Option<Truth>>) {
     (scan.mesh, joints, want)
 }
 
-// Measured with the MakeHuman convention trained on posed bodies and their single-view scans
-// (session 7, 2026-12-02): strict 0.950 (ideal scan) / 0.948 (Kinect realism), tolerant 0.985 /
-// 0.988; without scans in the training (session 6) 0.936 / 0.923 and 0.985 / 0.984; rest-pose
-// training (session 5) 0.922 / 0.919; no mirrored or cross-side area (joint planes: 0.870 /
-// 0.867, tolerant 0.946 / 0.949). These scans are s0_walk-10 seen by the fixture camera: the
-// training scans use the same camera and shape but other poses and another noise seed. Issue 5's target is ≥ 0.90 strict agreement on the visible surface: reached on
+// Measured 2026-12-02 with the MakeHuman convention trained on posed bodies and their
+// single-view scans: strict 0.950 (ideal scan) / 0.948 (Kinect realism), tolerant 0.985 / 0.988;
+// no mirrored or cross-side area (joint planes: 0.870 / 0.867). These scans are s0_walk-10 seen
+// by the fixture camera: the training scans use the same camera and shape but other poses and
+// another noise seed. The target ≥ 0.90 strict agreement on the visible surface is reached on
 // both. Before refinement refused circles far from the joint (2026-12-01) the realistic scan
 // scored 0.894: its left wrist, hidden against the hip, was moved 12 cm onto the hip and 3 % of
 // the pelvis/hip became forearm.
