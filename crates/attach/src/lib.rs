@@ -66,7 +66,9 @@ pub use convention::{
     SIDE_MARGIN,
 };
 pub use error::AttachError;
-pub use symcorr_skeleton::{BodySide, Bone, Joint, SagittalPlanes, Segment, Skeleton, BONES};
+pub use symcorr_skeleton::{
+    BodySide, Bone, Joint, Plane, SagittalPlanes, Segment, Skeleton, BONES,
+};
 
 use symcorr_mesh::TriMesh;
 

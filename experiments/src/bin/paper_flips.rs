@@ -30,18 +30,14 @@ fn signed_distances(m: &PreparedMesh, sym: u8, skull_t: f64) -> Vec<f64> {
     let j = &m.attachment.joints;
     let p = |x: Joint| -> [f64; 3] { j.position(x).into() };
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let mid =
-        |a: [f64; 3], b: [f64; 3]| [(a[0] + b[0]) / 2., (a[1] + b[1]) / 2., (a[2] + b[2]) / 2.];
-    let unit = |v: [f64; 3]| {
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        [v[0] / n, v[1] / n, v[2] / n]
+    // The pipeline's joint planes, from their one owner.
+    let planes = symcorr_attach::SagittalPlanes::of(j);
+    let plane = |pl: symcorr_attach::Plane| -> ([f64; 3], [f64; 3]) {
+        (pl.origin.into(), pl.normal.into())
     };
-    let hn = unit(sub(p(Joint::HipLeft), p(Joint::HipRight)));
-    let ho = mid(p(Joint::HipLeft), p(Joint::HipRight));
-    let sn = unit(sub(p(Joint::ShoulderLeft), p(Joint::ShoulderRight)));
-    let so = mid(p(Joint::ShoulderLeft), p(Joint::ShoulderRight));
-    let tn = unit([hn[0] + sn[0], hn[1] + sn[1], hn[2] + sn[2]]);
-    let to = mid(ho, so);
+    let (ho, hn) = plane(planes.pelvis);
+    let (so, sn) = plane(planes.shoulders);
+    let (to, tn) = plane(planes.torso);
     let fit = |seg: Segment, o: [f64; 3], n: [f64; 3]| {
         let bit = match seg {
             Segment::Pelvis => 1,
