@@ -51,6 +51,7 @@
 //! partial targets ([`PARTIAL_BOUNDARY_RATIO`]; `2026-11-23-partial-targets-scored-on-template.md`).
 
 pub mod dataset;
+pub mod figures;
 pub mod output;
 mod pipeline;
 

@@ -278,14 +278,19 @@ impl PreparedMesh {
         out
     }
 
+    /// The paper method's per-mesh data. Errors unless the mesh was prepared for
+    /// [`Method::Paper`].
+    pub fn paper_data(&self) -> Result<&PaperData, PipelineError> {
+        self.paper
+            .as_ref()
+            .ok_or(PipelineError::NotPreparedFor(Method::Paper))
+    }
+
     /// This mesh as one side of the paper's matching stages (symcorr-correspond's
     /// `match_points`): descriptors, labels, base-set profile, halves, sagittal coordinates and
     /// positions. Errors unless the mesh was prepared for [`Method::Paper`].
     pub fn paper_side(&self) -> Result<Side<'_>, PipelineError> {
-        let p = self
-            .paper
-            .as_ref()
-            .ok_or(PipelineError::NotPreparedFor(Method::Paper))?;
+        let p = self.paper_data()?;
         Ok(Side {
             descriptors: &p.descriptors,
             labels: &self.attachment.labels,

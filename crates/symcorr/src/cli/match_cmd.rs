@@ -9,7 +9,7 @@ use symcorr::output::{
     atomic_write, correspondence_json, input_colours, match_colours, pair_timings, repair_json,
     segment_colours,
 };
-use symcorr::{Mode, Pipeline, PipelineOptions, PreparedMesh};
+use symcorr::{figures, Mode, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_correspond::CandidateOptions;
 use symcorr_spectral::cache::{CacheLocation, CachePolicy};
 
@@ -52,6 +52,19 @@ pub struct MatchArgs {
     /// (template_segments.ply, target_segments.ply), plus .glb copies.
     #[arg(long, value_name = "DIR")]
     pub ply_out: Option<PathBuf>,
+    /// Also write the base vertex set (the paper's Fig. 4) as one mesh (PLY, GLB, OBJ or OFF
+    /// by extension): template and target side by side in pale segment colours, the base
+    /// vertices marked in black. Only with --method paper.
+    #[arg(long, value_name = "FILE")]
+    pub base_set_out: Option<PathBuf>,
+    /// Also write template and target side by side joined by lines for a sample of matches
+    /// (the paper's Figs. 1 and 6) as one mesh (PLY, GLB, OBJ or OFF by extension): lines in
+    /// the template point's segment colour, red where a match joins left to right.
+    #[arg(long, value_name = "FILE")]
+    pub lines_out: Option<PathBuf>,
+    /// Matches drawn by --lines-out (a farthest-point sample of the matched template points).
+    #[arg(long, value_name = "N", default_value_t = 60, requires = "lines_out")]
+    pub lines: usize,
     /// Print a machine-readable summary (JSON) on stdout instead of the text lines: `matches`,
     /// `template_points`, `fallbacks`, `seconds`, `timings_s`, `repair` (per mesh), `files`.
     #[arg(long)]
@@ -146,6 +159,15 @@ pub enum MethodArg {
     Paper,
 }
 
+/// `--paper-filter`: the paper's skeleton filter as written, or with symcorr's midline extensions.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PaperFilterArg {
+    /// Same segment only (§3.2).
+    Strict,
+    /// Same segment, same sagittal half on the midline segments, sagittal band (the default).
+    Extended,
+}
+
 /// Method options shared by `match` and `bench`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MethodArgs {
@@ -159,8 +181,15 @@ pub struct MethodArgs {
     #[arg(long, default_value_t = symcorr::DEFAULT_SAMPLES)]
     pub samples: usize,
     /// Ablation: skip the skeleton filter (the paper's method without its contribution).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "paper_filter")]
     pub no_skeleton_filter: bool,
+    /// The paper method's skeleton filter: `strict` keeps a candidate only on the point's own
+    /// segment (the paper's §3.2, nothing more); `extended` (default) also separates the left
+    /// and right halves of the pelvis, torso and head by the joints' sagittal planes (the skull
+    /// by its own symmetry plane) and keeps a midline point's candidates on its side of a
+    /// sagittal band (beyond the paper). Only with --method paper.
+    #[arg(long, value_enum, value_name = "FILTER")]
+    pub paper_filter: Option<PaperFilterArg>,
     /// Candidates per point: the N nearest by si-HKS.
     #[arg(long, value_name = "N", default_value_t = symcorr_correspond::DEFAULT_NEAREST)]
     pub candidates: usize,
@@ -206,6 +235,17 @@ impl MethodArgs {
             ..PipelineOptions::default()
         };
         o.matching.skeleton_filter = !self.no_skeleton_filter;
+        if let Some(filter) = self.paper_filter {
+            if self.method != MethodArg::Paper {
+                return Err(CliError(
+                    "--paper-filter chooses the paper pipeline's filter: add --method paper".into(),
+                ));
+            }
+            if filter == PaperFilterArg::Strict {
+                o.matching.midline_halves = false;
+                o.matching.sagittal_ratio = None;
+            }
+        }
         o.method = match self.method {
             MethodArg::Paper => symcorr::Method::Paper,
             MethodArg::Refined => symcorr::Method::Refined,
@@ -279,6 +319,9 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let pipeline = args.method.pipeline(args.dense)?;
     let format = super::joints_format(args.joints_format.as_deref())?;
     check_output_dir(&args.out)?;
+    for figure in [&args.base_set_out, &args.lines_out].into_iter().flatten() {
+        check_output_dir(figure)?;
+    }
     let start = Instant::now();
     let counts = std::sync::Arc::new(CacheCounts::default());
     let with_cache = |mesh: &Path| {
@@ -301,6 +344,12 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         || load_prepared(&pb, &args.target, &args.target_joints, args.frame, format),
     );
     let (a, b) = (a?, b?);
+    // Figures that need the paper's data are refused before any matching work.
+    if args.base_set_out.is_some() && args.method.method != MethodArg::Paper {
+        return Err(CliError(
+            "--base-set-out draws the paper pipeline's base vertex set: add --method paper".into(),
+        ));
+    }
     progress.set("matching");
     let corr = pipeline.run(&a, &b).map_err(|e| CliError(e.to_string()))?;
     let mut timings = pair_timings(&a, &b, &corr);
@@ -319,6 +368,20 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let mut files = vec![args.out.clone()];
     if let Some(dir) = &args.ply_out {
         files.extend(write_coloured(dir, &a, &b, &corr)?);
+    }
+    if let Some(path) = &args.base_set_out {
+        let (mesh, colours) =
+            figures::base_set_figure(&a, &b).map_err(|e| CliError(e.to_string()))?;
+        symcorr_mesh::io::write(path, &mesh, Some(&colours))
+            .map_err(|e| CliError(e.to_string()))?;
+        files.push(path.clone());
+    }
+    if let Some(path) = &args.lines_out {
+        let (mesh, colours) = figures::lines_figure(&a, &b, &corr, args.lines)
+            .map_err(|e| CliError(e.to_string()))?;
+        symcorr_mesh::io::write(path, &mesh, Some(&colours))
+            .map_err(|e| CliError(e.to_string()))?;
+        files.push(path.clone());
     }
     let seconds = start.elapsed().as_secs_f64();
     let points = corr.filter_stats().points.max(corr.pairs.len());
