@@ -62,6 +62,31 @@ pub use pipeline::{
     PARTIAL_BOUNDARY_RATIO,
 };
 
+/// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum OptionError {
+    /// Sparse mode with no template point.
+    #[error("sparse mode needs at least one sample")]
+    NoSamples,
+    /// The paper's candidate rule keeps no candidate.
+    #[error("the candidate count must be at least 1")]
+    NoCandidates,
+    /// The relative candidate threshold is not a finite factor ≥ 1.
+    #[error("candidate threshold {0}: must be a factor ≥ 1")]
+    CandidateThreshold(f64),
+    /// The base vertex set radius is not a positive length.
+    #[error("base vertex set radius {0}: must be positive")]
+    BaseRadius(f64),
+    /// Fewer than two eigenpairs for a method with spectral data.
+    #[error("eigenpairs = {0} (need at least 2)")]
+    TooFewEigenpairs(usize),
+    /// The skeleton filter switched off (the paper's ablation) with another method, whose
+    /// segment pools are its skeleton constraint.
+    #[error("switching the skeleton filter off is the paper pipeline's ablation; the articulated and refined methods always keep matches on their segment")]
+    AblationNeedsPaper,
+}
+
 /// Everything that can go wrong in the pipeline, by stage.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -81,9 +106,12 @@ pub enum PipelineError {
     /// The matching stages.
     #[error(transparent)]
     Correspond(#[from] symcorr_correspond::CorrespondError),
-    /// An option is out of range.
+    /// An option is out of range or does not fit the method ([`PipelineOptions::check`]).
     #[error("invalid option: {0}")]
-    InvalidOption(String),
+    Option(#[from] OptionError),
+    /// The default mesh repair removed every triangle (all were degenerate).
+    #[error("no triangle left after removing degenerate ones")]
+    NothingLeftAfterRepair,
     /// A mesh was prepared without the data a method needs ([`PreparedMesh::new`] prepares
     /// for the methods it is given).
     #[error("the mesh was not prepared for the {0:?} method")]

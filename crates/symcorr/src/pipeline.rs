@@ -1,7 +1,7 @@
 //! The pipeline API: per-mesh preparation ([`PreparedMesh`]) and pairwise matching
 //! ([`Pipeline::run`]).
 
-use crate::PipelineError;
+use crate::{OptionError, PipelineError};
 use nalgebra::Point3;
 use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Attachment};
@@ -161,18 +161,13 @@ impl PreparedMesh {
     ) -> Result<PreparedMesh, PipelineError> {
         let needs = Needs::of(methods);
         if needs.spectral() && options.eigenpairs < 2 {
-            return Err(PipelineError::InvalidOption(format!(
-                "eigenpairs = {} (need at least 2)",
-                options.eigenpairs
-            )));
+            return Err(OptionError::TooFewEigenpairs(options.eigenpairs).into());
         }
         // Scans and exported meshes carry degenerate faces and stray vertices that would make
         // the Laplacian singular; remove them and keep the map back to the input ids.
         let repaired = repair(&input, &RepairOptions::default())?;
         if repaired.mesh.num_triangles() == 0 {
-            return Err(PipelineError::InvalidOption(
-                "no triangle left after removing degenerate ones".into(),
-            ));
+            return Err(PipelineError::NothingLeftAfterRepair);
         }
         let (mesh, vertex_map, report) = (repaired.mesh, repaired.vertex_map, repaired.report);
         let input = if report.unchanged() {
@@ -680,15 +675,34 @@ pub struct PipelineOptions {
 }
 
 impl PipelineOptions {
-    /// Refuses combinations that would silently run something else than asked: the skeleton
-    /// filter switch (`matching.skeleton_filter = false`, the paper's ablation) has no meaning
-    /// for [`Method::Refined`] and [`Method::Articulated`], whose segment pools are their
-    /// skeleton constraint.
-    pub fn check(&self) -> Result<(), PipelineError> {
+    /// Refuses options out of range and combinations that would silently run something else
+    /// than asked: the skeleton filter switch (`matching.skeleton_filter = false`, the paper's
+    /// ablation) has no meaning for [`Method::Refined`] and [`Method::Articulated`], whose
+    /// segment pools are their skeleton constraint. [`Pipeline::run`] calls it; callers that
+    /// want to fail before reading any file call it first.
+    pub fn check(&self) -> Result<(), OptionError> {
+        if matches!(self.mode, Mode::Sparse { samples: 0 }) {
+            return Err(OptionError::NoSamples);
+        }
+        if self.method == Method::Paper {
+            if self.matching.candidates.nearest == Some(0) {
+                return Err(OptionError::NoCandidates);
+            }
+            if let Some(t) = self.matching.candidates.threshold {
+                if !(t.is_finite() && t >= 1.0) {
+                    return Err(OptionError::CandidateThreshold(t));
+                }
+            }
+        }
+        let r = self.prepare.base_radius;
+        if self.method == Method::Paper && !(r.is_finite() && r > 0.0) {
+            return Err(OptionError::BaseRadius(r));
+        }
+        if self.method != Method::Articulated && self.prepare.eigenpairs < 2 {
+            return Err(OptionError::TooFewEigenpairs(self.prepare.eigenpairs));
+        }
         if self.method != Method::Paper && !self.matching.skeleton_filter {
-            return Err(PipelineError::InvalidOption(
-                "switching the skeleton filter off is the paper pipeline's ablation; the articulated and refined methods always keep matches on their segment".into(),
-            ));
+            return Err(OptionError::AblationNeedsPaper);
         }
         Ok(())
     }
@@ -903,7 +917,7 @@ impl Pipeline {
     /// Matches `template` onto `target` with this pipeline's method.
     ///
     /// Errors: [`PipelineError::NotPreparedFor`] when a mesh lacks the method's data,
-    /// [`PipelineError::InvalidOption`] for options [`PipelineOptions::check`] refuses, and the
+    /// [`PipelineError::Option`] for options [`PipelineOptions::check`] refuses, and the
     /// method's own errors.
     pub fn run(
         &self,
@@ -1270,7 +1284,7 @@ mod tests {
             o.matching.skeleton_filter = true;
             assert!(o.check().is_ok());
             o.matching.skeleton_filter = false;
-            assert!(matches!(o.check(), Err(PipelineError::InvalidOption(_))));
+            assert_eq!(o.check(), Err(OptionError::AblationNeedsPaper));
         }
         o.method = Method::Paper;
         assert!(o.check().is_ok());

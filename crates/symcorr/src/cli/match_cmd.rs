@@ -9,7 +9,7 @@ use symcorr::output::{
     atomic_write, correspondence_json, input_colours, match_colours, pair_timings, repair_json,
     segment_colours,
 };
-use symcorr::{figures, Mode, Pipeline, PipelineOptions, PreparedMesh};
+use symcorr::{figures, Mode, OptionError, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_correspond::CandidateOptions;
 use symcorr_spectral::cache::{CacheLocation, CachePolicy};
 
@@ -207,23 +207,6 @@ pub struct MethodArgs {
 impl MethodArgs {
     /// The pipeline these options describe.
     pub fn pipeline(&self, dense: bool) -> Result<Pipeline, CliError> {
-        if !dense && self.samples == 0 {
-            return Err(CliError("--samples must be at least 1".into()));
-        }
-        if self.candidates == 0 {
-            return Err(CliError("--candidates must be at least 1".into()));
-        }
-        if let Some(t) = self.threshold {
-            if !(t.is_finite() && t >= 1.0) {
-                return Err(CliError(format!("--threshold {t}: must be a factor ≥ 1")));
-            }
-        }
-        if !(self.base_radius.is_finite() && self.base_radius > 0.0) {
-            return Err(CliError(format!(
-                "--base-radius {}: must be positive",
-                self.base_radius
-            )));
-        }
         let mut o = PipelineOptions {
             mode: if dense {
                 Mode::Dense
@@ -257,13 +240,24 @@ impl MethodArgs {
         };
         o.prepare.eigenpairs = self.eigenpairs;
         o.prepare.base_radius = self.base_radius;
-        // The library's rule, checked before any file is read; the message names the flags.
-        if o.check().is_err() {
-            return Err(CliError(
-                "--no-skeleton-filter is the paper pipeline's ablation: add --method paper".into(),
-            ));
-        }
+        // The library's rules, checked before any file is read; the message names the flags.
+        o.check().map_err(|e| CliError(flag_message(e)))?;
         Ok(Pipeline::new(o))
+    }
+}
+
+/// A refused option in the words of the command line: the flag, and what it needs.
+fn flag_message(e: OptionError) -> String {
+    match e {
+        OptionError::NoSamples => "--samples must be at least 1".into(),
+        OptionError::NoCandidates => "--candidates must be at least 1".into(),
+        OptionError::CandidateThreshold(t) => format!("--threshold {t}: must be a factor ≥ 1"),
+        OptionError::BaseRadius(r) => format!("--base-radius {r}: must be positive"),
+        OptionError::TooFewEigenpairs(k) => format!("--eigenpairs {k}: need at least 2"),
+        OptionError::AblationNeedsPaper => {
+            "--no-skeleton-filter is the paper pipeline's ablation: add --method paper".into()
+        }
+        other => other.to_string(),
     }
 }
 
