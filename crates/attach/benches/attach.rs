@@ -1,5 +1,7 @@
 //! Attachment (alignment + refinement + bone heat + labels) on the 13,380-vertex synth body.
 
+#![allow(missing_docs)] // criterion_group! generates undocumented public functions
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::path::Path;
 use symcorr_attach::{attach, AttachOptions, Joint, Skeleton};

@@ -11,47 +11,84 @@ pub enum KinectError {
     /// The file could not be opened, read or written.
     #[error("{file}: {source}")]
     Io {
+        /// The file (`<memory>` for in-memory input).
         file: String,
+        /// The underlying error.
         #[source]
         source: std::io::Error,
     },
     /// A text file (Kinect SDK text dump, NTU `.skeleton`) is malformed at a line (1-based).
     #[error("{file}:{line}: {message}")]
     Parse {
+        /// The file (`<memory>` for in-memory input).
         file: String,
+        /// The line (1-based).
         line: usize,
+        /// What is wrong.
         message: String,
     },
     /// A JSON file is not valid JSON or does not have the expected shape.
     #[error("{file}: {message}")]
-    Json { file: String, message: String },
+    Json {
+        /// The file (`<memory>` for in-memory input).
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A frame of a joint file is invalid (missing or non-finite joint, bad confidence, ...).
     #[error("{file}: frame {frame}: {message}")]
     Frame {
+        /// The file (`<memory>` for in-memory input).
         file: String,
+        /// The frame (0-based).
         frame: usize,
+        /// What is wrong.
         message: String,
     },
     /// A `symcorr.joints/1` file names a skeleton this crate does not know.
     #[error(
         "{file}: unknown skeleton {name:?}; expected \"kinect_v1\", \"nite\" or \"kinect_v2\""
     )]
-    UnknownSkeleton { file: String, name: String },
+    UnknownSkeleton {
+        /// The file (`<memory>` for in-memory input).
+        file: String,
+        /// The skeleton name found.
+        name: String,
+    },
     /// The joint file format could not be recognised from the content.
     #[error("{file}: unrecognised joint file format: {message}")]
-    UnknownFormat { file: String, message: String },
+    UnknownFormat {
+        /// The file (`<memory>` for in-memory input).
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// No usable frame: the file has no frames, or no frame has the requested/any body.
     #[error("{file}: {message}")]
-    NoBody { file: String, message: String },
+    NoBody {
+        /// The file (`<memory>` for in-memory input).
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A PNG depth image is malformed or not 16-bit greyscale.
     #[error("{file}: {message}")]
-    Png { file: String, message: String },
+    Png {
+        /// The file (`<memory>` for in-memory input).
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A depth frame does not match the size its intrinsics (or the call) expect.
     #[error("depth frame is {width}x{height} with {values} values, expected {expected}")]
     DepthSize {
+        /// Frame width in pixels.
         width: u32,
+        /// Frame height in pixels.
         height: u32,
+        /// Number of depth values given.
         values: usize,
+        /// What was expected.
         expected: String,
     },
     /// Invalid camera intrinsics.
@@ -69,8 +106,11 @@ pub enum KinectError {
     /// An OpenNI2 call failed; `message` is OpenNI2's extended error text (`oniGetExtendedError`).
     #[error("OpenNI2 {call} failed (status {status}): {message}")]
     OpenNi {
+        /// The OpenNI2 function.
         call: String,
+        /// Its status code.
         status: i32,
+        /// What is wrong.
         message: String,
     },
 }

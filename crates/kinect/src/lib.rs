@@ -55,6 +55,7 @@ pub mod joints;
 pub mod mapping;
 pub mod ntu;
 #[cfg(feature = "openni2")]
+#[allow(unsafe_code)] // the OpenNI2 C API: every call is wrapped and checked in this module
 pub mod openni2;
 pub mod replay;
 pub mod scan;

@@ -10,64 +10,104 @@ use thiserror::Error;
 pub enum MeshError {
     /// No vertices or no triangles.
     #[error("empty mesh: {vertices} vertices, {triangles} triangles")]
-    Empty { vertices: usize, triangles: usize },
+    Empty {
+        /// Number of vertices.
+        vertices: usize,
+        /// Number of triangles.
+        triangles: usize,
+    },
     /// A coordinate is NaN or infinite.
     #[error("vertex {vertex} has a non-finite coordinate")]
-    NonFinite { vertex: usize },
+    NonFinite {
+        /// The vertex (0-based).
+        vertex: usize,
+    },
     /// A triangle refers to a vertex that does not exist.
     #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertices} vertices")]
     IndexOutOfRange {
+        /// The triangle (0-based).
         triangle: usize,
+        /// The vertex id it names.
         index: usize,
+        /// Number of vertices.
         vertices: usize,
     },
     /// The file could not be opened, read, or written.
     #[error("{file}: {source}")]
     Io {
+        /// The file (`<memory>` for bytes).
         file: String,
+        /// The underlying error.
         #[source]
         source: std::io::Error,
     },
     /// A text file (OFF, OBJ, PLY header or ascii body) is malformed at a line (1-based).
     #[error("{file}:{line}: {message}")]
     Parse {
+        /// The file (`<memory>` for bytes).
         file: String,
+        /// The line (1-based).
         line: usize,
+        /// What is wrong.
         message: String,
     },
     /// A binary or structured file (binary PLY, glTF/GLB) is malformed at an element.
     #[error("{file}: {element}: {message}")]
     Malformed {
+        /// The file (`<memory>` for bytes).
         file: String,
+        /// The element (`vertex 12`, `face 3`, `accessor 2`, `byte 1024`).
         element: String,
+        /// What is wrong.
         message: String,
     },
     /// The file extension names no supported mesh format.
     #[error(
         "{file}: unrecognised mesh format (extension {extension:?}); expected .off, .obj, .ply, .gltf or .glb"
     )]
-    UnknownFormat { file: String, extension: String },
+    UnknownFormat {
+        /// The file (`<memory>` for bytes).
+        file: String,
+        /// The extension found.
+        extension: String,
+    },
     /// A mesh read from a file is invalid as a whole (empty, non-finite, index out of range).
     #[error("{file}: {source}")]
     InFile {
+        /// The file (`<memory>` for bytes).
         file: String,
+        /// The underlying error.
         #[source]
         source: Box<MeshError>,
     },
     /// The number of per-vertex colours does not match the number of vertices.
     #[error("{colors} colours given for {vertices} vertices")]
-    ColorCount { colors: usize, vertices: usize },
+    ColorCount {
+        /// Number of colours given.
+        colors: usize,
+        /// Number of vertices.
+        vertices: usize,
+    },
     /// A coordinate cannot be stored in the output format (glTF positions are 32-bit floats).
     #[error("vertex {vertex}: coordinate {value} does not fit a 32-bit float ({format} stores positions as f32)")]
     NotRepresentable {
+        /// The vertex (0-based).
         vertex: usize,
+        /// The coordinate.
         value: f64,
+        /// The output format.
         format: &'static str,
     },
     /// A repair removed every triangle (e.g. all of them were degenerate).
     #[error("repair left no triangles: {reason}")]
-    NothingLeft { reason: String },
+    NothingLeft {
+        /// Why nothing is left.
+        reason: String,
+    },
     /// A result would have more vertices than 32-bit vertex ids can name.
     #[error("{vertices} vertices do not fit 32-bit vertex ids")]
-    TooLarge { vertices: usize },
+    TooLarge {
+        /// Number of vertices.
+        vertices: usize,
+    },
 }

@@ -4,6 +4,8 @@
 //! (icosahedron, each face split 100×100, projected, then stretched and bumped so the spectrum
 //! has no symmetric multiplicities) from `symcorr_spectral::testmesh`.
 
+#![allow(missing_docs)] // criterion_group! generates undocumented public functions
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use std::time::Duration;

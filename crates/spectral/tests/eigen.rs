@@ -1,3 +1,6 @@
+//! The eigensolver against known spectra (the sphere's l(l+1) with multiplicities), deflation of
+//! components, restarts, and its errors.
+
 mod common;
 
 use common::*;

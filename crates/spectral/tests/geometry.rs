@@ -1,3 +1,6 @@
+//! Curvature (Gauss–Bonnet on spheres, disks and the body) and geodesics (Dijkstra against
+//! Euclidean bounds and the heat method) on meshes with known answers.
+
 mod common;
 
 use common::*;

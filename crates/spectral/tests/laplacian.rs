@@ -1,3 +1,6 @@
+//! Cotan Laplacian and mass matrix invariants, the Dirichlet energy of linear functions, and the
+//! sparse factorisation.
+
 mod common;
 
 use common::*;

@@ -470,10 +470,20 @@ fn evaluate_partial(
 /// Progress events of [`run_bench`].
 #[derive(Debug, Clone, Copy)]
 pub enum Progress {
-    /// Preparing meshes: `done` of `total`.
-    Prepared { done: usize, total: usize },
-    /// Matching pairs: `done` of `total`.
-    Matched { done: usize, total: usize },
+    /// Preparing meshes.
+    Prepared {
+        /// Meshes prepared so far.
+        done: usize,
+        /// Meshes to prepare.
+        total: usize,
+    },
+    /// Matching pairs.
+    Matched {
+        /// Pairs matched so far.
+        done: usize,
+        /// Pairs to match.
+        total: usize,
+    },
 }
 
 /// Runs every pair of `dataset` with `pipeline`: prepares each mesh once, matches the pairs in

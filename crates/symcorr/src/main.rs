@@ -54,6 +54,7 @@ fn main() -> ExitCode {
 /// Rust ignores SIGPIPE, so `symcorr spectrum … | head` would make `println!` panic on the closed
 /// pipe. Restore the default action: the process ends quietly when its reader goes away, like
 /// every other Unix filter.
+#[allow(unsafe_code)] // one libc call, see SAFETY below
 fn restore_sigpipe() {
     #[cfg(unix)]
     // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid handler.

@@ -1,4 +1,6 @@
 //! Posing and rendering speed on the 13,380-vertex body.
+#![allow(missing_docs)] // criterion_group! generates undocumented public functions
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use symcorr_synth::render::{render, Camera, Realism};
 use symcorr_synth::{poses::named_pose, Assets, Model, Shape};
