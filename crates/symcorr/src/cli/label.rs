@@ -276,4 +276,45 @@ mod tests {
             assert!(!out2.exists(), "{format}");
         }
     }
+
+    #[test]
+    fn generate_labels_golden() {
+        let dir = tempfile::tempdir().unwrap();
+        let sk = symcorr_attach::testbody::t_pose(1.0);
+        let (mesh, _) = symcorr_attach::testbody::capsule_body(&sk, 0.08);
+        let mesh_path = dir.path().join("body.ply");
+        symcorr_mesh::io::write(&mesh_path, &mesh, None).unwrap();
+        let mut joints = Map::new();
+        for j in Joint::ALL {
+            joints.insert(j.name().into(), json!(sk.position(j)));
+        }
+        let jdoc = json!({"format": "symcorr.joints/1", "skeleton": "kinect_v1", "units": "m",
+                          "frames": [{"time_s": 0.0, "joints": joints}]});
+        let joints_path = dir.path().join("body.json");
+        std::fs::write(&joints_path, jdoc.to_string()).unwrap();
+        let golden = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/formats");
+        for (name, weights, boundaries) in [
+            ("labels_weights", true, Boundaries::JointPlanes),
+            ("labels_makehuman", false, Boundaries::Makehuman),
+        ] {
+            let out = dir.path().join("labels.json");
+            run(LabelArgs {
+                mesh: mesh_path.clone(),
+                joints: joints_path.clone(),
+                out: out.clone(),
+                frame: None,
+                joints_format: None,
+                ply: None,
+                glb: None,
+                weights,
+                refuse_mirrored: false,
+                boundaries,
+            })
+            .unwrap();
+            let text = std::fs::read_to_string(&out).unwrap();
+            let quoted = serde_json::to_string(&mesh_path.display().to_string()).unwrap();
+            let text = text.replace(&quoted, "\"body.ply\"");
+            std::fs::write(golden.join(format!("{name}.json")), text).unwrap();
+        }
+    }
 }
