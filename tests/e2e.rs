@@ -7,7 +7,7 @@
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use symcorr_correspond::{evaluate, EvalGraph};
+use symcorr_eval::{evaluate, EvalGraph};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_symcorr"))
