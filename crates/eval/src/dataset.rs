@@ -523,3 +523,84 @@ fn evaluate_partial(
     let evaluation = evaluate(graph, template.area, &pairs, |p| p, mirror.as_deref());
     (evaluation, confidence)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dataset folder with meshes/joints for `names` (contents are not read by `open`).
+    fn folder(names: &[&str], pairs: &str) -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        for sub in ["meshes", "joints"] {
+            std::fs::create_dir(dir.path().join(sub)).unwrap();
+        }
+        for n in names {
+            std::fs::write(dir.path().join(format!("meshes/{n}.off")), "").unwrap();
+            std::fs::write(dir.path().join(format!("meshes/{n}.obj")), "").unwrap();
+            std::fs::write(dir.path().join(format!("joints/{n}.json")), "").unwrap();
+        }
+        std::fs::write(dir.path().join("pairs.txt"), pairs).unwrap();
+        dir
+    }
+
+    fn message(e: EvalError) -> String {
+        e.to_string()
+    }
+
+    #[test]
+    fn open_reads_pairs_and_prefers_off() {
+        let dir = folder(&["a", "b"], "# comment\n\na b\nb a # back\n");
+        let ds = Dataset::open(dir.path(), None).unwrap();
+        assert_eq!(ds.pairs.len(), 2);
+        assert_eq!(ds.used_names(), ["a", "b"]);
+        assert!(ds.meshes["a"].ends_with("meshes/a.off"));
+        assert!(ds.mirror.is_none() && ds.truth.is_empty());
+    }
+
+    #[test]
+    fn bad_folders_name_the_file_and_the_line() {
+        let dir = folder(&["a", "b"], "a b\na c\n");
+        let e = message(Dataset::open(dir.path(), None).unwrap_err());
+        assert!(e.contains("pairs.txt: line 2: no mesh meshes/c."), "{e}");
+        let dir = folder(&["a", "b"], "a b c\n");
+        let e = message(Dataset::open(dir.path(), None).unwrap_err());
+        assert!(e.contains("line 1: expected `template target`"), "{e}");
+        let dir = folder(&["a", "b"], "# nothing\n");
+        let e = message(Dataset::open(dir.path(), None).unwrap_err());
+        assert!(e.ends_with("pairs.txt: no pairs"), "{e}");
+        let dir = folder(&["a", "b"], "a b\n");
+        std::fs::write(dir.path().join("mirror.txt"), "1\n0\n5\n").unwrap();
+        let e = message(Dataset::open(dir.path(), None).unwrap_err());
+        assert!(
+            e.contains("mirror.txt: entry 2: vertex 5 out of range"),
+            "{e}"
+        );
+        std::fs::write(dir.path().join("mirror.txt"), "1\nx\n").unwrap();
+        let e = message(Dataset::open(dir.path(), None).unwrap_err());
+        assert!(e.contains("mirror.txt: line 2: not a vertex index"), "{e}");
+    }
+
+    #[test]
+    fn check_pair_compares_vertex_counts_truth_and_mirror() {
+        let dir = folder(&["a", "b"], "a b\n");
+        std::fs::write(dir.path().join("mirror.txt"), "1\n0\n").unwrap();
+        std::fs::create_dir(dir.path().join("truth")).unwrap();
+        std::fs::write(dir.path().join("truth/b.txt"), "1\n-1\n0\n").unwrap();
+        let ds = Dataset::open(dir.path(), None).unwrap();
+        let truth = read_truth(&ds.truth["b"]).unwrap();
+        assert_eq!(truth, [Some(1), None, Some(0)]);
+        ds.check_pair(("a", "b"), (2, 3), Some(&truth)).unwrap();
+        let e = message(ds.check_pair(("a", "b"), (2, 4), Some(&truth)).unwrap_err());
+        assert!(e.contains("b.txt: 3 lines, meshes/b has 4 vertices"), "{e}");
+        let e = message(ds.check_pair(("a", "b"), (2, 3), None).unwrap_err());
+        assert!(e.contains("pair a b: 2 and 3 vertices"), "{e}");
+        let e = message(ds.check_pair(("a", "b"), (1, 3), Some(&truth)).unwrap_err());
+        assert!(e.contains("an id ≥ 1"), "{e}");
+        let e = message(ds.check_pair(("a", "b"), (3, 3), None).unwrap_err());
+        assert!(e.contains("mirror.txt: 2 entries"), "{e}");
+        // A template with a truth table is refused when the folder is opened.
+        std::fs::write(dir.path().join("truth/a.txt"), "0\n").unwrap();
+        let e = message(Dataset::open(dir.path(), None).unwrap_err());
+        assert!(e.contains("a is a template"), "{e}");
+    }
+}
