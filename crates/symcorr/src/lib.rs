@@ -18,7 +18,7 @@
 //!   [`Method::Refined`]: skeleton landmark coordinates + si-HKS within segment pools, then
 //!   segment-constrained ZoomOut. [`Method::Paper`]: the paper's si-HKS candidates, skeleton
 //!   filter and eq. 8 selection (DESIGN.md, Algorithms 1–6).
-//! * [`io`] reads the input meshes and joint files; [`bench`] runs a benchmark folder in
+//! * [`io`] reads the input meshes and joint files; [`bench`](mod@bench) runs a benchmark folder in
 //!   DESIGN.md's layout and scores it with symcorr-eval; [`output`] writes the
 //!   `symcorr.correspondence/1` JSON ([`formats`]), coloured meshes and the error-curve plot;
 //!   [`cache`] keeps eigenpairs on disk between runs.
