@@ -7,7 +7,8 @@
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use symcorr_correspond::{evaluate, EvalGraph};
+use symcorr::formats::CorrespondenceFile;
+use symcorr_eval::{evaluate, EvalGraph};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_symcorr"))
@@ -147,13 +148,11 @@ fn fixture_pair_matches_under_thresholds() {
             assert!(summary["timings_s"]["eigenpairs"].as_f64().unwrap() > 0.0);
             assert_eq!(summary["files"][0], out.display().to_string());
         }
-        let corr = read_json(&out);
-        let pairs: Vec<(u32, u32)> = corr["pairs"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|p| (p[0].as_u64().unwrap() as u32, p[1].as_u64().unwrap() as u32))
-            .collect();
+        // Read back through the typed format.
+        let corr = CorrespondenceFile::read(&out).unwrap();
+        assert_eq!(corr.format, "symcorr.correspondence/1");
+        assert!(corr.no_counterpart.is_none());
+        let pairs: Vec<(u32, u32)> = corr.pairs.iter().map(|&(p, q, _)| (p, q)).collect();
         assert_eq!(pairs.len(), 300);
         let target = symcorr_mesh::io::read(mesh(b)).unwrap().mesh;
         let m = mirror();
@@ -286,8 +285,8 @@ fn bench_writes_summary_pair_files_and_plot() {
     let w5 = s["within_0.05"].as_f64().unwrap();
     let w10 = s["within_0.10"].as_f64().unwrap();
     assert!(w5 <= w10 && w10 <= 1.0);
-    let corr = read_json(&out_dir.join("s1_rest__s1_arms-down.json"));
-    assert_eq!(corr["pairs"].as_array().unwrap().len(), 150);
+    let corr = CorrespondenceFile::read(&out_dir.join("s1_rest__s1_arms-down.json")).unwrap();
+    assert_eq!(corr.pairs.len(), 150);
     let svg = std::fs::read_to_string(out_dir.join("curve.svg")).unwrap();
     assert!(svg.contains("<polyline"));
     let stdout = String::from_utf8_lossy(&o.stdout);

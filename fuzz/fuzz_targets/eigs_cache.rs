@@ -1,5 +1,5 @@
 #![no_main]
-// The eigenpair cache parser (symcorr_spectral::cache::decode) on arbitrary bytes: it must
+// The eigenpair cache parser (symcorr::cache::decode) on arbitrary bytes: it must
 // return Ok or a typed error — never panic, hang or allocate beyond the input's size — and
 // whatever it accepts must encode back to exactly the same bytes (so nothing is read but what
 // is there). Three views of each input: the raw bytes; the bytes behind a valid magic and
@@ -9,7 +9,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use sha2::{Digest, Sha256};
-use symcorr_spectral::cache::{decode, encode, FORMAT_VERSION, MAGIC};
+use symcorr::cache::{decode, encode, FORMAT_VERSION, MAGIC};
 
 const HEADER: usize = 112;
 const SUM: usize = 32;

@@ -60,7 +60,6 @@ mod candidates;
 mod filter;
 mod kdtree;
 mod landmarks;
-mod metrics;
 mod refine;
 mod sample;
 mod selection;
@@ -73,9 +72,6 @@ pub use articulated::{
 pub use candidates::{candidates, Candidate, CandidateOptions, Descriptors};
 pub use filter::{sagittal_band, skeleton_filter, BandStats, FilterStats};
 pub use landmarks::{joint_landmarks, landmark_coordinates, skeleton_landmarks};
-pub use metrics::{
-    cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
-};
 pub use refine::{
     adjacent_segments, coverage, nearest_in_pools, refine_dense, zoomout, RefineOptions,
     RefineSide, RefinedMatches, SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult,

@@ -75,9 +75,9 @@ pub use scan::{fuse_depth_frames, scan_mesh, ScanMesh, ScanOptions};
 use std::path::Path;
 
 /// Writes `bytes` to `path` atomically (temporary file + rename) through the one owner of that,
-/// [`symcorr_mesh::io::write_file_atomic`].
+/// [`symcorr_mesh::io::atomic_write`], its I/O error as this crate's [`KinectError::Io`].
 pub(crate) fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), KinectError> {
-    symcorr_mesh::io::write_file_atomic(path, bytes).map_err(|e| match e {
+    symcorr_mesh::io::atomic_write(path, bytes).map_err(|e| match e {
         symcorr_mesh::MeshError::Io { file, source } => KinectError::io(&file, source),
         other => KinectError::io(
             &path.display().to_string(),

@@ -4,8 +4,9 @@
 //! # Data flow
 //! mesh → [`Laplacian`] (cotan stiffness `L`, PSD with `L·1 = 0`, and lumped barycentric mass
 //! `M`; the one owner of both) → [`eigenpairs`] of `L φ = λ M φ` (shift-invert block Lanczos on
-//! faer's sparse Cholesky, own blocked triangular solves and Gram–Schmidt; optionally cached on
-//! disk by [`cache`]) → descriptors [`hks`] and [`si_hks`] (Bronstein & Kokkinos 2010).
+//! faer's sparse Cholesky, own blocked triangular solves and Gram–Schmidt; the `symcorr`
+//! driver keeps them in an on-disk cache) → descriptors [`hks`] and [`si_hks`] (Bronstein &
+//! Kokkinos 2010).
 //! Beside them: [`gaussian_curvature`] (paper eq. 4), geodesics by
 //! [`dijkstra`] / [`EdgeGraph`] (paper eq. 5–6) and the heat method ([`HeatGeodesics`], on a
 //! prefactored [`SystemFactor`]), and the paper's [`base_vertex_set`] (§3.3).
@@ -41,13 +42,10 @@
 //!   infinitely far. Base-set radius in `√(total area)` units, its geodesics Dijkstra.
 //! * si-HKS defaults are the paper's absolute window (`t = 2^τ`, τ = 1..25 step 1/16, 6
 //!   frequencies); [`SiHksParams::area_relative`] is the window the pipeline uses.
-//! * The eigenpair cache uses a file only when its key (mesh bits, `k`, every [`EigenOptions`]
-//!   field, the Laplacian constants, [`cache::SOLVER_REVISION`]) and the mass match bit for bit.
 //!
 //! Measured: `docs/decisions/2026-11-23-eigensolver-shift-invert-block-lanczos.md` and
 //! `docs/decisions/2026-11-23-paper-pipeline-defaults.md` (si-HKS window).
 
-pub mod cache;
 mod curvature;
 mod descriptors;
 mod eigen;

@@ -18,8 +18,10 @@
 //!   [`Method::Refined`]: skeleton landmark coordinates + si-HKS within segment pools, then
 //!   segment-constrained ZoomOut. [`Method::Paper`]: the paper's si-HKS candidates, skeleton
 //!   filter and eq. 8 selection (DESIGN.md, Algorithms 1–6).
-//! * [`dataset`] runs a benchmark folder in DESIGN.md's layout; [`output`] writes the
-//!   `symcorr.correspondence/1` JSON, coloured meshes and the error-curve plot.
+//! * [`io`] reads the input meshes and joint files; [`bench`](mod@bench) runs a benchmark folder in
+//!   DESIGN.md's layout and scores it with symcorr-eval; [`output`] writes the
+//!   `symcorr.correspondence/1` JSON ([`formats`]), coloured meshes and the error-curve plot;
+//!   [`cache`] keeps eigenpairs on disk between runs.
 //!
 //! ```
 //! use symcorr::{Mode, Pipeline, PipelineOptions};
@@ -50,8 +52,11 @@
 //! midline halves ([`midline_halves`]; `2026-11-23-midline-halves-and-skull-plane.md`) and
 //! partial targets ([`PARTIAL_BOUNDARY_RATIO`]; `2026-11-23-partial-targets-scored-on-template.md`).
 
-pub mod dataset;
+pub mod bench;
+pub mod cache;
 pub mod figures;
+pub mod formats;
+pub mod io;
 pub mod output;
 mod pipeline;
 
@@ -106,6 +111,9 @@ pub enum PipelineError {
     /// The matching stages.
     #[error(transparent)]
     Correspond(#[from] symcorr_correspond::CorrespondError),
+    /// A benchmark dataset file (pairs file, mirror map, truth table; symcorr-eval).
+    #[error(transparent)]
+    Eval(#[from] symcorr_eval::EvalError),
     /// An option is out of range or does not fit the method ([`PipelineOptions::check`]).
     #[error("invalid option: {0}")]
     Option(#[from] OptionError),

@@ -1,26 +1,19 @@
-//! Output files: `symcorr.correspondence/1` JSON, match- and segment-coloured meshes, the
-//! cumulative error curve as SVG. Every file is written atomically (temporary file in the
-//! same directory, then rename), so a failure never leaves a half-written output.
+//! Output files: `symcorr.correspondence/1` and `symcorr.labels/1` JSON ([`crate::formats`]),
+//! match- and segment-coloured meshes, the cumulative error curve as SVG. Every file is written
+//! through [`symcorr_mesh::io::atomic_write`] (temporary file in the same directory, then
+//! rename), so a failure never leaves a half-written output.
 
-use crate::{Correspondence, PipelineError, PreparedMesh};
+use crate::formats::{
+    Alignment, Component, CorrespondenceFile, FilterCounts, JointMoveEntry, LabelDiagnostics,
+    LabelsFile, MeshPair, MeshRef, RepairedJoint, LABELS_FORMAT,
+};
+use crate::{Correspondence, PreparedMesh};
 use serde_json::{json, Value};
-use std::path::Path;
-use symcorr_attach::palette;
+use std::collections::BTreeMap;
+use symcorr_attach::{palette, Attachment};
+use symcorr_skeleton::{Joint, Segment, BONES};
 
-/// The `format` tag of correspondence files.
-pub const CORRESPONDENCE_FORMAT: &str = "symcorr.correspondence/1";
-
-/// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename)
-/// through the one owner of that, [`symcorr_mesh::io::write_file_atomic`].
-pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
-    symcorr_mesh::io::write_file_atomic(path, bytes).map_err(|e| PipelineError::File {
-        file: path.display().to_string(),
-        message: match e {
-            symcorr_mesh::MeshError::Io { source, .. } => source.to_string(),
-            other => other.to_string(),
-        },
-    })
-}
+pub use crate::formats::CORRESPONDENCE_FORMAT;
 
 /// Stage timings of a pair: each per-mesh stage summed over the two meshes, then the pair
 /// stages, in pipeline order.
@@ -50,7 +43,7 @@ pub fn correspondence_json(
     target: &PreparedMesh,
     corr: &Correspondence,
     timings: &[(String, f64)],
-) -> Value {
+) -> CorrespondenceFile {
     // Ids in the file are the input files' ids (the stages ran on the repaired meshes).
     // Template points a partial target does not show are listed apart, not as pairs.
     let seen = |i: usize| corr.has_counterpart().is_none_or(|h| h[i]);
@@ -61,47 +54,134 @@ pub fn correspondence_json(
         .filter(|&(i, _)| !seen(i))
         .map(|(_, m)| template.input_id(m.template))
         .collect();
-    let pairs: Vec<Value> = corr
+    let pairs = corr
         .pairs
         .iter()
         .enumerate()
         .filter(|&(i, _)| seen(i))
         .map(|(_, m)| {
-            json!([
+            (
                 template.input_id(m.template),
                 target.input_id(m.target),
-                round6(m.confidence)
-            ])
+                round6(m.confidence),
+            )
         })
         .collect();
     // One label per input vertex; `null` for a vertex the repair removed.
-    let labels = |p: &PreparedMesh| -> Vec<Value> {
-        let l: Vec<Value> = p.labels().iter().map(|s| json!(s.index())).collect();
-        p.to_input(&l, Value::Null)
+    let labels = |p: &PreparedMesh| -> Vec<Option<usize>> {
+        let l: Vec<Option<usize>> = p.labels().iter().map(|s| Some(s.index())).collect();
+        p.to_input(&l, None)
     };
-    let timings: serde_json::Map<String, Value> = timings
-        .iter()
-        .map(|(n, s)| (n.clone(), json!(round6(*s))))
-        .collect();
-    let mut doc = json!({
-        "format": CORRESPONDENCE_FORMAT,
-        "template": {"path": template_path, "vertices": template.input_mesh().num_vertices()},
-        "target": {"path": target_path, "vertices": target.input_mesh().num_vertices()},
-        "pairs": pairs,
-        "segments": {"template": labels(template), "target": labels(target)},
-        "skeleton_filter": {
-            "points": corr.filter_stats().points,
-            "kept": corr.filter_stats().kept,
-            "removed": corr.filter_stats().removed,
-            "fallbacks": corr.filter_stats().fallbacks,
-            "segment_missing": corr.filter_stats().segment_missing,
+    let mesh = |path: &str, p: &PreparedMesh| MeshRef {
+        path: path.to_string(),
+        vertices: p.input_mesh().num_vertices(),
+    };
+    let f = corr.filter_stats();
+    CorrespondenceFile {
+        format: CORRESPONDENCE_FORMAT.to_string(),
+        no_counterpart: corr.has_counterpart().map(|_| no_counterpart),
+        pairs,
+        segments: MeshPair {
+            target: labels(target),
+            template: labels(template),
         },
-        "timings_s": timings,
-    });
-    if corr.has_counterpart().is_some() {
-        doc["no_counterpart"] = json!(no_counterpart);
+        skeleton_filter: FilterCounts {
+            fallbacks: f.fallbacks,
+            kept: f.kept,
+            points: f.points,
+            removed: f.removed,
+            segment_missing: f.segment_missing,
+        },
+        target: mesh(target_path, target),
+        template: mesh(template_path, template),
+        timings_s: timings
+            .iter()
+            .map(|(n, s)| (n.clone(), round6(*s)))
+            .collect(),
     }
-    doc
+}
+
+/// The `symcorr.labels/1` document of `mesh_path` (with `vertices` vertices) and its attachment
+/// (DESIGN.md, Data formats). `boundaries` names the segment-boundary convention used
+/// (`"joint-planes"` or `"makehuman"`); `weights` adds the bones and the sparse bone-heat
+/// weights per vertex.
+pub fn labels_file(
+    mesh_path: &str,
+    vertices: usize,
+    attachment: &Attachment,
+    boundaries: &str,
+    weights: bool,
+) -> LabelsFile {
+    let att = attachment;
+    let d = &att.diagnostics;
+    let al = &d.alignment;
+    let joints: BTreeMap<String, [f64; 3]> = Joint::ALL
+        .iter()
+        .filter(|j| att.joints.confidence[j.index()] > 0.0 || att.joints.interpolated[j.index()])
+        .map(|&j| {
+            (
+                j.name().to_string(),
+                <[f64; 3]>::from(att.joints.position(j)),
+            )
+        })
+        .collect();
+    LabelsFile {
+        bones: weights.then(|| {
+            BONES
+                .iter()
+                .map(|b| format!("{}-{}", b.parent.name(), b.child.name()))
+                .collect()
+        }),
+        diagnostics: LabelDiagnostics {
+            alignment: Alignment {
+                fit_after: al.fit_after,
+                fit_before: al.fit_before,
+                rotation: al.rotation,
+                scale: al.scale,
+                translation: al.translation,
+            },
+            boundaries: boundaries.to_string(),
+            components: d
+                .components
+                .iter()
+                .map(|c| Component {
+                    fallback: c.fallback,
+                    vertices: c.vertices,
+                    visible_vertices: c.visible_vertices,
+                })
+                .collect(),
+            convention_changes: d.convention_changes,
+            joint_asymmetry: d.joint_asymmetry,
+            joint_moves: d
+                .joint_moves
+                .iter()
+                .map(|m| JointMoveEntry {
+                    distance: m.distance(),
+                    joint: m.joint.name().to_string(),
+                    reason: m.reason.to_string(),
+                })
+                .collect(),
+            mirrored_fixed: d.mirror.swapped,
+            nearest_bone_vertices: d.nearest_bone_vertices,
+            repaired_joints: d
+                .repaired_joints
+                .iter()
+                .map(|(j, r)| RepairedJoint {
+                    joint: j.name().to_string(),
+                    repair: format!("{r:?}").to_lowercase(),
+                })
+                .collect(),
+        },
+        format: LABELS_FORMAT.to_string(),
+        joints,
+        labels: att.labels.iter().map(|s| s.index()).collect(),
+        mesh: MeshRef {
+            path: mesh_path.to_string(),
+            vertices,
+        },
+        segments: Segment::ALL.iter().map(|s| s.name().to_string()).collect(),
+        weights: weights.then(|| (0..vertices).map(|v| att.weights.row(v).to_vec()).collect()),
+    }
 }
 
 /// The repair report as JSON (stable keys; counts refer to the input mesh).
@@ -312,16 +392,5 @@ mod tests {
         assert_eq!(s.matches("<polyline").count(), 2);
         assert!(s.contains("a&lt;b") && s.contains("t &amp; u"));
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
-    }
-
-    #[test]
-    fn atomic_write_leaves_nothing_on_failure() {
-        let dir = tempfile::tempdir().unwrap();
-        let bad = dir.path().join("missing-dir").join("x.json");
-        assert!(atomic_write(&bad, b"{}").is_err());
-        let good = dir.path().join("x.json");
-        atomic_write(&good, b"{}").unwrap();
-        assert_eq!(std::fs::read(&good).unwrap(), b"{}");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }

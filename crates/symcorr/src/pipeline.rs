@@ -78,12 +78,12 @@ pub struct PrepareOptions {
     /// Half-width of the band around the skeleton's sagittal plane in which a midline vertex
     /// gets no half ([`midline_halves`]), in units of √area.
     pub midline_margin: f64,
-    /// Keep the eigenpairs on disk and reuse them ([`symcorr_spectral::cache`]): `None` (the
+    /// Keep the eigenpairs on disk and reuse them ([`crate::cache`]): `None` (the
     /// default) always runs the eigensolver. A file is used only if it was written for exactly
     /// this (repaired) mesh, eigenpair count and solver setting; a stale, corrupted or unreadable
     /// file is recomputed and rewritten (the policy's observer hears about it), never used.
     /// On a hit the `eigenpairs` timing is named `eigenpairs_cached`.
-    pub cache: Option<symcorr_spectral::cache::CachePolicy>,
+    pub cache: Option<crate::cache::CachePolicy>,
 }
 
 /// Default eigenpair count: 60. On the generated bodies 100 changed the mean error by < 0.003
@@ -1058,7 +1058,7 @@ fn run_paper(
 mod tests {
     use super::*;
     use symcorr_attach::testbody::{capsule_body, t_pose};
-    use symcorr_correspond::{evaluate, EvalGraph};
+    use symcorr_eval::{evaluate, EvalGraph};
 
     /// The capsule body against a stretched, jittered copy of itself (same connectivity, so
     /// the identity is the truth). The body is left/right symmetric, so the descriptors cannot
@@ -1161,7 +1161,15 @@ mod tests {
         let b = pipeline.prepare(mesh, &sk).unwrap();
         assert!(b.input.is_none(), "a clean mesh is not copied");
         let corr = pipeline.run(&a, &b).unwrap();
-        let doc = crate::output::correspondence_json("a", &a, "b", &b, &corr, &[]);
+        let doc = serde_json::to_value(crate::output::correspondence_json(
+            "a",
+            &a,
+            "b",
+            &b,
+            &corr,
+            &[],
+        ))
+        .unwrap();
         assert_eq!(doc["template"]["vertices"], n + 1);
         assert_eq!(doc["target"]["vertices"], n);
         let labels = doc["segments"]["template"].as_array().unwrap();

@@ -4,10 +4,10 @@
 
 use std::path::Path;
 use std::sync::{Arc, Mutex};
+use symcorr::cache::{CacheLocation, CacheOutcome, CachePolicy};
 use symcorr::{Method, PrepareOptions, PreparedMesh};
 use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_mesh::TriMesh;
-use symcorr_spectral::cache::{CacheLocation, CacheOutcome, CachePolicy};
 
 /// What the policy's observer saw: (hit, warning) per preparation.
 type Log = Arc<Mutex<Vec<(bool, Option<String>)>>>;

@@ -5,13 +5,14 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::dataset::{read_mesh, read_skeleton, Dataset};
+use symcorr::io::{read_mesh, read_skeleton};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_attach::{Joint, Segment};
 use symcorr_correspond::{
-    candidates, evaluate, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
-    EvalGraph, MatchOptions,
+    candidates, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
+    MatchOptions,
 };
+use symcorr_eval::{evaluate, Dataset, EvalGraph};
 
 struct Mesh {
     p: PreparedMesh,

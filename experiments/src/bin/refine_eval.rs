@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Segment, Skeleton};
 use symcorr_correspond::*;
+use symcorr_eval::{evaluate, EvalGraph};
 use symcorr_mesh::TriMesh;
 use symcorr_spectral::*;
 

@@ -271,7 +271,7 @@ pub fn write_with(
             source: Box::new(e),
         }
     })?;
-    write_file_atomic(path, &bytes)
+    atomic_write(path, &bytes)
 }
 
 /// Encodes a mesh in memory in the given format.
@@ -300,17 +300,21 @@ pub fn write_to_bytes(
 
 /// Writes `bytes` to a temporary file next to `path`, syncs it, then renames it over `path`, so
 /// that a failure never leaves a half-written `path`. Every output file of symcorr (meshes, joint
-/// logs, depth frames, correspondence JSON, plots) goes through this one function.
+/// logs, depth frames, correspondence and label JSON, plots, the eigenpair cache) goes through
+/// this one function.
+///
+/// Errors: [`MeshError::Io`] naming `path` (directory missing or not writable, disk full, …);
+/// the temporary file is removed on every error.
 ///
 /// ```
 /// let dir = tempfile::tempdir().unwrap();
 /// let path = dir.path().join("note.txt");
-/// symcorr_mesh::io::write_file_atomic(&path, b"hello").unwrap();
+/// symcorr_mesh::io::atomic_write(&path, b"hello").unwrap();
 /// assert_eq!(std::fs::read(&path).unwrap(), b"hello");
 /// // A directory that does not exist: an error naming the file, and nothing written.
-/// assert!(symcorr_mesh::io::write_file_atomic(&dir.path().join("no/such.txt"), b"x").is_err());
+/// assert!(symcorr_mesh::io::atomic_write(&dir.path().join("no/such.txt"), b"x").is_err());
 /// ```
-pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
     use std::io::Write;
     let io_err = |source| MeshError::Io {
         file: path.display().to_string(),

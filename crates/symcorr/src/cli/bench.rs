@@ -6,9 +6,11 @@ use super::progress::Bar;
 use super::CliError;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
-use symcorr::dataset::{run_bench, BenchReport, Dataset, Progress};
-use symcorr::output::{atomic_write, correspondence_json, curve_svg};
+use symcorr::bench::{run_bench, BenchReport, Progress};
+use symcorr::output::{correspondence_json, curve_svg};
 use symcorr::Pipeline;
+use symcorr_eval::Dataset;
+use symcorr_mesh::io::atomic_write;
 
 /// Sparse or dense matching.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -179,8 +181,7 @@ pub fn write_pair_files(
             &symcorr::output::pair_timings(a, b, &p.correspondence),
         );
         let path = dir.join(format!("{}__{}.json", p.template, p.target));
-        let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-        atomic_write(&path, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+        atomic_write(&path, doc.to_json().as_bytes()).map_err(|e| CliError(e.to_string()))?;
     }
     Ok(())
 }

@@ -8,10 +8,12 @@ use super::CliError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::dataset::{evaluate_pair, read_mesh, read_skeleton, BenchReport, Dataset, PairResult};
-use symcorr::output::{atomic_write, correspondence_json, curve_svg, pair_timings};
+use symcorr::bench::{evaluate_pair, BenchReport, PairResult};
+use symcorr::io::{read_mesh, read_skeleton};
+use symcorr::output::{correspondence_json, curve_svg, pair_timings};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions};
-use symcorr_correspond::{cumulative_curve, table1_row, EvalGraph};
+use symcorr_eval::{cumulative_curve, table1_row, Dataset, EvalGraph};
+use symcorr_mesh::io::atomic_write;
 
 /// Arguments of `symcorr demo`.
 #[derive(clap::Args, Debug)]
@@ -146,8 +148,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         &main.correspondence,
         &pair_timings(&a, &b, &main.correspondence),
     );
-    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    atomic_write(&corr_path, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    atomic_write(&corr_path, doc.to_json().as_bytes()).map_err(|e| CliError(e.to_string()))?;
     files.push(corr_path);
     files.extend(write_coloured(&args.out, &a, &b, &main.correspondence)?);
     let curves: Vec<(String, Vec<(f64, f64)>)> = results

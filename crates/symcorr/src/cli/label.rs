@@ -3,12 +3,11 @@
 //! `symcorr.labels/1` plus optional segment-coloured meshes (fixed 17-colour palette).
 
 use super::CliError;
-use serde_json::{json, Map, Value};
 use std::path::PathBuf;
-use symcorr::dataset::{read_mesh, read_skeleton_as};
-use symcorr::output::atomic_write;
+use symcorr::io::{read_mesh, read_skeleton_as};
+use symcorr::output::labels_file;
 use symcorr_attach::{attach, palette, AttachOptions};
-use symcorr_skeleton::{Joint, Segment, BONES};
+use symcorr_mesh::io::atomic_write;
 
 /// Arguments of `symcorr label`.
 #[derive(clap::Args)]
@@ -82,68 +81,20 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
             a.joints.display()
         ))
     })?;
+    let boundaries = match a.boundaries {
+        Boundaries::JointPlanes => "joint-planes",
+        Boundaries::Makehuman => "makehuman",
+    };
+    let doc = labels_file(
+        &a.mesh.display().to_string(),
+        mesh.num_vertices(),
+        &att,
+        boundaries,
+        a.weights,
+    );
+    atomic_write(&a.out, doc.to_json().as_bytes()).map_err(|e| CliError(e.to_string()))?;
     let d = &att.diagnostics;
-    let mut joints = Map::new();
-    for j in Joint::ALL {
-        if att.joints.confidence[j.index()] > 0.0 || att.joints.interpolated[j.index()] {
-            joints.insert(
-                j.name().into(),
-                json!(<[f64; 3]>::from(att.joints.position(j))),
-            );
-        }
-    }
     let al = &d.alignment;
-    let mut doc = json!({
-        "format": "symcorr.labels/1",
-        "mesh": {"path": a.mesh.display().to_string(), "vertices": mesh.num_vertices()},
-        "segments": Segment::ALL.iter().map(|s| s.name()).collect::<Vec<_>>(),
-        "labels": att.labels.iter().map(|s| s.index()).collect::<Vec<_>>(),
-        "joints": joints,
-        "diagnostics": {
-            "alignment": {"scale": al.scale, "rotation": al.rotation, "translation": al.translation,
-                          "fit_before": al.fit_before, "fit_after": al.fit_after},
-            "mirrored_fixed": d.mirror.swapped,
-            "repaired_joints": d.repaired_joints.iter()
-                .map(|(j, r)| json!({"joint": j.name(), "repair": format!("{r:?}").to_lowercase()}))
-                .collect::<Vec<_>>(),
-            "joint_moves": d.joint_moves.iter()
-                .map(|m| json!({"joint": m.joint.name(), "distance": m.distance(), "reason": m.reason}))
-                .collect::<Vec<_>>(),
-            "components": d.components.iter()
-                .map(|c| json!({"vertices": c.vertices, "visible_vertices": c.visible_vertices,
-                                "fallback": c.fallback}))
-                .collect::<Vec<_>>(),
-            "nearest_bone_vertices": d.nearest_bone_vertices,
-            // Where neighbouring segments end (`--boundaries`), what that moved, and the
-            // joints' left/right asymmetry (≈ their noise, mesh units).
-            "boundaries": match a.boundaries {
-                Boundaries::JointPlanes => "joint-planes",
-                Boundaries::Makehuman => "makehuman",
-            },
-            "convention_changes": d.convention_changes,
-            "joint_asymmetry": d.joint_asymmetry,
-        },
-    });
-    if a.weights {
-        let bones: Vec<String> = BONES
-            .iter()
-            .map(|b| format!("{}-{}", b.parent.name(), b.child.name()))
-            .collect();
-        let rows: Vec<Value> = (0..mesh.num_vertices())
-            .map(|v| {
-                json!(att
-                    .weights
-                    .row(v)
-                    .iter()
-                    .map(|&(b, w)| json!([b, w]))
-                    .collect::<Vec<_>>())
-            })
-            .collect();
-        doc["bones"] = json!(bones);
-        doc["weights"] = Value::Array(rows);
-    }
-    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    atomic_write(&a.out, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
     let colours: Vec<[u8; 3]> = att.labels.iter().map(|&s| palette::colour(s)).collect();
     for path in [&a.ply, &a.glb].into_iter().flatten() {
         symcorr_mesh::io::write(path, &mesh, Some(&colours))
@@ -164,6 +115,8 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::{json, Map, Value};
+    use symcorr_skeleton::Joint;
 
     #[test]
     fn label_writes_json_and_coloured_meshes() {
@@ -274,6 +227,53 @@ mod tests {
             .unwrap();
             assert!(!e.to_string().contains('\n'), "{e}");
             assert!(!out2.exists(), "{format}");
+        }
+    }
+
+    #[test]
+    fn labels_files_match_the_golden_files_byte_for_byte() {
+        let dir = tempfile::tempdir().unwrap();
+        let sk = symcorr_attach::testbody::t_pose(1.0);
+        let (mesh, _) = symcorr_attach::testbody::capsule_body(&sk, 0.08);
+        let mesh_path = dir.path().join("body.ply");
+        symcorr_mesh::io::write(&mesh_path, &mesh, None).unwrap();
+        let mut joints = Map::new();
+        for j in Joint::ALL {
+            joints.insert(j.name().into(), json!(sk.position(j)));
+        }
+        let jdoc = json!({"format": "symcorr.joints/1", "skeleton": "kinect_v1", "units": "m",
+                          "frames": [{"time_s": 0.0, "joints": joints}]});
+        let joints_path = dir.path().join("body.json");
+        std::fs::write(&joints_path, jdoc.to_string()).unwrap();
+        let golden =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/formats");
+        for (name, weights, boundaries) in [
+            ("labels_weights", true, Boundaries::JointPlanes),
+            ("labels_makehuman", false, Boundaries::Makehuman),
+        ] {
+            let out = dir.path().join("labels.json");
+            run(LabelArgs {
+                mesh: mesh_path.clone(),
+                joints: joints_path.clone(),
+                out: out.clone(),
+                frame: None,
+                joints_format: None,
+                ply: None,
+                glb: None,
+                weights,
+                refuse_mirrored: false,
+                boundaries,
+            })
+            .unwrap();
+            let text = std::fs::read_to_string(&out).unwrap();
+            let quoted = serde_json::to_string(&mesh_path.display().to_string()).unwrap();
+            let text = text.replace(&quoted, "\"body.ply\"");
+            // Written by the json!-built writer this one replaced, from the same inputs.
+            let expected = std::fs::read_to_string(golden.join(format!("{name}.json"))).unwrap();
+            assert_eq!(text, expected, "{name}");
+            let back = symcorr::formats::LabelsFile::read(&out).unwrap();
+            assert_eq!(back.weights.is_some(), weights);
+            assert_eq!(back.labels.len(), mesh.num_vertices());
         }
     }
 }

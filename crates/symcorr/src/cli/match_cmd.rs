@@ -4,14 +4,14 @@
 use super::CliError;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::dataset::{read_mesh, read_skeleton_as};
+use symcorr::cache::{CacheLocation, CachePolicy};
+use symcorr::io::{read_mesh, read_skeleton_as};
 use symcorr::output::{
-    atomic_write, correspondence_json, input_colours, match_colours, pair_timings, repair_json,
-    segment_colours,
+    correspondence_json, input_colours, match_colours, pair_timings, repair_json, segment_colours,
 };
 use symcorr::{figures, Mode, OptionError, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_correspond::CandidateOptions;
-use symcorr_spectral::cache::{CacheLocation, CachePolicy};
+use symcorr_mesh::io::atomic_write;
 
 /// Arguments of `symcorr match`.
 #[derive(clap::Args, Debug)]
@@ -124,7 +124,7 @@ impl CacheArgs {
             (None, true, Some(dir)) => CacheLocation::Dir(dir.to_path_buf()),
             (None, true, None) => {
                 let mut p = mesh.as_os_str().to_owned();
-                p.push(format!(".{}", symcorr_spectral::cache::EXTENSION));
+                p.push(format!(".{}", symcorr::cache::EXTENSION));
                 CacheLocation::File(PathBuf::from(p))
             }
             (None, false, _) => return None,

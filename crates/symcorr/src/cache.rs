@@ -1,14 +1,16 @@
 //! On-disk cache of Laplace–Beltrami eigenpairs (`*.symcorr-eigs` files), so that a mesh
 //! matched in many runs (one template against many targets, a benchmark run twice) pays for
-//! its eigensolve once.
+//! its eigensolve once. The driver owns it ([`crate::PrepareOptions::cache`]); symcorr-spectral
+//! only computes ([`symcorr_spectral::eigenpairs`]).
 //!
 //! A cache file is only ever used for the exact mesh and solver settings it was computed from:
 //! its header carries a [`CacheKey`] (SHA-256 of the vertex positions, the triangles, `k`, every
 //! [`EigenOptions`] field, the Laplacian's constants and [`SOLVER_REVISION`]), and its body is
 //! covered by a SHA-256 checksum. [`load`] answers [`Lookup::Hit`] only when everything
 //! matches, [`Lookup::Stale`] for a well-formed file of another mesh or setting, and a typed
-//! [`CacheError`] for anything malformed — never a silently wrong basis. [`save`] writes a
-//! temporary file in the same directory and renames it, so a reader never sees half a file.
+//! [`CacheError`] for anything malformed — never a silently wrong basis. [`save`] writes through
+//! [`symcorr_mesh::io::atomic_write`] (temporary file in the same directory, then a rename), so
+//! a reader never sees half a file.
 //! [`eigenpairs_cached`] puts the two around [`eigenpairs`]: a file that is missing, stale or
 //! broken is recomputed and rewritten, and what happened is reported ([`CacheOutcome`]).
 //!
@@ -38,7 +40,7 @@
 //! other version ([`CacheError::UnsupportedVersion`]); the caller recomputes and overwrites.
 //!
 //! ```
-//! use symcorr_spectral::cache::{eigenpairs_cached, CacheLocation, CacheOutcome};
+//! use symcorr::cache::{eigenpairs_cached, CacheLocation, CacheOutcome};
 //! use symcorr_spectral::{EigenOptions, Laplacian};
 //! let mesh = symcorr_spectral::testmesh::icosphere(1);
 //! let lap = Laplacian::new(&mesh).unwrap();
@@ -52,15 +54,13 @@
 //! std::fs::remove_dir_all(dir).unwrap();
 //! ```
 
-use crate::{eigenpairs, EigenOptions, Eigenpairs, Laplacian, SpectralError};
-use crate::{COT_CLAMP, DEGENERATE_REL};
 use faer::Mat;
 use sha2::{Digest, Sha256};
-use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use symcorr_mesh::TriMesh;
+use symcorr_spectral::{eigenpairs, EigenOptions, Eigenpairs, Laplacian, SpectralError};
+use symcorr_spectral::{COT_CLAMP, DEGENERATE_REL};
 use thiserror::Error;
 
 /// First 8 bytes of every cache file (`\x1a` stops `type`/text tools, as in PNG).
@@ -478,39 +478,22 @@ pub fn load(path: &Path, key: &CacheKey, mass: Option<&[f64]>) -> Result<Lookup,
 ///
 /// Errors: [`CacheError::Io`]; [`CacheError::Invalid`] from [`encode`].
 pub fn save(path: &Path, key: &CacheKey, eig: &Eigenpairs, mass: &[f64]) -> Result<(), CacheError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
     let bytes = encode(key, eig, mass)?;
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |source| CacheError::Io { path: p, source }
-    };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    std::fs::create_dir_all(&dir).map_err(io(&dir))?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| EXTENSION.into());
-    // Unique per process and call, so parallel writers (two meshes of one run, or two runs)
-    // never share a temporary file.
-    let tmp = dir.join(format!(
-        ".{name}.{}.{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let written = std::fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(&bytes))
-        .and_then(|()| std::fs::rename(&tmp, path));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(CacheError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        });
-    }
-    Ok(())
+    std::fs::create_dir_all(&dir).map_err(|source| CacheError::Io {
+        path: dir.clone(),
+        source,
+    })?;
+    symcorr_mesh::io::atomic_write(path, &bytes).map_err(|e| CacheError::Io {
+        path: path.to_path_buf(),
+        source: match e {
+            symcorr_mesh::MeshError::Io { source, .. } => source,
+            other => std::io::Error::other(other.to_string()),
+        },
+    })
 }
 
 /// Where [`eigenpairs_cached`] keeps its file.
@@ -634,7 +617,7 @@ pub type Notify = Arc<dyn Fn(&CacheOutcome) + Send + Sync>;
 /// ```
 /// use std::sync::atomic::{AtomicUsize, Ordering};
 /// use std::sync::Arc;
-/// use symcorr_spectral::cache::{CacheLocation, CachePolicy};
+/// use symcorr::cache::{CacheLocation, CachePolicy};
 /// let hits = Arc::new(AtomicUsize::new(0));
 /// let h = hits.clone();
 /// let policy = CachePolicy::new(CacheLocation::Dir("cache".into())).with_notify(move |o| {
@@ -700,8 +683,9 @@ impl CachePolicy {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testmesh::icosphere;
     use proptest::prelude::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use symcorr_spectral::testmesh::icosphere;
 
     fn tmpdir(tag: &str) -> PathBuf {
         static N: AtomicU64 = AtomicU64::new(0);

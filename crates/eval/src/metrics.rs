@@ -78,7 +78,7 @@ impl EvalGraph {
     ///
     /// ```
     /// use symcorr_mesh::TriMesh;
-    /// use symcorr_correspond::EvalGraph;
+    /// use symcorr_eval::EvalGraph;
     /// let m = TriMesh::new(vec![[0.0; 3], [3.0, 0.0, 0.0], [3.0, 4.0, 0.0]], vec![[0, 1, 2]]).unwrap();
     /// assert_eq!(EvalGraph::new(&m).distance(0, 2), 5.0);
     /// ```
@@ -160,7 +160,7 @@ pub fn within(errors: &[f64], x: f64) -> f64 {
 ///
 /// ```
 /// use symcorr_mesh::TriMesh;
-/// use symcorr_correspond::{evaluate, EvalGraph};
+/// use symcorr_eval::{evaluate, EvalGraph};
 /// let m = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
 /// let g = EvalGraph::new(&m);
 /// let e = evaluate(&g, m.total_area(), &[(0, 0), (1, 0)], |p| p, None);
@@ -245,7 +245,7 @@ pub fn cumulative_curve(errors: &[f64], max: f64, steps: usize) -> Vec<(f64, f64
 /// Each bucket holds `⌈k·n/10⌉` matches (at least one); all zero without matches.
 ///
 /// ```
-/// let row = symcorr_correspond::table1_row(&[0.3, 0.1], &[0.2, 0.9]);
+/// let row = symcorr_eval::table1_row(&[0.3, 0.1], &[0.2, 0.9]);
 /// assert_eq!(row[0], 0.1);
 /// assert!((row[9] - 0.2).abs() < 1e-12);
 /// ```

@@ -1,0 +1,221 @@
+//! The JSON files symcorr writes, as types (DESIGN.md, Data formats): `symcorr.correspondence/1`
+//! ([`CorrespondenceFile`], written by `match`, `bench --out-dir` and `demo`) and
+//! `symcorr.labels/1` ([`LabelsFile`], written by `label`). [`crate::output`] builds them; any
+//! reader parses them back with [`CorrespondenceFile::read`] / [`LabelsFile::read`] or serde.
+//!
+//! Fields are declared in alphabetical order, which is the order of the keys in the files
+//! (the files were first written through `serde_json::Value`, whose maps sort their keys);
+//! `fixtures/formats/` holds files written that way, and the tests compare against them byte
+//! for byte. An optional key that is absent is left out (`no_counterpart`, `bones`, `weights`);
+//! a value that may be unknown is `null` (a label of a vertex the repair removed,
+//! `convention_changes`, `joint_asymmetry`).
+
+use crate::PipelineError;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The `format` tag of correspondence files.
+pub const CORRESPONDENCE_FORMAT: &str = "symcorr.correspondence/1";
+/// The `format` tag of label files.
+pub const LABELS_FORMAT: &str = "symcorr.labels/1";
+
+/// A `symcorr.correspondence/1` file. Vertex ids are the input files' ids.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CorrespondenceFile {
+    /// [`CORRESPONDENCE_FORMAT`].
+    pub format: String,
+    /// For a partial target (a single-view scan): the template points it does not show, by
+    /// template id (absent for a whole target).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub no_counterpart: Option<Vec<u32>>,
+    /// `[template vertex, target vertex, confidence]` per match (confidence rounded to 1e-6).
+    pub pairs: Vec<(u32, u32, f64)>,
+    /// Segment label index per input vertex of each mesh (`null`: removed by the repair).
+    pub segments: MeshPair<Vec<Option<usize>>>,
+    /// What the paper's skeleton filter did (all zero for the other methods).
+    pub skeleton_filter: FilterCounts,
+    /// The target mesh file.
+    pub target: MeshRef,
+    /// The template mesh file.
+    pub template: MeshRef,
+    /// Seconds per stage (rounded to 1e-6), by stage name.
+    pub timings_s: BTreeMap<String, f64>,
+}
+
+/// One value per mesh of a pair.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeshPair<T> {
+    /// The target's.
+    pub target: T,
+    /// The template's.
+    pub template: T,
+}
+
+/// A mesh file and its vertex count.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MeshRef {
+    /// The path as given on the command line (or the dataset's).
+    pub path: String,
+    /// Vertices of the file.
+    pub vertices: usize,
+}
+
+/// The skeleton filter's counts (symcorr-correspond's `FilterStats`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FilterCounts {
+    /// Points whose candidate lists fell back to the nearest same-segment vertex.
+    pub fallbacks: usize,
+    /// Candidates kept.
+    pub kept: usize,
+    /// Template points filtered.
+    pub points: usize,
+    /// Candidates removed.
+    pub removed: usize,
+    /// Points whose segment the target lacks.
+    pub segment_missing: usize,
+}
+
+/// A `symcorr.labels/1` file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LabelsFile {
+    /// With `--weights`: the bones, `"parent-child"` joint names, in the order weights name them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bones: Option<Vec<String>>,
+    /// How the attachment went.
+    pub diagnostics: LabelDiagnostics,
+    /// [`LABELS_FORMAT`].
+    pub format: String,
+    /// Refined joint positions (mesh units) of the tracked or interpolated joints, by name.
+    pub joints: BTreeMap<String, [f64; 3]>,
+    /// Segment index per vertex (into `segments`).
+    pub labels: Vec<usize>,
+    /// The mesh file.
+    pub mesh: MeshRef,
+    /// The 17 segment names, in index order.
+    pub segments: Vec<String>,
+    /// With `--weights`: per vertex, its non-zero `[bone, weight]` pairs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Vec<Vec<(usize, f64)>>>,
+}
+
+/// The `diagnostics` object of a [`LabelsFile`] (symcorr-attach's `Diagnostics`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LabelDiagnostics {
+    /// How the skeleton was brought into the mesh's frame.
+    pub alignment: Alignment,
+    /// Where neighbouring segments end: `"joint-planes"` or `"makehuman"`.
+    pub boundaries: String,
+    /// Per connected component of the mesh.
+    pub components: Vec<Component>,
+    /// Vertices the boundary convention moved to another segment (`null` without one).
+    pub convention_changes: Option<usize>,
+    /// Left/right asymmetry of the joints, mesh units (`null` when not measurable).
+    pub joint_asymmetry: Option<f64>,
+    /// Joints moved by the refinement.
+    pub joint_moves: Vec<JointMoveEntry>,
+    /// True when the skeleton's left and right were swapped to fit the mesh.
+    pub mirrored_fixed: bool,
+    /// Vertices labelled by their nearest bone (no bone visible).
+    pub nearest_bone_vertices: usize,
+    /// Joints repaired before the attachment.
+    pub repaired_joints: Vec<RepairedJoint>,
+}
+
+/// The skeleton-to-mesh alignment (symcorr-attach's `FrameAlignment`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Alignment {
+    /// Median joint-to-mesh distance after the alignment, in skeleton heights.
+    pub fit_after: f64,
+    /// The same before it (after the scale only).
+    pub fit_before: f64,
+    /// Rotation, row-major.
+    pub rotation: [[f64; 3]; 3],
+    /// Uniform scale.
+    pub scale: f64,
+    /// Translation, mesh units.
+    pub translation: [f64; 3],
+}
+
+/// One connected component of a labelled mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Component {
+    /// True when no bone was visible from it and it was labelled by nearest bone.
+    pub fallback: bool,
+    /// Its vertices.
+    pub vertices: usize,
+    /// Those that see a bone.
+    pub visible_vertices: usize,
+}
+
+/// A joint moved by the refinement.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JointMoveEntry {
+    /// How far, mesh units.
+    pub distance: f64,
+    /// The joint's name.
+    pub joint: String,
+    /// Why.
+    pub reason: String,
+}
+
+/// A joint repaired before the attachment.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RepairedJoint {
+    /// The joint's name.
+    pub joint: String,
+    /// `"interpolated"` or `"dropped"`.
+    pub repair: String,
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    format: &str,
+    tag: impl Fn(&T) -> &str,
+) -> Result<T, PipelineError> {
+    let err = |message: String| PipelineError::File {
+        file: path.display().to_string(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let doc: T =
+        serde_json::from_str(&text).map_err(|e| err(format!("not a {format} file: {e}")))?;
+    match tag(&doc) {
+        t if t == format => Ok(doc),
+        t => Err(err(format!("format {t:?}, expected {format:?}"))),
+    }
+}
+
+impl CorrespondenceFile {
+    /// Reads a `symcorr.correspondence/1` file.
+    ///
+    /// Errors ([`PipelineError::File`], naming the file): unreadable, not JSON of this shape,
+    /// or another `format`.
+    pub fn read(path: &Path) -> Result<CorrespondenceFile, PipelineError> {
+        read_json(path, CORRESPONDENCE_FORMAT, |d: &CorrespondenceFile| {
+            &d.format
+        })
+    }
+
+    /// The file as compact JSON (what the commands write).
+    pub fn to_json(&self) -> String {
+        // Invariant: plain numbers, strings, arrays and string-keyed maps always serialise.
+        serde_json::to_string(self).unwrap_or_default()
+    }
+}
+
+impl LabelsFile {
+    /// Reads a `symcorr.labels/1` file.
+    ///
+    /// Errors ([`PipelineError::File`], naming the file): unreadable, not JSON of this shape,
+    /// or another `format`.
+    pub fn read(path: &Path) -> Result<LabelsFile, PipelineError> {
+        read_json(path, LABELS_FORMAT, |d: &LabelsFile| &d.format)
+    }
+
+    /// The file as compact JSON (what `symcorr label` writes).
+    pub fn to_json(&self) -> String {
+        // Invariant: plain numbers, strings, arrays and string-keyed maps always serialise.
+        serde_json::to_string(self).unwrap_or_default()
+    }
+}
