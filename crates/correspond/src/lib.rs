@@ -61,7 +61,7 @@ mod filter;
 mod kdtree;
 mod landmarks;
 mod metrics;
-mod refine;
+mod pools;
 mod sample;
 mod selection;
 mod symmetry;
@@ -76,7 +76,7 @@ pub use landmarks::{joint_landmarks, landmark_coordinates, skeleton_landmarks};
 pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
-pub use refine::{
+pub use pools::{
     adjacent_segments, coverage, nearest_in_pools, refine_dense, zoomout, RefineOptions,
     RefineSide, RefinedMatches, SegmentPools, SpectralBasis, ZoomOutOptions, ZoomOutResult,
     DEFAULT_ZOOMOUT_POINTS,
