@@ -42,7 +42,9 @@
 //! * Confidence is in (0, 1] and means what its method says: candidate spread or descriptor
 //!   distance and eq. 8 gap ([`assign_confidence`]), spectral residual ([`RefinedMatches`]),
 //!   final fit distance ([`ArticulatedMatches`]).
-//! * Bad input is an error ([`CorrespondError`]), never a panic; lengths are in √area units.
+//! * The methods' entry points return a [`CorrespondError`] for inconsistent input; a few
+//!   single stages (`skeleton_filter`, `sagittal_band`, `skeleton_landmarks`) panic instead, as
+//!   documented. Lengths in options are in √area units.
 //!
 //! # Measured choices
 //! In `docs/decisions/` (each module's docs name its own): the paper pipeline's defaults,
