@@ -16,7 +16,7 @@ use symcorr_spectral::HeatGeodesics;
 /// ```
 /// use symcorr_skeleton::{Joint, Skeleton};
 /// use symcorr_correspond::joint_landmarks;
-/// let mut sk = Skeleton::from_arrays([[0.0; 3]; 20]);
+/// let mut sk = Skeleton::from_arrays([[0.0; 3]; Joint::COUNT]);
 /// sk.positions[Joint::Head.index()] = [0.0, 2.0, 0.0].into();
 /// let pos = [[0.0, 0.1, 0.0], [0.0, 1.9, 0.0]];
 /// let l = joint_landmarks(&pos, &sk);
@@ -197,9 +197,12 @@ mod tests {
         let heat = HeatGeodesics::new(&mesh, 1.0).unwrap();
         let area = mesh.total_area();
         let sources = skeleton_landmarks(&mesh.positions, &labels, &sk, 0.05);
-        assert_eq!(sources.len(), 20);
+        assert_eq!(sources.len(), Joint::COUNT);
         let lm = landmark_coordinates(&heat, &sources, area).unwrap();
-        assert_eq!((lm.nrows(), lm.ncols()), (mesh.num_vertices(), 20));
+        assert_eq!(
+            (lm.nrows(), lm.ncols()),
+            (mesh.num_vertices(), Joint::COUNT)
+        );
         let graph = EdgeGraph::new(&mesh);
         for (i, s) in sources.iter().enumerate() {
             let h = heat.distance(s).unwrap();
