@@ -8,7 +8,7 @@
 //! 20–60 dimensions, where trees do not prune, and keep the blocked brute force of
 //! [`nearest_in_pools`](crate::nearest_in_pools).
 
-use crate::{CorrespondError, SegmentPools};
+use crate::{same_len, CorrespondError, SegmentPools};
 use rayon::prelude::*;
 
 /// Points per leaf bucket.
@@ -176,7 +176,8 @@ pub(crate) struct PoolTrees {
 impl PoolTrees {
     /// Trees over `target` (one feature row per target vertex) for every pool of `pools`.
     ///
-    /// Errors: [`CorrespondError::InvalidArgument`] when a pool names a vertex beyond `target`.
+    /// Errors: [`CorrespondError::IndexOutOfRange`] when a pool names a vertex beyond
+    /// `target`.
     pub(crate) fn new(
         pools: &SegmentPools,
         target: &[[f64; 6]],
@@ -186,10 +187,11 @@ impl PoolTrees {
             .par_iter()
             .map(|pool| {
                 if let Some(&q) = pool.iter().find(|&&q| q as usize >= target.len()) {
-                    return Err(CorrespondError::InvalidArgument(format!(
-                        "pool vertex {q} out of range ({} target rows)",
-                        target.len()
-                    )));
+                    return Err(CorrespondError::IndexOutOfRange {
+                        what: "pool vertex (target feature row)",
+                        index: q as usize,
+                        len: target.len(),
+                    });
                 }
                 let pts = pool.iter().map(|&q| target[q as usize]).collect();
                 Ok(KdTree::new(pts, pool.clone()))
@@ -204,21 +206,20 @@ impl PoolTrees {
     /// id. Only the members `subset` (per group) are searched when given; the others get
     /// `(0, ∞)`.
     ///
-    /// Errors: [`CorrespondError::InvalidArgument`] when `template` has another length than
-    /// the pools were built for.
+    /// Errors: [`CorrespondError::LengthMismatch`] when `template` has another length than
+    /// the pools were built for, or the trees were built for other pools.
     pub(crate) fn nearest(
         &self,
         pools: &SegmentPools,
         template: &[[f64; 6]],
         subset: Option<&[Vec<u32>]>,
     ) -> Result<Vec<(u32, f64)>, CorrespondError> {
-        if template.len() != pools.num_template() || self.trees.len() != pools.len() {
-            return Err(CorrespondError::InvalidArgument(format!(
-                "features of {} template vertices, pools for {}",
-                template.len(),
-                pools.num_template()
-            )));
-        }
+        same_len(
+            "template feature rows (one per vertex of the pools)",
+            pools.num_template(),
+            template.len(),
+        )?;
+        same_len("k-d trees (one per pool)", pools.len(), self.trees.len())?;
         let members = subset.unwrap_or(pools.members());
         let mut out = vec![(0u32, f64::INFINITY); template.len()];
         let found: Vec<Vec<(u32, (u32, f64))>> = members

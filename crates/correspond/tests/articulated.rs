@@ -5,7 +5,8 @@
 use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::{
-    articulated_match, bone_transforms, outward_normals, skin, ArticulatedOptions, ArticulatedSide,
+    articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
+    ArticulatedOptions,
 };
 use symcorr_mesh::geometry::dist;
 use symcorr_mesh::TriMesh;
@@ -54,6 +55,7 @@ fn bodies() -> (Body, Body, symcorr_attach::Attachment) {
         &att.weights,
         &bone_transforms(&sk, &bent),
     );
+    let posed = posed.into_iter().map(|p| p.into()).collect();
     let target = TriMesh::new(posed, mesh.triangles.clone()).unwrap();
     (
         Body { mesh, skeleton: sk },
@@ -70,8 +72,8 @@ fn side<'a>(
     att: &'a symcorr_attach::Attachment,
     normals: &'a [[f64; 3]],
     boundary: Option<&'a [bool]>,
-) -> ArticulatedSide<'a> {
-    ArticulatedSide {
+) -> ArticulatedInputs<'a> {
+    ArticulatedInputs {
         boundary,
         neighbors: None,
         positions: &mesh.positions,

@@ -8,11 +8,11 @@ use symcorr_attach::{attach, AttachOptions, Attachment};
 use symcorr_correspond::{
     articulated_match, base_profile, coverage, farthest_point_sample, landmark_coordinates,
     match_points, outward_normals, refine_dense, refine_symmetry_plane, skeleton_landmarks,
-    ArticulatedMatches, ArticulatedOptions, ArticulatedSide, Descriptors, FilterStats, Match,
-    MatchOptions, Pair, RefineOptions, RefineSide, Side, SpectralBasis,
+    ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, Descriptors, FilterStats, Match,
+    MatchOptions, Pair, PaperInputs, RefineOptions, RefinedInputs, SpectralBasis,
 };
 use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
-use symcorr_skeleton::{Joint, Plane, SagittalPlanes, Segment, Skeleton};
+use symcorr_skeleton::{BodySide, Joint, Plane, SagittalPlanes, Segment, Skeleton};
 use symcorr_spectral::{
     base_vertex_set, eigenpairs, gaussian_curvature, si_hks, EdgeGraph, EigenOptions,
     HeatGeodesics, Laplacian, SiHksParams,
@@ -188,12 +188,12 @@ impl PreparedMesh {
         let area = mesh.total_area();
         let paper = match sp.paper {
             Some((descriptors, base_set, profile)) => Some(PaperData {
-                halves: midline_halves(
+                halves: sides(midline_halves(
                     &mesh,
                     &attachment.labels,
                     &attachment.joints,
                     options.midline_margin * area.sqrt(),
-                ),
+                )),
                 sagittal: midline_sagittal(&mesh, &attachment.labels, &attachment.joints),
                 descriptors,
                 curvature: sp.curvature,
@@ -284,9 +284,9 @@ impl PreparedMesh {
     /// This mesh as one side of the paper's matching stages (symcorr-correspond's
     /// `match_points`): descriptors, labels, base-set profile, halves, sagittal coordinates and
     /// positions. Errors unless the mesh was prepared for [`Method::Paper`].
-    pub fn paper_side(&self) -> Result<Side<'_>, PipelineError> {
+    pub fn paper_side(&self) -> Result<PaperInputs<'_>, PipelineError> {
         let p = self.paper_data()?;
-        Ok(Side {
+        Ok(PaperInputs {
             descriptors: &p.descriptors,
             labels: &self.attachment.labels,
             profile: &p.profile,
@@ -309,7 +309,7 @@ pub struct PaperData {
     /// `D̂(v)`: mean edge-geodesic distance to the base set over √area (eq. 7).
     pub profile: Vec<f64>,
     /// Sagittal half per vertex of the midline segments ([`midline_halves`]).
-    pub halves: Vec<i8>,
+    pub halves: Vec<BodySide>,
     /// Sagittal coordinate per vertex of the midline segments ([`midline_sagittal`]).
     pub sagittal: Vec<f64>,
 }
@@ -373,6 +373,14 @@ pub fn midline_halves(
                 0
             }
         })
+        .collect()
+}
+
+/// Sagittal halves as body sides (`+1` left, `-1` right, `0` midline).
+fn sides(halves: Vec<i8>) -> Vec<BodySide> {
+    halves
+        .into_iter()
+        .map(|h| BodySide::of_signed_distance(f64::from(h), 0.0))
         .collect()
 }
 
@@ -475,7 +483,7 @@ pub struct RefineData {
     pub landmarks: faer::Mat<f64>,
     /// Sagittal halves with each midline plane refined by the surface's symmetry
     /// ([`symmetric_midline_halves`]).
-    pub halves: Vec<i8>,
+    pub halves: Vec<BodySide>,
     /// The edge graph (geodesic bands around segments).
     pub graph: EdgeGraph,
     /// si-HKS descriptor per vertex (joined to the landmark coordinates).
@@ -520,7 +528,11 @@ impl RefineData {
         let landmarks = landmark_coordinates(&heat, &sources, mesh.total_area())?;
         timings.push(("landmarks".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        let halves = symmetric_midline_halves(mesh, &attachment.labels, &attachment.joints);
+        let halves = sides(symmetric_midline_halves(
+            mesh,
+            &attachment.labels,
+            &attachment.joints,
+        ));
         timings.push(("symmetry_planes".into(), t.elapsed().as_secs_f64()));
         Ok(RefineData {
             basis: eig.vectors,
@@ -847,8 +859,8 @@ fn articulated(
         normals: &'a [[f64; 3]],
         boundary: Option<&'a [bool]>,
         neighbors: Option<&'a [Vec<u32>]>,
-    ) -> ArticulatedSide<'a> {
-        ArticulatedSide {
+    ) -> ArticulatedInputs<'a> {
+        ArticulatedInputs {
             boundary,
             neighbors,
             positions: &m.mesh.positions,
@@ -1004,12 +1016,12 @@ fn run_refined(
     points: &[u32],
     mode: Mode,
 ) -> Result<MethodOutput, PipelineError> {
-    fn side(m: &PreparedMesh) -> Result<RefineSide<'_>, PipelineError> {
+    fn side(m: &PreparedMesh) -> Result<RefinedInputs<'_>, PipelineError> {
         let r = m
             .refine
             .as_ref()
             .ok_or(PipelineError::NotPreparedFor(Method::Refined))?;
-        Ok(RefineSide {
+        Ok(RefinedInputs {
             basis: SpectralBasis {
                 vectors: r.basis.as_ref(),
                 mass: &r.mass,

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr::io::{read_mesh, read_skeleton};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
-use symcorr_attach::{Joint, Segment};
+use symcorr_attach::{BodySide, Joint, Segment};
 use symcorr_correspond::{
     candidates, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
     MatchOptions,
@@ -249,12 +249,12 @@ fn variant(name: &str) -> Result<(MatchOptions, Option<Rule>), String> {
 fn compatible_by_descriptor(
     ta: &PreparedMesh,
     tb: &PreparedMesh,
-    halves: (&[i8], &[i8]),
+    halves: (&[BodySide], &[BodySide]),
     p: usize,
 ) -> Vec<Candidate> {
     let lp = ta.labels()[p];
     let mut all: Vec<Candidate> = (0..tb.num_vertices())
-        .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0)
+        .filter(|&q| tb.labels()[q] == lp && !halves.0[p].opposes(halves.1[q]))
         .map(|q| Candidate {
             vertex: q as u32,
             distance: pd(ta).descriptors.distance(p, &pd(tb).descriptors, q),
@@ -277,16 +277,8 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
             s[v]
         }
     };
-    let sign = |x: f64| {
-        if x > 0.0 {
-            1i8
-        } else if x < 0.0 {
-            -1
-        } else {
-            0
-        }
-    };
-    let own: (Vec<i8>, Vec<i8>) = (
+    let sign = |x: f64| BodySide::of_signed_distance(x, 0.0);
+    let own: (Vec<BodySide>, Vec<BodySide>) = (
         sa.iter().map(|&x| sign(x)).collect(),
         sb.iter().map(|&x| sign(x)).collect(),
     );
@@ -449,7 +441,7 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
         list.retain(|c| ok(c.vertex as usize));
         if list.is_empty() {
             let best = (0..tb.num_vertices())
-                .filter(|&q| tb.labels()[q] == lp && halves.0[p] * halves.1[q] >= 0 && ok(q))
+                .filter(|&q| tb.labels()[q] == lp && !halves.0[p].opposes(halves.1[q]) && ok(q))
                 .map(|q| Candidate {
                     vertex: q as u32,
                     distance: pd(ta).descriptors.distance(p, &pd(tb).descriptors, q),
@@ -754,7 +746,7 @@ fn run(args: &Args) -> Result<(), String> {
                     "tmpl_label"
                 } else if mb.p.attachment.labels[p] != mb.reference[p] {
                     "target_label"
-                } else if pd(&ma.p).halves[p] * pd(&mb.p).halves[p] < 0 {
+                } else if pd(&ma.p).halves[p].opposes(pd(&mb.p).halves[p]) {
                     "halves"
                 } else {
                     "selection"
@@ -767,10 +759,10 @@ fn run(args: &Args) -> Result<(), String> {
                         rp.name(),
                         ma.p.attachment.labels[p].name(),
                         mb.p.attachment.labels[p].name(),
-                        pd(&ma.p).halves[p],
-                        pd(&mb.p).halves[p],
+                        pd(&ma.p).halves[p].sign(),
+                        pd(&mb.p).halves[p].sign(),
                         mb.p.attachment.labels[q].name(),
-                        pd(&mb.p).halves[q],
+                        pd(&mb.p).halves[q].sign(),
                         e.errors[i],
                         ma.sd[0][p],
                         mb.sd[0][p],

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::error::Error;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr_attach::{attach, AttachOptions, Segment, Skeleton};
+use symcorr_attach::{attach, AttachOptions, BodySide, Segment, Skeleton};
 use symcorr_correspond::*;
 use symcorr_eval::{evaluate, EvalGraph};
 use symcorr_mesh::TriMesh;
@@ -103,7 +103,7 @@ struct Prep {
     mass: Vec<f64>,
     sihks: Mat<f64>,
     labels: Vec<Segment>,
-    halves: Vec<i8>,
+    halves: Vec<BodySide>,
     landmarks: Mat<f64>,
     graph: EdgeGraph,
     secs: f64,
@@ -223,7 +223,10 @@ fn prepare(mesh: TriMesh, sk: &Skeleton, args: &Args) -> Result<Prep, Box<dyn Er
         Landmarks::Ring => rings,
     };
     let landmarks = landmark_coordinates(&heat, &lm, area)?;
-    let halves = halves(&mesh, &att.labels, &att.joints, args.symmetry);
+    let halves = halves(&mesh, &att.labels, &att.joints, args.symmetry)
+        .into_iter()
+        .map(|h| BodySide::of_signed_distance(f64::from(h), 0.0))
+        .collect();
     let graph = EdgeGraph::new(&mesh);
     Ok(Prep {
         area,
@@ -364,13 +367,13 @@ fn run(args: &Args) -> Result<(), Box<dyn Error>> {
             &pb.graph,
             band * pb.area.sqrt(),
         )?;
-        let strip = |p: &Prep| -> Vec<i8> {
+        let strip = |p: &Prep| -> Vec<BodySide> {
             p.halves
                 .iter()
                 .zip(&p.labels)
                 .map(|(&h, &l)| match args.zoomout_free_halves {
-                    Symmetry::Head if l == Segment::Head => 0,
-                    Symmetry::All => 0,
+                    Symmetry::Head if l == Segment::Head => BodySide::Midline,
+                    Symmetry::All => BodySide::Midline,
                     _ => h,
                 })
                 .collect()

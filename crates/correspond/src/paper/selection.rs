@@ -1,7 +1,7 @@
 //! Selection (paper §3.3, eq. 7–8): among the (filtered) candidates of a template point `p`,
 //! the one whose summed geodesic distance to the mesh's base vertex set is closest to `p`'s.
 
-use crate::Candidate;
+use crate::{Candidate, Pair};
 
 /// The base-set profile `D̂(v) = (1/|B|) Σ_{b ∈ B} g(v, b) / √area` of every vertex (paper eq. 7,
 /// normalised by the set's size and by √area so that two meshes' values compare).
@@ -34,20 +34,6 @@ pub fn base_profile<R: AsRef<[f64]>>(rows: &[R], area: f64) -> Vec<f64> {
         .zip(&count)
         .map(|(&x, &c)| if c == 0 { 0.0 } else { x / (c as f64 * s) })
         .collect()
-}
-
-/// A matched pair `template → target` with a confidence in (0, 1] (higher is more
-/// trustworthy): what every method returns. What a confidence means is the method's own:
-/// the paper's ranks by eq. 8's gap ([`assign_confidence`]), the refined method's by the
-/// spectral residual, the articulated method's by the final fit distance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pair {
-    /// Template vertex.
-    pub template: u32,
-    /// Target vertex.
-    pub target: u32,
-    /// Confidence in (0, 1].
-    pub confidence: f64,
 }
 
 impl From<&Match> for Pair {

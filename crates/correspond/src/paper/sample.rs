@@ -1,5 +1,6 @@
 //! Farthest-point sampling of template points (sparse mode).
 
+use nalgebra::{Point3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// `n` vertices of `mesh` by farthest-point sampling in Euclidean 3-space (each new point is
@@ -25,31 +26,28 @@ pub fn farthest_point_sample(mesh: &TriMesh, n: usize) -> Vec<u32> {
     if n == 0 {
         return Vec::new();
     }
-    let p = &mesh.positions;
-    let mut c = [0.0; 3];
-    for q in p {
-        for k in 0..3 {
-            c[k] += q[k] / v as f64;
-        }
+    let p: Vec<Point3<f64>> = mesh.positions.iter().copied().map(Point3::from).collect();
+    let mut c = Vector3::zeros();
+    for q in &p {
+        c += q.coords / v as f64;
     }
-    let d2 = |a: [f64; 3], b: [f64; 3]| {
-        (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
-    };
+    let c = Point3::from(c);
+    let d2 = |a: &Point3<f64>, b: &Point3<f64>| (a - b).norm_squared();
     let argmax = |d: &[f64]| {
         d.iter()
             .enumerate()
             .max_by(|a, b| a.1.total_cmp(b.1))
             .map_or(0, |(i, _)| i)
     };
-    let start = argmax(&p.iter().map(|&q| d2(q, c)).collect::<Vec<_>>());
+    let start = argmax(&p.iter().map(|q| d2(q, &c)).collect::<Vec<_>>());
     let mut out = Vec::with_capacity(n);
     let mut dist = vec![f64::INFINITY; v];
     let mut next = start;
     for _ in 0..n {
         out.push(next as u32);
         let s = p[next];
-        for (d, &q) in dist.iter_mut().zip(p) {
-            *d = d.min(d2(q, s));
+        for (d, q) in dist.iter_mut().zip(&p) {
+            *d = d.min(d2(q, &s));
         }
         next = argmax(&dist);
     }

@@ -5,6 +5,7 @@
 
 use crate::CorrespondError;
 use faer::Mat;
+use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use symcorr_skeleton::{Joint, Skeleton};
 use symcorr_spectral::HeatGeodesics;
@@ -15,7 +16,7 @@ use symcorr_spectral::HeatGeodesics;
 /// ```
 /// use symcorr_skeleton::{Joint, Skeleton};
 /// use symcorr_correspond::joint_landmarks;
-/// let mut sk = Skeleton::from_arrays([[0.0; 3]; 20]);
+/// let mut sk = Skeleton::from_arrays([[0.0; 3]; Joint::COUNT]);
 /// sk.positions[Joint::Head.index()] = [0.0, 2.0, 0.0].into();
 /// let pos = [[0.0, 0.1, 0.0], [0.0, 1.9, 0.0]];
 /// let l = joint_landmarks(&pos, &sk);
@@ -33,10 +34,7 @@ pub fn joint_landmarks(positions: &[[f64; 3]], joints: &Skeleton) -> Vec<u32> {
             positions
                 .iter()
                 .enumerate()
-                .map(|(v, p)| {
-                    let d = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2);
-                    (v, d)
-                })
+                .map(|(v, &p)| (v, (Point3::from(p) - c).norm_squared()))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map_or(0, |(v, _)| v as u32)
         })
@@ -48,29 +46,23 @@ pub fn joint_landmarks(positions: &[[f64; 3]], joints: &Skeleton) -> Vec<u32> {
 /// compare. Distances to sets are computed in parallel; an unreachable vertex (another
 /// component) gets the column's largest finite value.
 ///
-/// Errors: [`CorrespondError::InvalidArgument`] for an empty source set, a source out of
-/// range, or a non-positive area.
+/// Errors: [`CorrespondError::InvalidArea`] for an area that is not positive and finite,
+/// [`CorrespondError::EmptyLandmark`] for an empty source set, and
+/// [`CorrespondError::Geodesics`] for a source out of range.
 pub fn landmark_coordinates(
     heat: &HeatGeodesics,
     sources: &[Vec<u32>],
     area: f64,
 ) -> Result<Mat<f64>, CorrespondError> {
     if !(area > 0.0 && area.is_finite()) {
-        return Err(CorrespondError::InvalidArgument(format!(
-            "landmark coordinates: area {area}"
-        )));
+        return Err(CorrespondError::InvalidArea(area));
     }
     if let Some(i) = sources.iter().position(Vec::is_empty) {
-        return Err(CorrespondError::InvalidArgument(format!(
-            "landmark {i} has no source vertex"
-        )));
+        return Err(CorrespondError::EmptyLandmark(i));
     }
     let cols: Vec<Vec<f64>> = sources
         .par_iter()
-        .map(|s| {
-            heat.distance(s)
-                .map_err(|e| CorrespondError::InvalidArgument(e.to_string()))
-        })
+        .map(|s| heat.distance(s).map_err(CorrespondError::from))
         .collect::<Result<_, _>>()?;
     let n = cols.first().map_or(0, Vec::len);
     let s = area.sqrt();
@@ -126,18 +118,18 @@ pub fn skeleton_landmarks(
     if positions.is_empty() {
         return vec![Vec::new(); Joint::ALL.len()];
     }
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let unit = |a: [f64; 3]| {
-        let n = dot(a, a).sqrt();
+    // A zero axis (coincident joints) falls back to "up".
+    let unit = |a: Vector3<f64>| {
+        let n = a.norm();
         if n > 0.0 {
-            [a[0] / n, a[1] / n, a[2] / n]
+            a / n
         } else {
-            [0.0, 1.0, 0.0]
+            Vector3::y()
         }
     };
-    let p = |j: Joint| -> [f64; 3] { joints.position(j).into() };
+    let p = |j: Joint| joints.position(j);
     let nearest = joint_landmarks(positions, joints);
+    let positions: Vec<Point3<f64>> = positions.iter().copied().map(Point3::from).collect();
     // Segments whose bones touch a joint.
     let touching = |j: Joint| -> Vec<Segment> {
         Segment::ALL
@@ -152,33 +144,33 @@ pub fn skeleton_landmarks(
             let c = p(j);
             if TIPS.contains(&j) {
                 let parent = j.parent().unwrap_or(Joint::HipCenter);
-                let dir = unit(sub(c, p(parent)));
+                let dir = unit(c - p(parent));
                 let segs = touching(j);
                 let best = positions
                     .iter()
                     .enumerate()
                     .filter(|(v, _)| segs.contains(&labels[*v]))
-                    .max_by(|a, b| dot(sub(*a.1, c), dir).total_cmp(&dot(sub(*b.1, c), dir)));
+                    .max_by(|a, b| (a.1 - c).dot(&dir).total_cmp(&(b.1 - c).dot(&dir)));
                 return vec![best.map_or(nearest[j.index()], |(v, _)| v as u32)];
             }
             let axis = match j {
-                Joint::HipCenter => unit(sub(p(Joint::Spine), c)),
-                Joint::HipLeft => unit(sub(p(Joint::KneeLeft), c)),
-                Joint::HipRight => unit(sub(p(Joint::KneeRight), c)),
-                _ => unit(sub(c, p(j.parent().unwrap_or(Joint::HipCenter)))),
+                Joint::HipCenter => unit(p(Joint::Spine) - c),
+                Joint::HipLeft => unit(p(Joint::KneeLeft) - c),
+                Joint::HipRight => unit(p(Joint::KneeRight) - c),
+                _ => unit(c - p(j.parent().unwrap_or(Joint::HipCenter))),
             };
             let q = positions[nearest[j.index()] as usize];
-            let r0 = dot(sub(q, c), sub(q, c)).sqrt();
+            let r0 = (q - c).norm();
             let radius = 3.0 * r0.max(slab);
             let segs = touching(j);
             let ring: Vec<u32> = positions
                 .iter()
                 .enumerate()
                 .filter(|(v, x)| {
-                    let d = sub(**x, c);
+                    let d = *x - c;
                     segs.contains(&labels[*v])
-                        && dot(d, axis).abs() <= slab
-                        && dot(d, d) <= radius * radius
+                        && d.dot(&axis).abs() <= slab
+                        && d.norm_squared() <= radius * radius
                 })
                 .map(|(v, _)| v as u32)
                 .collect();
@@ -205,9 +197,12 @@ mod tests {
         let heat = HeatGeodesics::new(&mesh, 1.0).unwrap();
         let area = mesh.total_area();
         let sources = skeleton_landmarks(&mesh.positions, &labels, &sk, 0.05);
-        assert_eq!(sources.len(), 20);
+        assert_eq!(sources.len(), Joint::COUNT);
         let lm = landmark_coordinates(&heat, &sources, area).unwrap();
-        assert_eq!((lm.nrows(), lm.ncols()), (mesh.num_vertices(), 20));
+        assert_eq!(
+            (lm.nrows(), lm.ncols()),
+            (mesh.num_vertices(), Joint::COUNT)
+        );
         let graph = EdgeGraph::new(&mesh);
         for (i, s) in sources.iter().enumerate() {
             let h = heat.distance(s).unwrap();

@@ -6,7 +6,7 @@
 //! (faer), then each row is reduced to its candidates with a partial selection; blocks run in
 //! parallel (rayon). A 13.4k × 13.4k dense pass is one 13.4k × d × 13.4k product.
 
-use crate::CorrespondError;
+use crate::{same_len, CorrespondError};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
@@ -22,20 +22,25 @@ pub struct Descriptors {
 impl Descriptors {
     /// Descriptors from a row-major buffer of `n·dim` values.
     ///
-    /// Errors: [`CorrespondError::InvalidArgument`] if `data.len() != n·dim`, `dim == 0`, or a
-    /// value is not finite.
+    /// Errors: [`CorrespondError::InvalidOptions`] if `dim == 0`,
+    /// [`CorrespondError::LengthMismatch`] if `data.len() != n·dim`,
+    /// [`CorrespondError::NotFinite`] if a value is not finite.
     pub fn new(n: usize, dim: usize, data: Vec<f64>) -> Result<Descriptors, CorrespondError> {
-        if dim == 0 || data.len() != n * dim {
-            return Err(CorrespondError::InvalidArgument(format!(
-                "descriptor buffer has {} values, expected {n} × {dim}",
-                data.len()
+        if dim == 0 {
+            return Err(CorrespondError::InvalidOptions(format!(
+                "descriptors of length 0 for {n} vertices"
             )));
         }
+        same_len(
+            &format!("descriptor buffer ({n} vertices × {dim} values)"),
+            n * dim,
+            data.len(),
+        )?;
         if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-            return Err(CorrespondError::InvalidArgument(format!(
-                "descriptor of vertex {} is not finite",
-                i / dim
-            )));
+            return Err(CorrespondError::NotFinite {
+                what: "descriptor",
+                row: i / dim,
+            });
         }
         Ok(Descriptors { n, dim, data })
     }
@@ -133,40 +138,39 @@ const BLOCK: usize = 256;
 /// assert_eq!(c[0].len(), 2);
 /// ```
 ///
-/// Errors: [`CorrespondError::InvalidArgument`] for descriptors of different lengths, an empty
-/// target, a point out of range, or options that select nothing (`nearest = Some(0)`, or neither
-/// rule given).
+/// Errors: [`CorrespondError::LengthMismatch`] for descriptors of different lengths,
+/// [`CorrespondError::EmptyMesh`] for an empty target, [`CorrespondError::IndexOutOfRange`]
+/// for a point out of range, [`CorrespondError::InvalidOptions`] for options that select
+/// nothing (`nearest = Some(0)`, or neither rule given) or a threshold below 1.
 pub fn candidates(
     template: &Descriptors,
     target: &Descriptors,
     points: &[u32],
     options: &CandidateOptions,
 ) -> Result<Vec<Vec<Candidate>>, CorrespondError> {
-    if template.dim != target.dim {
-        return Err(CorrespondError::InvalidArgument(format!(
-            "descriptor lengths differ: template {}, target {}",
-            template.dim, target.dim
-        )));
-    }
+    same_len(
+        "target descriptor length (as the template's)",
+        template.dim,
+        target.dim,
+    )?;
     if target.n == 0 {
-        return Err(CorrespondError::InvalidArgument(
-            "target has no vertices".into(),
-        ));
+        return Err(CorrespondError::EmptyMesh { side: "target" });
     }
     if let Some(&p) = points.iter().find(|&&p| p as usize >= template.n) {
-        return Err(CorrespondError::InvalidArgument(format!(
-            "template point {p} out of range ({} vertices)",
-            template.n
-        )));
+        return Err(CorrespondError::IndexOutOfRange {
+            what: "template point",
+            index: p as usize,
+            len: template.n,
+        });
     }
     match (options.nearest, options.threshold) {
         (Some(0), _) | (None, None) => {
-            return Err(CorrespondError::InvalidArgument(
+            return Err(CorrespondError::InvalidOptions(
                 "candidate options select nothing: give nearest ≥ 1 and/or a threshold".into(),
             ))
         }
         (_, Some(t)) if !(t.is_finite() && t >= 1.0) => {
-            return Err(CorrespondError::InvalidArgument(format!(
+            return Err(CorrespondError::InvalidOptions(format!(
                 "candidate threshold {t} must be a finite factor ≥ 1"
             )))
         }

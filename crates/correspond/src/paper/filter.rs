@@ -2,7 +2,7 @@
 //! point is dropped — this is what keeps a left limb from matching a right one.
 
 use crate::{Candidate, Descriptors};
-use symcorr_skeleton::Segment;
+use symcorr_skeleton::{BodySide, Segment};
 
 /// What the filter did, over all points.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -27,9 +27,9 @@ pub struct FilterStats {
 ///
 /// `halves` (optional, one table per mesh) refine the midline segments (pelvis, torso, head),
 /// which have a left and a right half that the segment label alone cannot tell apart:
-/// `-1`/`+1` for a vertex clearly on the subject's right/left of the skeleton's sagittal plane,
-/// `0` near the plane (or on a limb). A candidate whose half is the opposite non-zero value of
-/// the point's is dropped too.
+/// [`BodySide::Right`]/[`BodySide::Left`] for a vertex clearly on the subject's right/left of
+/// the skeleton's sagittal plane, [`BodySide::Midline`] near the plane (or on a limb). A
+/// candidate whose half opposes the point's is dropped too.
 ///
 /// If no candidate survives, the list becomes the single target vertex of the same segment
 /// whose descriptor is nearest (counted in [`FilterStats::fallbacks`]). If the target has no
@@ -52,12 +52,12 @@ pub fn skeleton_filter(
     cands: &mut [Vec<Candidate>],
     points: &[u32],
     (template_labels, target_labels): (&[Segment], &[Segment]),
-    halves: Option<(&[i8], &[i8])>,
+    halves: Option<(&[BodySide], &[BodySide])>,
     template: &Descriptors,
     target: &Descriptors,
 ) -> FilterStats {
     // Segments present on the target.
-    let mut present = [false; 17];
+    let mut present = [false; Segment::COUNT];
     for s in target_labels {
         present[s.index()] = true;
     }
@@ -68,11 +68,11 @@ pub fn skeleton_filter(
         } else {
             !sp.side().opposes(sq.side())
         };
-        same && halves.is_none_or(|(hp, hq)| hp[p as usize] * hq[q as usize] >= 0)
+        same && halves.is_none_or(|(hp, hq)| !hp[p as usize].opposes(hq[q as usize]))
     };
     assert_eq!(cands.len(), points.len(), "one candidate list per point");
     // Target vertices per segment, for the fallback search.
-    let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); 17];
+    let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); Segment::COUNT];
     for (v, s) in target_labels.iter().enumerate() {
         by_segment[s.index()].push(v as u32);
     }
@@ -170,7 +170,7 @@ pub fn sagittal_band(
     assert_eq!(cands.len(), points.len(), "one candidate list per point");
     assert_eq!(template_labels.len(), template_sagittal.len());
     assert_eq!(target_labels.len(), target_sagittal.len());
-    let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); 17];
+    let mut by_segment: Vec<Vec<u32>> = vec![Vec::new(); Segment::COUNT];
     for (v, s) in target_labels.iter().enumerate() {
         if is_midline(*s) {
             by_segment[s.index()].push(v as u32);
@@ -266,12 +266,12 @@ mod tests {
                 distance: 0.3,
             },
         ]];
-        let hu = [-1i8, 0, 1];
+        let hu = [BodySide::Right, BodySide::Midline, BodySide::Left];
         let s = skeleton_filter(
             &mut c,
             &[0],
             (&[Torso], &[Torso; 3]),
-            Some((&[1], &hu)),
+            Some((&[BodySide::Left], &hu)),
             &t,
             &u,
         );

@@ -5,13 +5,16 @@
 //! many degrees and whole regions land in the wrong half. [`refine_symmetry_plane`] improves
 //! it from the geometry (iterated reflect–match–refit, like ICP for a reflection).
 
+use nalgebra::{Matrix3, Point3, Vector3};
+
 /// Refines a symmetry plane `(origin, normal)` of the point set `points`: reflect every point
 /// across the plane, pair it with its nearest point (brute force, so keep the set to a few
 /// thousand points), and refit the plane to the pairs — normal = the dominant direction of the
 /// pair differences (power iteration on their scatter matrix, sign kept), origin = the mean of
 /// the pair midpoints. Pairs farther apart after reflection than twice their median are
 /// ignored (parts that are not symmetric). Returns the input plane unchanged when `points` has
-/// fewer than 8 points or the normal is zero.
+/// fewer than 8 points or the normal is zero. Arrays in and out, like the mesh positions the
+/// points come from.
 ///
 /// ```
 /// use symcorr_correspond::refine_symmetry_plane;
@@ -29,33 +32,25 @@ pub fn refine_symmetry_plane(
     normal: [f64; 3],
     iterations: usize,
 ) -> ([f64; 3], [f64; 3]) {
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let nn = dot(normal, normal).sqrt();
+    let normal = Vector3::from(normal);
+    let nn = normal.norm();
     if points.len() < 8 || nn == 0.0 || !nn.is_finite() {
-        return (origin, normal);
+        return (origin, normal.into());
     }
-    let (mut o, mut n) = (origin, [normal[0] / nn, normal[1] / nn, normal[2] / nn]);
+    let points: Vec<Point3<f64>> = points.iter().copied().map(Point3::from).collect();
+    let (mut o, mut n) = (Point3::from(origin), normal / nn);
     for _ in 0..iterations {
         // Reflect and pair.
         let pairs: Vec<(usize, usize, f64)> = points
             .iter()
             .enumerate()
-            .map(|(i, &x)| {
-                let s = dot([x[0] - o[0], x[1] - o[1], x[2] - o[2]], n);
-                let r = [
-                    x[0] - 2.0 * s * n[0],
-                    x[1] - 2.0 * s * n[1],
-                    x[2] - 2.0 * s * n[2],
-                ];
+            .map(|(i, x)| {
+                let s = (x - o).dot(&n);
+                let r = x - n * (2.0 * s);
                 let (j, d) = points
                     .iter()
                     .enumerate()
-                    .map(|(j, y)| {
-                        (
-                            j,
-                            (y[0] - r[0]).powi(2) + (y[1] - r[1]).powi(2) + (y[2] - r[2]).powi(2),
-                        )
-                    })
+                    .map(|(j, y)| (j, (y - r).norm_squared()))
                     .min_by(|a, b| a.1.total_cmp(&b.1))
                     .unwrap_or((i, 0.0));
                 (i, j, d)
@@ -66,21 +61,17 @@ pub fn refine_symmetry_plane(
         ds.select_nth_unstable_by(k, f64::total_cmp);
         let cut = 4.0 * ds[k].max(f64::MIN_POSITIVE); // squared: twice the median distance
                                                       // Scatter of the differences (x − y) of pairs on opposite sides, and mean midpoint.
-        let mut s = [[0.0; 3]; 3];
-        let mut mid = [0.0; 3];
+        let mut scatter = Matrix3::zeros();
+        let mut mid = Vector3::zeros();
         let mut count = 0usize;
         for &(i, j, d) in &pairs {
             if d > cut || i == j {
                 continue;
             }
-            let (x, y) = (points[i], points[j]);
-            let v = [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
-            for a in 0..3 {
-                for b in 0..3 {
-                    s[a][b] += v[a] * v[b];
-                }
-                mid[a] += (x[a] + y[a]) / 2.0;
-            }
+            let (x, y) = (points[i].coords, points[j].coords);
+            let v = x - y;
+            scatter += v * v.transpose();
+            mid += (x + y) / 2.0;
             count += 1;
         }
         if count < 4 {
@@ -89,33 +80,26 @@ pub fn refine_symmetry_plane(
         // Power iteration from the current normal (keeps the sign).
         let mut v = n;
         for _ in 0..50 {
-            let w = [dot(s[0], v), dot(s[1], v), dot(s[2], v)];
-            let l = dot(w, w).sqrt();
+            let w = scatter * v;
+            let l = w.norm();
             if l == 0.0 {
                 break;
             }
-            v = [w[0] / l, w[1] / l, w[2] / l];
+            v = w / l;
         }
-        if dot(v, n) < 0.0 {
-            v = [-v[0], -v[1], -v[2]];
+        if v.dot(&n) < 0.0 {
+            v = -v;
         }
-        let new_o = [
-            mid[0] / count as f64,
-            mid[1] / count as f64,
-            mid[2] / count as f64,
-        ];
-        let moved = dot(
-            [new_o[0] - o[0], new_o[1] - o[1], new_o[2] - o[2]],
-            [new_o[0] - o[0], new_o[1] - o[1], new_o[2] - o[2]],
-        );
-        let turned = 1.0 - dot(v, n);
+        let new_o = Point3::from(mid / count as f64);
+        let moved = (new_o - o).norm_squared();
+        let turned = 1.0 - v.dot(&n);
         o = new_o;
         n = v;
         if moved < 1e-18 && turned < 1e-15 {
             break;
         }
     }
-    (o, n)
+    (o.into(), n.into())
 }
 
 #[cfg(test)]

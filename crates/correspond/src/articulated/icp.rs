@@ -1,0 +1,85 @@
+//! Articulated ICP: every bone re-fitted rigidly to the pairs of the vertices it carries,
+//! anchored by its two joints, then the template re-skinned (DESIGN.md, Algorithm 7, step 4).
+
+use super::transforms::{kabsch, skin, BoneTransforms, FitPair};
+use super::Alignment;
+use crate::CorrespondError;
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+use symcorr_skeleton::{Bone, BONES};
+
+/// Posed template positions and unit normals.
+type Posed = (Vec<Point3<f64>>, Vec<Vector3<f64>>);
+
+/// A bone is re-fitted only with at least this many pairs.
+const MIN_BONE_PAIRS: usize = 20;
+/// A vertex pairs for a bone only when its skinning weight on the bone exceeds this.
+const MIN_PAIR_WEIGHT: f64 = 0.1;
+
+/// [`ArticulatedOptions::iterations`](crate::ArticulatedOptions) rounds of articulated ICP
+/// from `transforms` (updated in place), on the even stride `sample` of the template (per
+/// pool group). Each round pairs every sampled posed vertex with its nearest pool vertex, keeps
+/// the pairs that hold at the round's gate (shrinking geometrically from `gate_start` to
+/// `gate_end`), re-fits each bone with enough pairs by weighted Kabsch plus its two joints as
+/// anchors, and re-skins. Returns the final posed positions and normals.
+pub(super) fn articulated_icp(
+    al: &Alignment<'_>,
+    transforms: &mut BoneTransforms,
+    sample: &[Vec<u32>],
+) -> Result<Posed, CorrespondError> {
+    let (template, target, options) = (&al.template, &al.target, al.options);
+    let (mut posed, mut posed_normals) =
+        skin(template.positions, template.normals, al.weights, transforms);
+    let iterations = options.iterations.max(1);
+    for it in 0..iterations {
+        let frac = if iterations > 1 {
+            it as f64 / (iterations - 1) as f64
+        } else {
+            1.0
+        };
+        let gate =
+            al.unit_len * (options.gate_start * (options.gate_end / options.gate_start).powf(frac));
+        let near = al.nearest(&posed, &posed_normals, Some(sample))?;
+        // Pairs per bone: (rest position, target position, weight).
+        let mut per_bone: Vec<Vec<FitPair>> = vec![Vec::new(); Bone::COUNT];
+        for (v, &(q, d2)) in near.iter().enumerate() {
+            if !d2.is_finite() {
+                continue; // not in the sample
+            }
+            if !al.holds(&posed[v], &posed_normals[v], q, gate) {
+                continue;
+            }
+            let y = al.target_positions[q as usize];
+            for &(b, w) in al.weights.row(v) {
+                if w > MIN_PAIR_WEIGHT {
+                    per_bone[b].push((al.template_positions[v], y, w));
+                }
+            }
+        }
+        transforms
+            .par_iter_mut()
+            .zip(per_bone.into_par_iter())
+            .enumerate()
+            .for_each(|(b, (tr, mut pairs))| {
+                if pairs.len() < MIN_BONE_PAIRS {
+                    return;
+                }
+                let wsum: f64 = pairs.iter().map(|p| p.2).sum();
+                // The skeleton anchors the fit: both joints of the bone pulled to the
+                // target's joints.
+                let anchor = options.joint_anchor * wsum;
+                for j in [BONES[b].parent, BONES[b].child] {
+                    pairs.push((
+                        template.joints.position(j),
+                        target.joints.position(j),
+                        anchor,
+                    ));
+                }
+                if let Some(fit) = kabsch(&pairs) {
+                    *tr = fit;
+                }
+            });
+        (posed, posed_normals) = skin(template.positions, template.normals, al.weights, transforms);
+    }
+    Ok((posed, posed_normals))
+}

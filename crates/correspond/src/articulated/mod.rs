@@ -1,0 +1,427 @@
+//! Skeleton-driven articulated alignment: symcorr's default method, for whole bodies and
+//! partial targets (single-view scans) alike (DESIGN.md, Algorithm 7).
+//!
+//! Intrinsic descriptors (si-HKS, Laplace–Beltrami bases, geodesic landmark coordinates) change
+//! wholesale when half of the surface is missing: a single-view scan has a long boundary, holes
+//! at every occlusion, and geodesics that run around them. The skeleton does not: both meshes
+//! come with their joints in their own frames. [`articulated_match`] therefore works
+//! *extrinsically* (lengths in √area units, see [`ArticulatedOptions`]):
+//!
+//! 1. **Pools and trees.** Each template segment's pool is the target region of that segment
+//!    and of its skeleton neighbours ([`SegmentPools::with_adjacent`]), grown by a geodesic band
+//!    ([`ArticulatedOptions::band`]) and never on the other side of the body; no sagittal
+//!    halves. One exact k-d tree per pool over position ⊕ β·normal (6-D, β =
+//!    [`ArticulatedOptions::normal_weight`]) answers every nearest-neighbour query below.
+//! 2. **Pose the template** onto the target's skeleton by linear blend skinning with the
+//!    template's bone-heat weights ([`bone_transforms`]: the pelvis and the chest get full frames
+//!    from the hips and shoulders, every other bone the smallest rotation taking its direction
+//!    onto the target's, composed down the kinematic chain; [`skin`]; module `transforms`).
+//! 3. **Head twist search.** The joints fix a bone's direction, not its roll, and a roughly
+//!    round head can sit in a wrong roll that ICP does not leave: the head bone is started at
+//!    each of [`TWISTS`] about the target's neck → head axis, refined by a few rigid ICP steps on
+//!    at most 600 of its vertices, and the start with the lowest truncated residual wins
+//!    (module `twist`).
+//! 4. **Articulated ICP** ([`ArticulatedOptions::iterations`] rounds, on an even stride sample
+//!    of at most [`ArticulatedOptions::icp_points`] template vertices): every sampled vertex is
+//!    paired with its nearest pool vertex; a pair holds when it is within the round's gate
+//!    (shrinking geometrically from [`ArticulatedOptions::gate_start`] to
+//!    [`ArticulatedOptions::gate_end`]), its normals agree
+//!    ([`ArticulatedOptions::min_normal_cosine`]: the template's back has no counterpart on a
+//!    front view) and its target point is not on the target's border beyond
+//!    [`ArticulatedOptions::boundary_gate`]. Each bone with at least 20 pairs of weight > 0.1 is
+//!    re-fitted by weighted Kabsch (Arun et al. 1987) to them plus its two joints as anchors
+//!    ([`ArticulatedOptions::joint_anchor`]), then the template is re-skinned (module `icp`).
+//! 5. **Non-rigid step** (needs the template's edge graph, [`ArticulatedInputs::neighbors`]):
+//!    what rigid bones blended by skinning weights cannot express (another rig's skinning, soft
+//!    tissue, body shape) is pulled in by a smooth displacement field — the held pairs' offsets
+//!    spread over the edge graph by Jacobi iterations of
+//!    `min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²` — over
+//!    [`ArticulatedOptions::nonrigid_rounds`] rounds whose gates run coarse to fine from
+//!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end` (module `nonrigid`).
+//! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
+//!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`.
+//!
+//! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
+//! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
+//! `docs/decisions/2026-11-23-articulated-nonrigid-step.md`,
+//! `docs/decisions/2026-12-01-articulated-adjacent-pools.md`,
+//! `docs/decisions/2026-12-01-articulated-kdtrees.md`.
+
+mod icp;
+mod nonrigid;
+mod transforms;
+mod twist;
+
+pub use transforms::{bone_transforms, outward_normals, skin, BoneTransforms};
+pub use twist::TWISTS;
+
+use crate::kdtree::PoolTrees;
+use crate::{CorrespondError, Pair, SegmentPools};
+use nalgebra::{Point3, Vector3};
+use std::time::Instant;
+use symcorr_attach::BoneWeights;
+use symcorr_skeleton::{Bone, Joint, Segment, Skeleton, BONES};
+use symcorr_spectral::EdgeGraph;
+
+/// What [`articulated_match`] needs about one mesh.
+#[derive(Debug, Clone, Copy)]
+pub struct ArticulatedInputs<'a> {
+    /// Vertex positions.
+    pub positions: &'a [[f64; 3]],
+    /// Unit vertex normals, pointing out of the body (for a scan: towards the camera).
+    pub normals: &'a [[f64; 3]],
+    /// Segment label per vertex.
+    pub labels: &'a [Segment],
+    /// The skeleton (refined joints) in this mesh's frame.
+    pub joints: &'a Skeleton,
+    /// Per vertex: on the mesh's boundary? (`None`: a closed surface.) Used on the target side.
+    pub boundary: Option<&'a [bool]>,
+    /// The mesh's vertex neighbours (edge graph); on the template side they carry the
+    /// non-rigid step (`None`: no non-rigid step).
+    pub neighbors: Option<&'a [Vec<u32>]>,
+    /// Total surface area.
+    pub area: f64,
+}
+
+/// Options of [`articulated_match`]; lengths in units of the template's √area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArticulatedOptions {
+    /// ICP iterations.
+    pub iterations: usize,
+    /// Pair-rejection distance of the first iteration.
+    pub gate_start: f64,
+    /// Pair-rejection distance of the last iteration and of the final counterpart test.
+    pub gate_end: f64,
+    /// Weight of the normal difference next to the position in the nearest-neighbour search
+    /// (`|x − y|² + (β·|n_x − n_y|)²`, β in √area).
+    pub normal_weight: f64,
+    /// Minimum cosine between a pair's normals.
+    pub min_normal_cosine: f64,
+    /// Weight of each joint anchor in a bone's fit, relative to the bone's total vertex weight.
+    pub joint_anchor: f64,
+    /// Geodesic band of the target pools (see [`SegmentPools::new`]), in the target's √area.
+    pub band: f64,
+    /// At most this many template vertices (an even stride sample) drive the ICP fits.
+    pub icp_points: usize,
+    /// A pair whose target point lies on the target's boundary is rejected (and the template
+    /// point has no counterpart) when longer than this.
+    pub boundary_gate: f64,
+    /// Rounds of the non-rigid step after the ICP (0: none).
+    pub nonrigid_rounds: usize,
+    /// Pair-rejection distance of the first non-rigid round; the rounds' gates shrink
+    /// geometrically to [`ArticulatedOptions::gate_end`].
+    pub nonrigid_gate_start: f64,
+    /// Smoothness weight λ of the non-rigid displacement field (per edge, against 1 per
+    /// accepted pair).
+    pub nonrigid_smoothing: f64,
+}
+
+impl Default for ArticulatedOptions {
+    fn default() -> Self {
+        ArticulatedOptions {
+            iterations: 8,
+            gate_start: 0.10,
+            gate_end: 0.03,
+            normal_weight: 0.03,
+            min_normal_cosine: 0.3,
+            joint_anchor: 0.1,
+            band: 0.02,
+            icp_points: DEFAULT_ICP_POINTS,
+            boundary_gate: 0.01,
+            nonrigid_rounds: 3,
+            nonrigid_gate_start: 0.06,
+            nonrigid_smoothing: 5.0,
+        }
+    }
+}
+
+/// Default [`ArticulatedOptions::icp_points`].
+pub const DEFAULT_ICP_POINTS: usize = 16_000;
+
+/// The result of [`articulated_match`].
+#[derive(Debug, Clone)]
+pub struct ArticulatedMatches {
+    /// One pair per template vertex, in vertex order; `confidence` is `1/(1 + d/gate)` with
+    /// `d` the final distance.
+    pub pairs: Vec<crate::Pair>,
+    /// Per template vertex, the final distance from the posed template point to its match,
+    /// over √area.
+    pub distance: Vec<f64>,
+    /// Per template vertex: does the target show it (within the final gate, same facing)?
+    pub has_counterpart: Vec<bool>,
+    /// The template posed onto the target (the final skinning and the non-rigid step).
+    pub posed: Vec<Point3<f64>>,
+    /// The final bone transforms (template frame → target frame), one per bone of
+    /// [`BONES`](symcorr_skeleton::BONES).
+    pub transforms: BoneTransforms,
+    /// Seconds per stage: `segment_pools`, `articulated_icp` (with the k-d trees and the head's
+    /// twist search), `nonrigid`, `map`.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+/// Matches every template vertex onto a (possibly partial) target by skeleton-driven
+/// articulated alignment (see the module docs). `weights` are the template's bone weights;
+/// `graph` is the target's edge graph (pool bands).
+///
+/// Errors: [`CorrespondError::EmptyMesh`] for a mesh without vertices,
+/// [`CorrespondError::LengthMismatch`] when the tables of a side (or the template's weights)
+/// disagree in length.
+pub fn articulated_match(
+    template: &ArticulatedInputs<'_>,
+    weights: &BoneWeights,
+    target: &ArticulatedInputs<'_>,
+    graph: &EdgeGraph,
+    options: &ArticulatedOptions,
+) -> Result<ArticulatedMatches, CorrespondError> {
+    validate(template, weights, target)?;
+    let mut timings = Vec::new();
+    let t = Instant::now();
+    let pools = segment_pools(template, target, graph, options)?;
+    timings.push(("segment_pools", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let al = Alignment::new(template, weights, target, &pools, options)?;
+    let mut transforms = initial_transforms(&al)?;
+    let sample = al.icp_sample();
+    let (mut posed, posed_normals) = icp::articulated_icp(&al, &mut transforms, &sample)?;
+    timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    nonrigid::nonrigid_step(&al, &mut posed, &posed_normals)?;
+    timings.push(("nonrigid", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let map = final_map(&al, &posed, &posed_normals)?;
+    timings.push(("map", t.elapsed().as_secs_f64()));
+    Ok(ArticulatedMatches {
+        pairs: map.pairs,
+        distance: map.distance,
+        has_counterpart: map.has_counterpart,
+        posed,
+        transforms,
+        timings,
+    })
+}
+
+/// Checks that both meshes have vertices, that each side's tables have one entry per vertex,
+/// and that the template's bone weights have one row per vertex.
+fn validate(
+    template: &ArticulatedInputs<'_>,
+    weights: &BoneWeights,
+    target: &ArticulatedInputs<'_>,
+) -> Result<(), CorrespondError> {
+    for (side, s) in [("template", template), ("target", target)] {
+        let n = s.positions.len();
+        if n == 0 {
+            return Err(CorrespondError::EmptyMesh { side });
+        }
+        let tables = [
+            ("normals", Some(s.normals.len())),
+            ("labels", Some(s.labels.len())),
+            ("boundary flags", s.boundary.map(<[bool]>::len)),
+        ];
+        for (table, len) in tables {
+            if let Some(found) = len.filter(|&l| l != n) {
+                return Err(CorrespondError::LengthMismatch {
+                    what: format!("{side} {table} (one per position)"),
+                    expected: n,
+                    found,
+                });
+            }
+        }
+    }
+    if weights.len() != template.positions.len() {
+        return Err(CorrespondError::LengthMismatch {
+            what: "template bone weight rows (one per vertex)".into(),
+            expected: template.positions.len(),
+            found: weights.len(),
+        });
+    }
+    Ok(())
+}
+
+/// The target pools of the template's segments: each segment's target region and its
+/// skeleton neighbours' ([`SegmentPools::with_adjacent`]), grown by the geodesic band.
+///
+/// No sagittal halves on the midline segments: the alignment already puts each side on its
+/// side, and a symmetry plane fitted to a turned head is often off by tens of degrees.
+/// Adjacent segments join each pool: a label boundary that moved between the meshes (a neck
+/// the target's attachment gave to a clavicle) no longer cuts the true vertex out of the pool.
+/// Measured: docs/decisions/2026-11-23-articulated-alignment.md and
+/// docs/decisions/2026-12-01-articulated-adjacent-pools.md.
+fn segment_pools(
+    template: &ArticulatedInputs<'_>,
+    target: &ArticulatedInputs<'_>,
+    graph: &EdgeGraph,
+    options: &ArticulatedOptions,
+) -> Result<SegmentPools, CorrespondError> {
+    SegmentPools::with_adjacent(
+        (template.labels, None),
+        (target.labels, None),
+        graph,
+        options.band * target.area.sqrt(),
+    )
+}
+
+/// What every step of the alignment shares: both meshes (positions and normals as nalgebra
+/// points and vectors), the pools and their k-d trees over position ⊕ β·normal, and the
+/// lengths derived from the options.
+pub(super) struct Alignment<'a> {
+    template: ArticulatedInputs<'a>,
+    weights: &'a BoneWeights,
+    target: ArticulatedInputs<'a>,
+    pools: &'a SegmentPools,
+    options: &'a ArticulatedOptions,
+    trees: PoolTrees,
+    template_positions: Vec<Point3<f64>>,
+    template_normals: Vec<Vector3<f64>>,
+    target_positions: Vec<Point3<f64>>,
+    target_normals: Vec<Vector3<f64>>,
+    /// The template's √area: the unit of every length of the options.
+    unit_len: f64,
+    /// β of the features, in length units.
+    beta: f64,
+    /// [`ArticulatedOptions::boundary_gate`] in length units.
+    boundary_gate: f64,
+}
+
+impl<'a> Alignment<'a> {
+    /// Converts the meshes and builds one k-d tree per pool over the target's features.
+    fn new(
+        template: &ArticulatedInputs<'a>,
+        weights: &'a BoneWeights,
+        target: &ArticulatedInputs<'a>,
+        pools: &'a SegmentPools,
+        options: &'a ArticulatedOptions,
+    ) -> Result<Alignment<'a>, CorrespondError> {
+        let points = |p: &[[f64; 3]]| p.iter().copied().map(Point3::from).collect::<Vec<_>>();
+        let vectors = |p: &[[f64; 3]]| p.iter().copied().map(Vector3::from).collect::<Vec<_>>();
+        let unit_len = template.area.sqrt();
+        let beta = options.normal_weight * unit_len;
+        let target_positions = points(target.positions);
+        let target_normals = vectors(target.normals);
+        let target_features: Vec<[f64; 6]> = target_positions
+            .iter()
+            .zip(&target_normals)
+            .map(|(x, n)| feature(x, n, beta))
+            .collect();
+        Ok(Alignment {
+            template: *template,
+            weights,
+            target: *target,
+            pools,
+            options,
+            trees: PoolTrees::new(pools, &target_features)?,
+            template_positions: points(template.positions),
+            template_normals: vectors(template.normals),
+            target_positions,
+            target_normals,
+            unit_len,
+            beta,
+            // A template point whose nearest target point is on the target's border, and not
+            // right at it, lies beyond what the target shows (the standard rejection of
+            // partial ICP).
+            boundary_gate: options.boundary_gate * unit_len,
+        })
+    }
+
+    /// The nearest-neighbour feature of a posed point and its normal.
+    fn feature(&self, x: &Point3<f64>, n: &Vector3<f64>) -> [f64; 6] {
+        feature(x, n, self.beta)
+    }
+
+    /// For every posed template vertex (or only the members `subset` per group), the nearest
+    /// target vertex of its pool in feature space and the squared feature distance.
+    fn nearest(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        subset: Option<&[Vec<u32>]>,
+    ) -> Result<Vec<(u32, f64)>, CorrespondError> {
+        let f: Vec<[f64; 6]> = posed
+            .iter()
+            .zip(normals)
+            .map(|(x, n)| self.feature(x, n))
+            .collect();
+        self.trees.nearest(self.pools, &f, subset)
+    }
+
+    /// Does the pair (posed template point `x`, its normal `n`) → target vertex `q` hold at
+    /// this gate? Close enough, facing the same way, and not hanging over the target's border.
+    fn holds(&self, x: &Point3<f64>, n: &Vector3<f64>, q: u32, gate: f64) -> bool {
+        let q = q as usize;
+        let d = (x - self.target_positions[q]).norm();
+        let on_boundary = self.target.boundary.is_some_and(|b| b[q]);
+        d <= gate
+            && n.dot(&self.target_normals[q]) >= self.options.min_normal_cosine
+            && !(on_boundary && d > self.boundary_gate)
+    }
+
+    /// The template vertices that drive the ICP fits, per pool group: an even stride sample
+    /// of at most [`ArticulatedOptions::icp_points`] (a bone's rigid fit needs hundreds of
+    /// pairs, not tens of thousands; the final map uses all).
+    fn icp_sample(&self) -> Vec<Vec<u32>> {
+        let n = self.template.positions.len();
+        let stride = n.div_ceil(self.options.icp_points.max(1)).max(1);
+        self.pools
+            .members_where(|v| (v as usize).is_multiple_of(stride))
+    }
+}
+
+/// Position ⊕ β·normal: the nearest-neighbour feature of the alignment.
+fn feature(x: &Point3<f64>, n: &Vector3<f64>, beta: f64) -> [f64; 6] {
+    let m = n * beta;
+    [x.x, x.y, x.z, m.x, m.y, m.z]
+}
+
+/// The bone transforms that pose the template on the target's skeleton
+/// ([`bone_transforms`]), with the head bone's roll chosen by the twist search.
+fn initial_transforms(al: &Alignment<'_>) -> Result<BoneTransforms, CorrespondError> {
+    let mut transforms = bone_transforms(al.template.joints, al.target.joints);
+    let head = Bone::new(Joint::ShoulderCenter, Joint::Head);
+    // Invariant: the neck → head bone is one of BONES.
+    let head_bone = BONES.iter().position(|&b| b == head).unwrap_or(2);
+    transforms[head_bone] = twist::twist_search(al, head_bone, transforms[head_bone])?;
+    Ok(transforms)
+}
+
+/// The dense map of [`articulated_match`], per template vertex.
+struct FinalMap {
+    pairs: Vec<Pair>,
+    distance: Vec<f64>,
+    has_counterpart: Vec<bool>,
+}
+
+/// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
+/// when that pair holds at the final gate (`gate_end`), and its confidence is
+/// `1/(1 + d/gate)` from the final distance `d`.
+fn final_map(
+    al: &Alignment<'_>,
+    posed: &[Point3<f64>],
+    posed_normals: &[Vector3<f64>],
+) -> Result<FinalMap, CorrespondError> {
+    let gate = al.options.gate_end * al.unit_len;
+    let near = al.nearest(posed, posed_normals, None)?;
+    let n = posed.len();
+    let mut has_counterpart = Vec::with_capacity(n);
+    let mut distance = Vec::with_capacity(n);
+    let pairs = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, _))| {
+            let d = (posed[v] - al.target_positions[q as usize]).norm();
+            has_counterpart.push(al.holds(&posed[v], &posed_normals[v], q, gate));
+            distance.push(d / al.unit_len);
+            Pair {
+                template: v as u32,
+                target: q,
+                confidence: 1.0 / (1.0 + d / gate),
+            }
+        })
+        .collect();
+    Ok(FinalMap {
+        pairs,
+        distance,
+        has_counterpart,
+    })
+}

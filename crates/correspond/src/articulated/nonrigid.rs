@@ -1,0 +1,73 @@
+//! The non-rigid step of the articulated method (DESIGN.md, Algorithm 7, step 5): what rigid
+//! bones blended by skinning weights cannot express (another rig's skinning, soft tissue,
+//! body shape) is pulled in by a smooth displacement field over the template's edge graph.
+
+use super::Alignment;
+use crate::CorrespondError;
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+
+/// Jacobi iterations per round of the non-rigid step.
+const NONRIGID_JACOBI: usize = 30;
+
+/// Moves `posed` by [`ArticulatedOptions::nonrigid_rounds`](crate::ArticulatedOptions)
+/// rounds of a smooth displacement field; nothing without the template's edge graph
+/// (`neighbors`, one list per vertex). Each round pairs every posed vertex with its nearest
+/// pool vertex, keeps the pairs that hold at the round's gate (coarse to fine, from
+/// `nonrigid_gate_start` to `gate_end`, so a body part further off than the final gate — a
+/// heavier shape's belly — is pulled in by the early rounds), and spreads their offsets `d_v`
+/// by Jacobi iterations of `min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²` (`r_v` 1 for a
+/// held pair, else 0). The normals stay those of the skinning.
+pub(super) fn nonrigid_step(
+    al: &Alignment<'_>,
+    posed: &mut [Point3<f64>],
+    posed_normals: &[Vector3<f64>],
+) -> Result<(), CorrespondError> {
+    let options = al.options;
+    let n = posed.len();
+    let Some(nb) = al.template.neighbors.filter(|nb| nb.len() == n) else {
+        return Ok(());
+    };
+    let rounds = options.nonrigid_rounds;
+    let g0 = options.nonrigid_gate_start.max(options.gate_end);
+    for round in 0..rounds {
+        let frac = if rounds > 1 {
+            round as f64 / (rounds - 1) as f64
+        } else {
+            1.0
+        };
+        let round_gate = al.unit_len * g0 * (options.gate_end / g0).powf(frac);
+        let near = al.nearest(posed, posed_normals, None)?;
+        let mut d = vec![Vector3::zeros(); n];
+        let mut r = vec![0.0; n];
+        for (v, &(q, _)) in near.iter().enumerate() {
+            if al.holds(&posed[v], &posed_normals[v], q, round_gate) {
+                d[v] = al.target_positions[q as usize] - posed[v];
+                r[v] = 1.0;
+            }
+        }
+        let lambda = options.nonrigid_smoothing;
+        let mut field = d.clone();
+        for _ in 0..NONRIGID_JACOBI {
+            field = (0..n)
+                .into_par_iter()
+                .map(|v| {
+                    let mut acc = d[v] * r[v];
+                    for &u in &nb[v] {
+                        acc += field[u as usize] * lambda;
+                    }
+                    let wsum = r[v] + lambda * nb[v].len() as f64;
+                    if wsum > 0.0 {
+                        acc * (1.0 / wsum)
+                    } else {
+                        Vector3::zeros()
+                    }
+                })
+                .collect();
+        }
+        for (x, f) in posed.iter_mut().zip(&field) {
+            *x += f;
+        }
+    }
+    Ok(())
+}
