@@ -209,8 +209,26 @@ fn strict_paper_filter_and_figure_outputs() {
         .arg(&base)
         .arg("--lines-out")
         .arg(&lines)
-        .args(["--lines", "25"]));
+        .args(["--lines", "25", "--explain", "4000"]));
     assert!(o.status.success());
+    // --explain 4000: the strict filter keeps only candidates of the point's segment, and the
+    // selected match is one of the kept ones and the one the correspondence file holds.
+    let e = read_json(&dir.path().join("strict.explain-4000.json"));
+    assert_eq!(e["format"], "symcorr.explain/1");
+    assert_eq!(e["filter"], "strict");
+    assert_eq!(e["template_point"], 4000);
+    let segment = e["segment"].as_str().unwrap();
+    let candidates = e["candidates"].as_array().unwrap();
+    assert!(!candidates.is_empty());
+    for c in candidates {
+        assert_eq!(c["kept"].as_bool().unwrap(), c["segment"] == segment, "{c}");
+    }
+    let filtered = e["filtered"].as_array().unwrap();
+    assert!(filtered.iter().all(|c| c["segment"] == segment));
+    let selected = e["selected"]["target"].as_u64().unwrap();
+    assert!(filtered.iter().any(|c| c["target"] == selected));
+    let fig = symcorr_mesh::io::read(dir.path().join("strict.explain-4000.ply")).unwrap();
+    assert!(fig.colors.unwrap().contains(&[30, 60, 230]));
     let n = |name: &str| {
         symcorr_mesh::io::read(mesh(name))
             .unwrap()

@@ -67,9 +67,10 @@ pub use articulated::{
     ArticulatedMatches, ArticulatedOptions, BoneTransforms, DEFAULT_ICP_POINTS, TWISTS,
 };
 pub use paper::{
-    assign_confidence, base_profile, candidates, farthest_point_sample, match_points,
-    sagittal_band, select, skeleton_filter, BandStats, Candidate, CandidateOptions, Descriptors,
-    FilterStats, Match, MatchOptions, PaperInputs, PointMatches, DEFAULT_SAGITTAL_RATIO,
+    assign_confidence, base_profile, candidates, explain_point, farthest_point_sample,
+    match_points, sagittal_band, select, skeleton_filter, BandStats, Candidate, CandidateOptions,
+    Descriptors, FilterStats, Match, MatchOptions, PaperFilter, PaperInputs, PointExplanation,
+    PointMatches, DEFAULT_SAGITTAL_RATIO,
 };
 pub use pools::{adjacent_segments, nearest_in_pools, SegmentPools};
 pub use refined::{

@@ -156,6 +156,49 @@ pub fn base_set_figure(
     Ok((scene.mesh, colours))
 }
 
+/// The paper's Fig. 2 for one template point (a [`symcorr_correspond::PointExplanation`] in
+/// the prepared meshes' ids): template and target side by side in pale segment colours, the
+/// point marked in blue on the template, and on the target the candidates the filter removed
+/// in red, those it kept in green and the selected one in black (marks of 2.5 mark radii).
+pub fn explain_figure(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    explanation: &symcorr_correspond::PointExplanation,
+) -> Result<(TriMesh, Vec<[u8; 3]>), PipelineError> {
+    let scene = SideBySide::new(&template.mesh, &target.mesh)?;
+    let mut colours = body_colours(template, target);
+    let r = 2.5 * mark_radius(template);
+    let mut mark = |mesh: &TriMesh, offset: u32, centre: u32, colour: [u8; 3]| {
+        let c = Point3::from(mesh.positions[centre as usize]);
+        for (v, &p) in mesh.positions.iter().enumerate() {
+            if (Point3::from(p) - c).norm() <= r {
+                colours[v + offset as usize] = colour;
+            }
+        }
+    };
+    mark(&template.mesh, 0, explanation.point, [30, 60, 230]);
+    let kept = |q: u32| explanation.filtered.iter().any(|c| c.vertex == q);
+    for c in &explanation.candidates {
+        let colour = if kept(c.vertex) {
+            [20, 170, 40]
+        } else {
+            [230, 20, 20]
+        };
+        mark(&target.mesh, scene.target_offset, c.vertex, colour);
+    }
+    for c in explanation
+        .filtered
+        .iter()
+        .filter(|c| !explanation.candidates.contains(c))
+    {
+        mark(&target.mesh, scene.target_offset, c.vertex, [20, 170, 40]);
+    }
+    if let Some((c, _)) = &explanation.selected {
+        mark(&target.mesh, scene.target_offset, c.vertex, [20, 20, 20]);
+    }
+    Ok((scene.mesh, colours))
+}
+
 /// The paper's Figs. 1 and 6: template and target side by side in pale segment colours, and
 /// up to `count` matches (a farthest-point sample of the matched template points) drawn as
 /// lines in the template point's segment colour, or in red when a match joins the subject's

@@ -19,6 +19,59 @@ use std::path::Path;
 pub const CORRESPONDENCE_FORMAT: &str = "symcorr.correspondence/1";
 /// The `format` tag of label files.
 pub const LABELS_FORMAT: &str = "symcorr.labels/1";
+/// The `format` tag of `match --explain` files.
+pub const EXPLAIN_FORMAT: &str = "symcorr.explain/1";
+
+/// A `symcorr.explain/1` file (`match --method paper --explain POINT`): one template point
+/// through the paper's stages, its Fig. 2. Vertex ids are the input files' ids.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExplainFile {
+    /// Its candidates by si-HKS distance (§3.1), nearest first, before the filter; `kept`
+    /// says which the filter left.
+    pub candidates: Vec<ExplainedCandidate>,
+    /// The filter removed every candidate and `filtered` is its fallback.
+    pub fallback: bool,
+    /// `off`, `strict` or `extended`.
+    pub filter: String,
+    /// What the filter left, nearest first (its fallback when it removed every candidate).
+    pub filtered: Vec<ExplainedCandidate>,
+    /// [`EXPLAIN_FORMAT`].
+    pub format: String,
+    /// The template point's segment.
+    pub segment: String,
+    /// The candidate eq. 8 selects, and its `|D̂(c) − D̂(p)|` (`null`: no candidate).
+    pub selected: Option<ExplainedSelection>,
+    /// The target mesh file.
+    pub target: MeshRef,
+    /// The template mesh file.
+    pub template: MeshRef,
+    /// The template point.
+    pub template_point: u32,
+}
+
+/// A candidate of an [`ExplainFile`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExplainedCandidate {
+    /// Euclidean si-HKS distance to the template point's descriptor.
+    pub descriptor_distance: f64,
+    /// The filter kept it.
+    pub kept: bool,
+    /// Its segment on the target.
+    pub segment: String,
+    /// The target vertex.
+    pub target: u32,
+}
+
+/// The selected match of an [`ExplainFile`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExplainedSelection {
+    /// Euclidean si-HKS distance.
+    pub descriptor_distance: f64,
+    /// `|D̂(c) − D̂(p)|` (eq. 8).
+    pub profile_gap: f64,
+    /// The target vertex.
+    pub target: u32,
+}
 
 /// A `symcorr.correspondence/1` file. Vertex ids are the input files' ids.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

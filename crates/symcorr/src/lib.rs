@@ -90,6 +90,9 @@ pub enum OptionError {
     /// segment pools are its skeleton constraint.
     #[error("switching the skeleton filter off is the paper pipeline's ablation; the articulated and refined methods always keep matches on their segment")]
     AblationNeedsPaper,
+    /// A paper filter other than the default with another method, which has no such filter.
+    #[error("the skeleton filter variant belongs to the paper pipeline; the articulated and refined methods have segment pools instead")]
+    PaperFilterNeedsPaper,
 }
 
 /// Everything that can go wrong in the pipeline, by stage.

@@ -1,16 +1,19 @@
-//! Output files: `symcorr.correspondence/1` and `symcorr.labels/1` JSON ([`crate::formats`]),
+//! Output files: `symcorr.correspondence/1`, `symcorr.labels/1` and `symcorr.explain/1` JSON
+//! ([`crate::formats`]),
 //! match- and segment-coloured meshes, the cumulative error curve as SVG. Every file is written
 //! through [`symcorr_mesh::io::atomic_write`] (temporary file in the same directory, then
 //! rename), so a failure never leaves a half-written output.
 
 use crate::formats::{
-    Alignment, Component, CorrespondenceFile, FilterCounts, JointMoveEntry, LabelDiagnostics,
-    LabelsFile, MeshPair, MeshRef, RepairedJoint, LABELS_FORMAT,
+    Alignment, Component, CorrespondenceFile, ExplainFile, ExplainedCandidate, ExplainedSelection,
+    FilterCounts, JointMoveEntry, LabelDiagnostics, LabelsFile, MeshPair, MeshRef, RepairedJoint,
+    EXPLAIN_FORMAT, LABELS_FORMAT,
 };
 use crate::{Correspondence, PreparedMesh};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use symcorr_attach::{palette, Attachment};
+use symcorr_correspond::{PaperFilter, PointExplanation};
 use symcorr_skeleton::{Joint, Segment, BONES};
 
 pub use crate::formats::CORRESPONDENCE_FORMAT;
@@ -217,6 +220,47 @@ fn field_colour(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> [u8; 3] {
         c[k] = (40.0 + 215.0 * t).round() as u8;
     }
     c
+}
+
+/// The `symcorr.explain/1` file of one template point's [`PointExplanation`] (prepared ids, as
+/// [`crate::Pipeline::explain`] returns it), in the input files' ids.
+pub fn explain_file(
+    (template_path, template): (&str, &PreparedMesh),
+    (target_path, target): (&str, &PreparedMesh),
+    filter: PaperFilter,
+    e: &PointExplanation,
+) -> ExplainFile {
+    let mesh = |path: &str, p: &PreparedMesh| MeshRef {
+        path: path.to_string(),
+        vertices: p.input_mesh().num_vertices(),
+    };
+    let candidate = |c: &symcorr_correspond::Candidate| ExplainedCandidate {
+        descriptor_distance: c.distance,
+        kept: e.filtered.iter().any(|f| f.vertex == c.vertex),
+        segment: target.labels()[c.vertex as usize].name().to_string(),
+        target: target.input_id(c.vertex),
+    };
+    ExplainFile {
+        candidates: e.candidates.iter().map(candidate).collect(),
+        fallback: e.fallback,
+        filter: match filter {
+            PaperFilter::Off => "off",
+            PaperFilter::Strict => "strict",
+            PaperFilter::Extended { .. } => "extended",
+        }
+        .to_string(),
+        filtered: e.filtered.iter().map(candidate).collect(),
+        format: EXPLAIN_FORMAT.to_string(),
+        segment: template.labels()[e.point as usize].name().to_string(),
+        selected: e.selected.as_ref().map(|(c, gap)| ExplainedSelection {
+            descriptor_distance: c.distance,
+            profile_gap: *gap,
+            target: target.input_id(c.vertex),
+        }),
+        target: mesh(target_path, target),
+        template: mesh(template_path, template),
+        template_point: template.input_id(e.point),
+    }
 }
 
 /// Per-vertex colours of the template and the target in which matched points share a colour:

@@ -6,10 +6,11 @@ use nalgebra::Point3;
 use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Attachment};
 use symcorr_correspond::{
-    articulated_match, base_profile, coverage, farthest_point_sample, landmark_coordinates,
-    match_points, outward_normals, refine_dense, refine_symmetry_plane, skeleton_landmarks,
-    ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, Descriptors, FilterStats, Match,
-    MatchOptions, Pair, PaperInputs, RefineOptions, RefinedInputs, SpectralBasis,
+    articulated_match, base_profile, coverage, explain_point, farthest_point_sample,
+    landmark_coordinates, match_points, outward_normals, refine_dense, refine_symmetry_plane,
+    skeleton_landmarks, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, Descriptors,
+    FilterStats, Match, MatchOptions, Pair, PaperFilter, PaperInputs, PointExplanation,
+    RefineOptions, RefinedInputs, SpectralBasis,
 };
 use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
 use symcorr_skeleton::{BodySide, Joint, Plane, SagittalPlanes, Segment, Skeleton};
@@ -688,8 +689,8 @@ pub struct PipelineOptions {
 
 impl PipelineOptions {
     /// Refuses options out of range and combinations that would silently run something else
-    /// than asked: the skeleton filter switch (`matching.skeleton_filter = false`, the paper's
-    /// ablation) has no meaning for [`Method::Refined`] and [`Method::Articulated`], whose
+    /// than asked: the paper's filter choice (`matching.filter`: its ablation
+    /// [`PaperFilter::Off`], or [`PaperFilter::Strict`]) has no meaning for [`Method::Refined`] and [`Method::Articulated`], whose
     /// segment pools are their skeleton constraint. [`Pipeline::run`] calls it; callers that
     /// want to fail before reading any file call it first.
     pub fn check(&self) -> Result<(), OptionError> {
@@ -713,8 +714,12 @@ impl PipelineOptions {
         if self.method != Method::Articulated && self.prepare.eigenpairs < 2 {
             return Err(OptionError::TooFewEigenpairs(self.prepare.eigenpairs));
         }
-        if self.method != Method::Paper && !self.matching.skeleton_filter {
-            return Err(OptionError::AblationNeedsPaper);
+        if self.method != Method::Paper {
+            match self.matching.filter {
+                PaperFilter::Off => return Err(OptionError::AblationNeedsPaper),
+                f if f != PaperFilter::DEFAULT => return Err(OptionError::PaperFilterNeedsPaper),
+                _ => {}
+            }
         }
         Ok(())
     }
@@ -926,6 +931,26 @@ impl Pipeline {
         }
     }
 
+    /// One template point (`point`, a vertex of `template.mesh`) through the paper's stages
+    /// with this pipeline's candidate rule and filter: the candidates before and after the
+    /// filter and the selected one (the paper's Fig. 2; symcorr-correspond's `explain_point`).
+    ///
+    /// Errors: [`PipelineError::NotPreparedFor`] unless both meshes were prepared for
+    /// [`Method::Paper`]; [`PipelineError::Correspond`] for a point out of range.
+    pub fn explain(
+        &self,
+        template: &PreparedMesh,
+        target: &PreparedMesh,
+        point: u32,
+    ) -> Result<PointExplanation, PipelineError> {
+        Ok(explain_point(
+            &template.paper_side()?,
+            &target.paper_side()?,
+            point,
+            &self.options.matching,
+        )?)
+    }
+
     /// Matches `template` onto `target` with this pipeline's method.
     ///
     /// Errors: [`PipelineError::NotPreparedFor`] when a mesh lacks the method's data,
@@ -1116,7 +1141,7 @@ mod tests {
         let pairs: Vec<(u32, u32)> = corr.pairs.iter().map(|m| (m.template, m.target)).collect();
         let e = evaluate(&graph, q.area, &pairs, |v| v, Some(&mirror));
         let mut off = pipeline.clone();
-        off.options.matching.skeleton_filter = false;
+        off.options.matching.filter = PaperFilter::Off;
         let corr_off = off.run(&p, &q).unwrap();
         let pairs: Vec<(u32, u32)> = corr_off
             .pairs
@@ -1301,9 +1326,11 @@ mod tests {
         assert_eq!(o.method, Method::Articulated);
         for method in [Method::Articulated, Method::Refined] {
             o.method = method;
-            o.matching.skeleton_filter = true;
+            o.matching.filter = PaperFilter::DEFAULT;
             assert!(o.check().is_ok());
-            o.matching.skeleton_filter = false;
+            o.matching.filter = PaperFilter::Strict;
+            assert_eq!(o.check(), Err(OptionError::PaperFilterNeedsPaper));
+            o.matching.filter = PaperFilter::Off;
             assert_eq!(o.check(), Err(OptionError::AblationNeedsPaper));
         }
         o.method = Method::Paper;

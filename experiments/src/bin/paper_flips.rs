@@ -10,7 +10,7 @@ use symcorr::{Method, Mode, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_attach::{BodySide, Joint, Segment};
 use symcorr_correspond::{
     candidates, match_points, refine_symmetry_plane, select, skeleton_filter, Candidate,
-    MatchOptions,
+    MatchOptions, PaperFilter,
 };
 use symcorr_eval::{evaluate, Dataset, EvalGraph};
 
@@ -189,12 +189,13 @@ fn variant(name: &str) -> Result<(MatchOptions, Option<Rule>), String> {
         let num = |pre: &str| part.strip_prefix(pre).and_then(|x| x.parse::<f64>().ok());
         match part {
             "base" => {}
-            "paper" => {
-                o.midline_halves = false;
-                o.sagittal_ratio = None;
+            "paper" => o.filter = PaperFilter::Strict,
+            "noband" => {
+                o.filter = PaperFilter::Extended {
+                    sagittal_ratio: None,
+                }
             }
-            "noband" => o.sagittal_ratio = None,
-            "off" => o.skeleton_filter = false,
+            "off" => o.filter = PaperFilter::Off,
             "sym" => r.sym = 7,
             "own" => r.own_halves = true,
             "w" => r.width = true,
@@ -203,7 +204,9 @@ fn variant(name: &str) -> Result<(MatchOptions, Option<Rule>), String> {
             _ => {
                 let bad = || format!("variant {name:?}: bad part {part:?}");
                 if let Some(x) = part.strip_prefix("band") {
-                    o.sagittal_ratio = Some(x.parse().map_err(|_| bad())?);
+                    o.filter = PaperFilter::Extended {
+                        sagittal_ratio: Some(x.parse().map_err(|_| bad())?),
+                    };
                     continue;
                 }
                 if let Some(n) = part.strip_prefix('n') {
@@ -828,10 +831,15 @@ mod tests {
             MatchOptions::default().candidates.nearest
         );
         let (o, r) = variant("paper+n10").unwrap();
-        assert!(r.is_none() && !o.midline_halves && o.sagittal_ratio.is_none());
+        assert!(r.is_none() && o.filter == PaperFilter::Strict);
         assert_eq!(o.candidates.nearest, Some(10));
         let (o, r) = variant("band0.25+k50").unwrap();
-        assert_eq!(o.sagittal_ratio, Some(0.25));
+        assert_eq!(
+            o.filter,
+            PaperFilter::Extended {
+                sagittal_ratio: Some(0.25)
+            }
+        );
         assert_eq!(r.unwrap().reverse, Some(50));
         let (_, r) = variant("g0.05+w50").unwrap();
         let r = r.unwrap();

@@ -126,7 +126,7 @@ pub struct BandStats {
     pub fallbacks: usize,
 }
 
-/// The sagittal band (beyond the paper; [`MatchOptions::sagittal_ratio`](crate::MatchOptions)):
+/// The sagittal band (beyond the paper; [`PaperFilter::Extended`](crate::PaperFilter)):
 /// for a template point `p` on a midline segment (pelvis, torso, head) with sagittal coordinate
 /// `s(p)` (signed distance to the segment's sagittal plane over the segment's half-width, `+`
 /// on the subject's left), a candidate `q` is kept only if `s(q)·sign(s(p)) ≥ ratio·|s(p)|`:

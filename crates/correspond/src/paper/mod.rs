@@ -61,37 +61,49 @@ impl PaperInputs<'_> {
     }
 }
 
+/// The skeleton filter of the paper's method (§3.2), as the paper wrote it or extended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PaperFilter {
+    /// No filter: the ablation, the paper's method without its contribution.
+    Off,
+    /// §3.2 as written: a candidate survives only on the template point's segment.
+    Strict,
+    /// Beyond the paper: [`PaperFilter::Strict`], and on the midline segments (pelvis, torso,
+    /// head) also the same sagittal half ([`PaperInputs::halves`], when both sides have them)
+    /// and, with a ratio, the [`sagittal_band`] (when both sides have
+    /// [`PaperInputs::sagittal`]): a midline point's candidates must lie on its side at least
+    /// this fraction of its own (normalised) distance from the plane.
+    Extended {
+        /// The band's ratio; `None` keeps the halves without the band.
+        sagittal_ratio: Option<f64>,
+    },
+}
+
+impl PaperFilter {
+    /// The extended filter with the measured band ratio ([`DEFAULT_SAGITTAL_RATIO`]).
+    pub const DEFAULT: PaperFilter = PaperFilter::Extended {
+        sagittal_ratio: Some(DEFAULT_SAGITTAL_RATIO),
+    };
+}
+
+impl Default for PaperFilter {
+    fn default() -> Self {
+        PaperFilter::DEFAULT
+    }
+}
+
 /// Options of [`match_points`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct MatchOptions {
     /// The candidate rule (§3.1).
     pub candidates: CandidateOptions,
-    /// Apply the skeleton filter (§3.2). `false` is the ablation: the paper's method without
-    /// its contribution.
-    pub skeleton_filter: bool,
-    /// Within the filter, also separate the left and right halves of the midline segments
-    /// ([`PaperInputs::halves`], when both sides have them). `false` is the paper's filter exactly.
-    pub midline_halves: bool,
-    /// Beyond the paper: the sagittal band ([`sagittal_band`], when both sides have
-    /// [`PaperInputs::sagittal`] and the filter is on): a midline point's candidates must lie on its
-    /// side at least this fraction of its own (normalised) distance from the plane. `None`
-    /// switches it off.
-    pub sagittal_ratio: Option<f64>,
+    /// The skeleton filter (§3.2).
+    pub filter: PaperFilter,
 }
 
-/// Default [`MatchOptions::sagittal_ratio`] (measured: `docs/decisions/2026-11-23-sagittal-band.md`).
+/// Default band ratio of [`PaperFilter::Extended`] (measured:
+/// `docs/decisions/2026-11-23-sagittal-band.md`).
 pub const DEFAULT_SAGITTAL_RATIO: f64 = 0.5;
-
-impl Default for MatchOptions {
-    fn default() -> Self {
-        MatchOptions {
-            candidates: CandidateOptions::default(),
-            skeleton_filter: true,
-            midline_halves: true,
-            sagittal_ratio: Some(DEFAULT_SAGITTAL_RATIO),
-        }
-    }
-}
 
 /// The result of [`match_points`].
 #[derive(Debug, Clone)]
@@ -133,39 +145,7 @@ pub fn match_points(
     let mean_candidates =
         cands.iter().map(Vec::len).sum::<usize>() as f64 / cands.len().max(1) as f64;
     let t = Instant::now();
-    let filter = if options.skeleton_filter {
-        let halves = match (options.midline_halves, template.halves, target.halves) {
-            (true, Some(a), Some(b)) => Some((a, b)),
-            _ => None,
-        };
-        skeleton_filter(
-            &mut cands,
-            points,
-            (template.labels, target.labels),
-            halves,
-            template.descriptors,
-            target.descriptors,
-        )
-    } else {
-        FilterStats::default()
-    };
-    let band = match (
-        options.skeleton_filter,
-        options.sagittal_ratio,
-        template.sagittal,
-        target.sagittal,
-    ) {
-        (true, Some(ratio), Some(a), Some(b)) => sagittal_band(
-            &mut cands,
-            points,
-            (template.labels, target.labels),
-            (a, b),
-            ratio,
-            template.descriptors,
-            target.descriptors,
-        ),
-        _ => BandStats::default(),
-    };
+    let (filter, band) = apply_filter(&mut cands, points, template, target, options.filter);
     timings.push(("skeleton_filter", t.elapsed().as_secs_f64()));
     let t = Instant::now();
     let mut matches = select(&cands, points, template.profile, target.profile);
@@ -195,6 +175,120 @@ pub fn match_points(
         band,
         mean_candidates,
         timings,
+    })
+}
+
+/// The filter stage of [`match_points`] on candidate lists: the segment filter (with the
+/// halves when extended), then the band.
+fn apply_filter(
+    cands: &mut [Vec<Candidate>],
+    points: &[u32],
+    template: &PaperInputs<'_>,
+    target: &PaperInputs<'_>,
+    filter: PaperFilter,
+) -> (FilterStats, BandStats) {
+    let (halves, ratio) = match filter {
+        PaperFilter::Off => return (FilterStats::default(), BandStats::default()),
+        PaperFilter::Strict => (None, None),
+        PaperFilter::Extended { sagittal_ratio } => (
+            template.halves.zip(target.halves),
+            sagittal_ratio.zip(template.sagittal.zip(target.sagittal)),
+        ),
+    };
+    let labels = (template.labels, target.labels);
+    let stats = skeleton_filter(
+        cands,
+        points,
+        labels,
+        halves,
+        template.descriptors,
+        target.descriptors,
+    );
+    let band = match ratio {
+        Some((ratio, sagittal)) => sagittal_band(
+            cands,
+            points,
+            labels,
+            sagittal,
+            ratio,
+            template.descriptors,
+            target.descriptors,
+        ),
+        None => BandStats::default(),
+    };
+    (stats, band)
+}
+
+/// One template point through the paper's stages (its Fig. 2): the candidates before and after
+/// the filter, and the one eq. 8 selects. [`explain_point`] computes it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointExplanation {
+    /// The template point.
+    pub point: u32,
+    /// Its candidates by descriptor (§3.1), nearest first, before the filter.
+    pub candidates: Vec<Candidate>,
+    /// What the filter left, nearest first; when it removed every candidate, its fallback
+    /// (the nearest target vertex of the point's segment by descriptor, not one of
+    /// [`PointExplanation::candidates`]).
+    pub filtered: Vec<Candidate>,
+    /// The filter removed every candidate and [`PointExplanation::filtered`] is its fallback.
+    pub fallback: bool,
+    /// The candidate eq. 8 selects from the filtered ones, and its `|D̂(c) − D̂(p)|`.
+    pub selected: Option<(Candidate, f64)>,
+}
+
+/// Runs the stages of [`match_points`] for one template point and keeps what each did
+/// ([`PointExplanation`]). The selected candidate is the one `match_points` matches `point` to.
+///
+/// Errors: as [`match_points`].
+///
+/// ```
+/// use symcorr_skeleton::Segment::{ThighLeft, ThighRight};
+/// use symcorr_correspond::{explain_point, Descriptors, MatchOptions, PaperInputs};
+/// let d = Descriptors::new(2, 1, vec![1.0, 1.0]).unwrap();
+/// let (labels, profile) = ([ThighLeft, ThighRight], [0.3, 0.3]);
+/// let side = PaperInputs { descriptors: &d, labels: &labels, profile: &profile,
+///                          halves: None, sagittal: None, positions: None };
+/// let e = explain_point(&side, &side, 0, &MatchOptions::default()).unwrap();
+/// assert_eq!(e.candidates.len(), 2); // both thighs look alike to the descriptor
+/// assert_eq!(e.filtered.len(), 1); // the filter keeps the left one
+/// assert_eq!(e.selected.unwrap().0.vertex, 0);
+/// ```
+pub fn explain_point(
+    template: &PaperInputs<'_>,
+    target: &PaperInputs<'_>,
+    point: u32,
+    options: &MatchOptions,
+) -> Result<PointExplanation, CorrespondError> {
+    template.check("template")?;
+    target.check("target")?;
+    let points = [point];
+    let mut cands = candidates(
+        template.descriptors,
+        target.descriptors,
+        &points,
+        &options.candidates,
+    )?;
+    let before = cands.first().cloned().unwrap_or_default();
+    let (filter, band) = apply_filter(&mut cands, &points, template, target, options.filter);
+    let filtered = cands.first().cloned().unwrap_or_default();
+    let selected = select(&cands, &points, template.profile, target.profile)
+        .first()
+        .map(|m| {
+            (
+                Candidate {
+                    vertex: m.target,
+                    distance: m.descriptor_distance,
+                },
+                m.profile_gap,
+            )
+        });
+    Ok(PointExplanation {
+        point,
+        candidates: before,
+        filtered,
+        fallback: filter.fallbacks + band.fallbacks > 0,
+        selected,
     })
 }
 
@@ -230,7 +324,7 @@ mod tests {
             positions: None,
         };
         let off = MatchOptions {
-            skeleton_filter: false,
+            filter: PaperFilter::Off,
             ..MatchOptions::default()
         };
         assert_eq!(
@@ -270,7 +364,9 @@ mod tests {
         assert_eq!(on.matches[0].target, 1);
         assert_eq!(on.band.removed, 1);
         let off = MatchOptions {
-            sagittal_ratio: None,
+            filter: PaperFilter::Extended {
+                sagittal_ratio: None,
+            },
             ..MatchOptions::default()
         };
         let out = match_points(&ts, &us, &[0], &off).unwrap();
@@ -278,11 +374,52 @@ mod tests {
         assert_eq!(out.band, BandStats::default());
         // The ablation is the paper without its filter: no band either.
         let ablation = MatchOptions {
-            skeleton_filter: false,
+            filter: PaperFilter::Off,
             ..MatchOptions::default()
         };
         let out = match_points(&ts, &us, &[0], &ablation).unwrap();
         assert_eq!(out.matches[0].target, 0);
+    }
+
+    /// The paper's filter keeps the other half of a torso; the extended one does not, and
+    /// [`explain_point`] shows both lists and the match [`match_points`] makes.
+    #[test]
+    fn strict_filter_keeps_the_other_half_of_a_midline_segment() {
+        let t = Descriptors::new(1, 1, vec![0.0]).unwrap();
+        let u = Descriptors::new(3, 1, vec![0.01, 0.02, 0.5]).unwrap();
+        let ts = PaperInputs {
+            descriptors: &t,
+            labels: &[Torso],
+            profile: &[0.5],
+            halves: Some(&[BodySide::Left]),
+            sagittal: None,
+            positions: None,
+        };
+        let us = PaperInputs {
+            descriptors: &u,
+            labels: &[Torso, Torso, ThighLeft],
+            profile: &[0.5, 0.6, 0.5],
+            halves: Some(&[BodySide::Right, BodySide::Left, BodySide::Midline]),
+            sagittal: None,
+            positions: None,
+        };
+        for (filter, kept, target) in [
+            (PaperFilter::Off, 3, 0),
+            (PaperFilter::Strict, 2, 0),
+            (PaperFilter::DEFAULT, 1, 1),
+        ] {
+            let o = MatchOptions {
+                filter,
+                ..MatchOptions::default()
+            };
+            let e = explain_point(&ts, &us, 0, &o).unwrap();
+            assert_eq!(e.candidates.len(), 3, "{filter:?}");
+            assert_eq!(e.filtered.len(), kept, "{filter:?}");
+            assert!(!e.fallback);
+            assert_eq!(e.selected.unwrap().0.vertex, target, "{filter:?}");
+            let m = match_points(&ts, &us, &[0], &o).unwrap();
+            assert_eq!(m.matches[0].target, target, "{filter:?}");
+        }
     }
 
     #[test]

@@ -96,7 +96,12 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
         "dataset": dataset.display().to_string(),
         "mode": match o.mode { symcorr::Mode::Dense => "dense".to_string(), symcorr::Mode::Sparse { samples } => format!("sparse:{samples}") },
         "method": match o.method { symcorr::Method::Paper => "paper", symcorr::Method::Refined => "refined", symcorr::Method::Articulated => "articulated" },
-        "skeleton_filter": o.matching.skeleton_filter,
+        "skeleton_filter": o.matching.filter != symcorr_correspond::PaperFilter::Off,
+        "paper_filter": (o.method == symcorr::Method::Paper).then_some(match o.matching.filter {
+            symcorr_correspond::PaperFilter::Off => "off",
+            symcorr_correspond::PaperFilter::Strict => "strict",
+            symcorr_correspond::PaperFilter::Extended { .. } => "extended",
+        }),
         "candidates": spectral.then(|| json!({"nearest": o.matching.candidates.nearest, "threshold": o.matching.candidates.threshold})),
         "eigenpairs": spectral.then_some(o.prepare.eigenpairs),
         "base_radius": spectral.then_some(o.prepare.base_radius),
@@ -211,10 +216,12 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
         "articulated (skinning + ICP)"
     } else if pipeline.options.method == symcorr::Method::Refined {
         "refined (landmarks + ZoomOut)"
-    } else if pipeline.options.matching.skeleton_filter {
-        "with skeleton filter"
     } else {
-        "no skeleton filter"
+        match pipeline.options.matching.filter {
+            symcorr_correspond::PaperFilter::Off => "no skeleton filter",
+            symcorr_correspond::PaperFilter::Strict => "skeleton filter as in the paper",
+            symcorr_correspond::PaperFilter::Extended { .. } => "with skeleton filter",
+        }
     };
     let svg = curve_svg(
         &format!("symcorr bench {}", args.dataset.display()),

@@ -12,6 +12,7 @@ use symcorr::bench::{evaluate_pair, BenchReport, PairResult};
 use symcorr::io::{read_mesh, read_skeleton};
 use symcorr::output::{correspondence_json, curve_svg, pair_timings};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions};
+use symcorr_correspond::PaperFilter;
 use symcorr_eval::{cumulative_curve, table1_row, Dataset, EvalGraph};
 use symcorr_mesh::io::atomic_write;
 
@@ -95,20 +96,25 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     let variants = [
         (
             Method::Articulated,
-            true,
+            PaperFilter::DEFAULT,
             "articulated",
             "symcorr articulated",
         ),
         (
             Method::Refined,
-            true,
+            PaperFilter::DEFAULT,
             "refined",
             "symcorr refined (spectral)",
         ),
-        (Method::Paper, true, "paper", "paper, skeleton filter"),
         (
             Method::Paper,
-            false,
+            PaperFilter::DEFAULT,
+            "paper",
+            "paper, skeleton filter",
+        ),
+        (
+            Method::Paper,
+            PaperFilter::Off,
             "paper, no filter",
             "paper, no filter (ablation)",
         ),
@@ -117,7 +123,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         spin.set(&format!("matching ({tag})"));
         let mut o = options.clone();
         o.method = method;
-        o.matching.skeleton_filter = filter;
+        o.matching.filter = filter;
         let t = Instant::now();
         let corr = Pipeline::new(o)
             .run(&a, &b)

@@ -7,10 +7,11 @@ use std::time::Instant;
 use symcorr::cache::{CacheLocation, CachePolicy};
 use symcorr::io::{read_mesh, read_skeleton_as};
 use symcorr::output::{
-    correspondence_json, input_colours, match_colours, pair_timings, repair_json, segment_colours,
+    correspondence_json, explain_file, input_colours, match_colours, pair_timings, repair_json,
+    segment_colours,
 };
 use symcorr::{figures, Mode, OptionError, Pipeline, PipelineOptions, PreparedMesh};
-use symcorr_correspond::CandidateOptions;
+use symcorr_correspond::{CandidateOptions, PaperFilter};
 use symcorr_mesh::io::atomic_write;
 
 /// Arguments of `symcorr match`.
@@ -52,6 +53,13 @@ pub struct MatchArgs {
     /// (template_segments.ply, target_segments.ply), plus .glb copies.
     #[arg(long, value_name = "DIR")]
     pub ply_out: Option<PathBuf>,
+    /// Explain one template point (an id of the template file), the paper's Fig. 2: writes
+    /// OUT's name with `.explain-POINT.json` (`symcorr.explain/1`: its candidates before and
+    /// after the skeleton filter and the selected match) and `.explain-POINT.ply` (both bodies
+    /// side by side, the point in blue, removed candidates red, kept green, the selected one
+    /// black). Only with --method paper.
+    #[arg(long, value_name = "POINT")]
+    pub explain: Option<u32>,
     /// Also write the base vertex set (the paper's Fig. 4) as one mesh (PLY, GLB, OBJ or OFF
     /// by extension): template and target side by side in pale segment colours, the base
     /// vertices marked in black. Only with --method paper.
@@ -217,18 +225,16 @@ impl MethodArgs {
             },
             ..PipelineOptions::default()
         };
-        o.matching.skeleton_filter = !self.no_skeleton_filter;
-        if let Some(filter) = self.paper_filter {
-            if self.method != MethodArg::Paper {
-                return Err(CliError(
-                    "--paper-filter chooses the paper pipeline's filter: add --method paper".into(),
-                ));
-            }
-            if filter == PaperFilterArg::Strict {
-                o.matching.midline_halves = false;
-                o.matching.sagittal_ratio = None;
-            }
+        // An explicit --paper-filter with another method is refused even when it names the
+        // default, which the library cannot tell from no choice.
+        if self.paper_filter.is_some() && self.method != MethodArg::Paper {
+            return Err(CliError(flag_message(OptionError::PaperFilterNeedsPaper)));
         }
+        o.matching.filter = match (self.no_skeleton_filter, self.paper_filter) {
+            (true, _) => PaperFilter::Off,
+            (false, Some(PaperFilterArg::Strict)) => PaperFilter::Strict,
+            (false, Some(PaperFilterArg::Extended) | None) => PaperFilter::DEFAULT,
+        };
         o.method = match self.method {
             MethodArg::Paper => symcorr::Method::Paper,
             MethodArg::Refined => symcorr::Method::Refined,
@@ -256,6 +262,9 @@ fn flag_message(e: OptionError) -> String {
         OptionError::TooFewEigenpairs(k) => format!("--eigenpairs {k}: need at least 2"),
         OptionError::AblationNeedsPaper => {
             "--no-skeleton-filter is the paper pipeline's ablation: add --method paper".into()
+        }
+        OptionError::PaperFilterNeedsPaper => {
+            "--paper-filter chooses the paper pipeline's filter: add --method paper".into()
         }
         other => other.to_string(),
     }
@@ -316,6 +325,19 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     for figure in [&args.base_set_out, &args.lines_out].into_iter().flatten() {
         check_output_dir(figure)?;
     }
+    // Figures that need the paper's data are refused before any work.
+    let paper = args.method.method == MethodArg::Paper;
+    if args.base_set_out.is_some() && !paper {
+        return Err(CliError(
+            "--base-set-out draws the paper pipeline's base vertex set: add --method paper".into(),
+        ));
+    }
+    if args.explain.is_some() && !paper {
+        return Err(CliError(
+            "--explain follows a point through the paper pipeline's stages: add --method paper"
+                .into(),
+        ));
+    }
     let start = Instant::now();
     let counts = std::sync::Arc::new(CacheCounts::default());
     let with_cache = |mesh: &Path| {
@@ -338,12 +360,6 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         || load_prepared(&pb, &args.target, &args.target_joints, args.frame, format),
     );
     let (a, b) = (a?, b?);
-    // Figures that need the paper's data are refused before any matching work.
-    if args.base_set_out.is_some() && args.method.method != MethodArg::Paper {
-        return Err(CliError(
-            "--base-set-out draws the paper pipeline's base vertex set: add --method paper".into(),
-        ));
-    }
     progress.set("matching");
     let corr = pipeline.run(&a, &b).map_err(|e| CliError(e.to_string()))?;
     let mut timings = pair_timings(&a, &b, &corr);
@@ -362,6 +378,9 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let mut files = vec![args.out.clone()];
     if let Some(dir) = &args.ply_out {
         files.extend(write_coloured(dir, &a, &b, &corr)?);
+    }
+    if let Some(point) = args.explain {
+        files.extend(write_explanation(&args, &pipeline, (&a, &b), point)?);
     }
     if let Some(path) = &args.base_set_out {
         let (mesh, colours) =
@@ -421,6 +440,52 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         println!("wrote {}", f.display());
     }
     Ok(())
+}
+
+/// `--explain POINT`: the point's explanation as `symcorr.explain/1` JSON and as a figure, named
+/// after `--out` (`corr.json` → `corr.explain-POINT.json`, `corr.explain-POINT.ply`).
+fn write_explanation(
+    args: &MatchArgs,
+    pipeline: &Pipeline,
+    (a, b): (&PreparedMesh, &PreparedMesh),
+    point: u32,
+) -> Result<Vec<PathBuf>, CliError> {
+    let vertices = a.input_mesh().num_vertices();
+    let prepared = a
+        .prepared_ids()
+        .get(point as usize)
+        .copied()
+        .ok_or_else(|| {
+            CliError(format!(
+                "--explain {point}: the template has {vertices} vertices (ids 0..{vertices})"
+            ))
+        })?
+        .ok_or_else(|| {
+            CliError(format!(
+                "--explain {point}: the mesh repair removed that template vertex (degenerate or unreferenced)"
+            ))
+        })?;
+    let e = pipeline
+        .explain(a, b, prepared)
+        .map_err(|e| CliError(e.to_string()))?;
+    let doc = explain_file(
+        (&args.template.display().to_string(), a),
+        (&args.target.display().to_string(), b),
+        pipeline.options.matching.filter,
+        &e,
+    );
+    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
+    let stem = args.out.with_extension("");
+    let named = |ext: &str| {
+        let mut p = stem.as_os_str().to_owned();
+        p.push(format!(".explain-{point}.{ext}"));
+        PathBuf::from(p)
+    };
+    let (json, ply) = (named("json"), named("ply"));
+    symcorr_mesh::io::atomic_write(&json, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    let (mesh, colours) = figures::explain_figure(a, b, &e).map_err(|e| CliError(e.to_string()))?;
+    symcorr_mesh::io::write(&ply, &mesh, Some(&colours)).map_err(|e| CliError(e.to_string()))?;
+    Ok(vec![json, ply])
 }
 
 /// Fails early (before any work) if the output's directory does not exist.
