@@ -305,14 +305,14 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
         let mut partial = Partial::new();
         for (idx, p) in native.iter().enumerate() {
             if let (Some(p), Some(j)) = (p, kind.canonical(idx)) {
-                partial.set(j, *p, conf[idx]);
+                partial.set(j, (*p).into(), conf[idx]);
             }
         }
         if kind == SkeletonKind::KinectV2
             && partial.positions[Joint::ShoulderCenter.index()].is_none()
         {
             if let Some(p) = native[KINECT_V2_NECK] {
-                partial.set(Joint::ShoulderCenter, p, conf[KINECT_V2_NECK]);
+                partial.set(Joint::ShoulderCenter, p.into(), conf[KINECT_V2_NECK]);
             }
         }
         if kind == SkeletonKind::KinectV1 {

@@ -210,7 +210,7 @@ pub fn parse_ntu(text: &str, file: &str, select: BodySelect) -> Result<JointLog,
         let mut partial = Partial::new();
         for (ji, (p, state)) in body.1.iter().enumerate() {
             if let Some(j) = SkeletonKind::KinectV2.canonical(ji) {
-                partial.set(j, *p, f64::from(*state) / 2.0);
+                partial.set(j, (*p).into(), f64::from(*state) / 2.0);
             }
         }
         // Every canonical joint has a Kinect v2 source, so completion never interpolates.
