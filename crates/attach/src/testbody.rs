@@ -87,7 +87,8 @@ pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
         lo = lo.inf(&(p - margin));
         hi = hi.sup(&(p + margin));
     }
-    let dims: [usize; 3] = std::array::from_fn(|k| ((hi[k] - lo[k]) / step).ceil() as usize + 1);
+    let span = hi - lo;
+    let dims: [usize; 3] = std::array::from_fn(|k| (span[k] / step).ceil() as usize + 1);
     let at = |i: usize, j: usize, k: usize| -> Point3<f64> {
         lo + Vector3::new(i as f64, j as f64, k as f64) * step
     };
