@@ -6,10 +6,10 @@
 //! in the mesh, the best of the 24 axis rotations about the bounding-box centres. Refused when
 //! nothing fits ([`FIT_LIMIT`], [`COVER_LIMIT`]).
 
-use crate::geom::mat_vec;
+use crate::geom::{closest_on_segment, Joints};
 use crate::repair::{extent, skeleton_height};
 use crate::{AttachError, FrameAlignment};
-use symcorr_mesh::geometry::{add, dist, scale, sub};
+use nalgebra::{distance, Matrix3, Point3, Rotation3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// Largest accepted median joint-to-surface distance, in skeleton heights. Joints inside a
@@ -27,16 +27,13 @@ pub(crate) const COVER_LIMIT: f64 = 0.12;
 const RATIO_BAND: (f64, f64) = (0.5, 3.0);
 
 /// Median distance from the usable joints to their nearest mesh vertex, over `height`.
-pub(crate) fn fit(mesh: &TriMesh, p: &[[f64; 3]; 20], usable: &[bool; 20], height: f64) -> f64 {
+pub(crate) fn fit(mesh: &TriMesh, p: &Joints, usable: &[bool; 20], height: f64) -> f64 {
     let mut d: Vec<f64> = (0..20)
         .filter(|&j| usable[j])
         .map(|j| {
             mesh.positions
                 .iter()
-                .map(|v| {
-                    let e = sub(*v, p[j]);
-                    e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
-                })
+                .map(|v| (Point3::from(*v) - p[j]).norm_squared())
                 .fold(f64::INFINITY, f64::min)
                 .sqrt()
         })
@@ -50,13 +47,8 @@ pub(crate) fn fit(mesh: &TriMesh, p: &[[f64; 3]; 20], usable: &[bool; 20], heigh
 
 /// Median distance from (up to 1000 evenly spread) mesh vertices to the nearest bone, over
 /// `height`.
-pub(crate) fn coverage(
-    mesh: &TriMesh,
-    p: &[[f64; 3]; 20],
-    usable: &[bool; 20],
-    height: f64,
-) -> f64 {
-    let bones: Vec<([f64; 3], [f64; 3])> = crate::BONES
+pub(crate) fn coverage(mesh: &TriMesh, p: &Joints, usable: &[bool; 20], height: f64) -> f64 {
+    let bones: Vec<(Point3<f64>, Point3<f64>)> = crate::BONES
         .iter()
         .filter(|b| usable[b.parent.index()] && usable[b.child.index()])
         .map(|b| (p[b.parent.index()], p[b.child.index()]))
@@ -67,9 +59,10 @@ pub(crate) fn coverage(
         .iter()
         .step_by(stride)
         .map(|&x| {
+            let x = Point3::from(x);
             bones
                 .iter()
-                .map(|&(a, b)| crate::geom::closest_on_segment(x, a, b).1)
+                .map(|(a, b)| closest_on_segment(&x, a, b).1)
                 .fold(f64::INFINITY, f64::min)
         })
         .collect();
@@ -81,7 +74,7 @@ pub(crate) fn coverage(
 }
 
 /// The 24 proper rotations that permute the coordinate axes (with signs).
-fn axis_rotations() -> Vec<[[f64; 3]; 3]> {
+fn axis_rotations() -> Vec<Rotation3<f64>> {
     let perms = [
         [0, 1, 2],
         [0, 2, 1],
@@ -93,41 +86,37 @@ fn axis_rotations() -> Vec<[[f64; 3]; 3]> {
     let mut out = Vec::with_capacity(24);
     for p in perms {
         for signs in 0..8 {
-            let mut r = [[0.0; 3]; 3];
+            let mut r = Matrix3::zeros();
             for (row, &col) in p.iter().enumerate() {
-                r[row][col] = if signs & (1 << row) != 0 { -1.0 } else { 1.0 };
+                r[(row, col)] = if signs & (1 << row) != 0 { -1.0 } else { 1.0 };
             }
-            let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
-                - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
-                + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
-            if det > 0.0 {
-                out.push(r);
+            // A signed permutation is orthogonal; only the reflections are left out.
+            if r.determinant() > 0.0 {
+                out.push(Rotation3::from_matrix_unchecked(r));
             }
         }
     }
     out
 }
 
-fn bbox_centre(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
+fn bbox_centre(points: impl Iterator<Item = Point3<f64>>) -> Vector3<f64> {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
     for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
+        lo = lo.inf(&p.coords);
+        hi = hi.sup(&p.coords);
     }
-    scale(add(lo, hi), 0.5)
+    (lo + hi) * 0.5
 }
 
 /// Aligns `p` (in place) to the mesh and returns what was applied.
 pub(crate) fn align(
     mesh: &TriMesh,
-    p: &mut [[f64; 3]; 20],
+    p: &mut Joints,
     usable: &[bool; 20],
 ) -> Result<FrameAlignment, AttachError> {
     let (lo, hi) = mesh.bounding_box();
-    let mesh_extent = dist(lo, hi);
+    let mesh_extent = distance(&Point3::from(lo), &Point3::from(hi));
     let skel_extent = extent(p, usable);
     if !(skel_extent > 0.0) || !skel_extent.is_finite() {
         return Err(AttachError::EmptySkeleton {
@@ -150,7 +139,7 @@ pub(crate) fn align(
         }
         s
     };
-    let scaled: [[f64; 3]; 20] = std::array::from_fn(|j| scale(p[j], s));
+    let scaled: Joints = std::array::from_fn(|j| p[j] * s);
     let height = skeleton_height(&scaled, usable);
     let fit_before = fit(mesh, &scaled, usable, height);
     let cover_before = coverage(mesh, &scaled, usable, height);
@@ -165,12 +154,11 @@ pub(crate) fn align(
     if !ok(fit_before, cover_before) {
         let mut best_score = f64::INFINITY;
         // Not in place: try every axis rotation with the bounding-box centres matched.
-        let cm = bbox_centre(mesh.positions.iter().copied());
+        let cm = bbox_centre(mesh.positions.iter().map(|&x| Point3::from(x)));
         let cj = bbox_centre((0..20).filter(|&j| usable[j]).map(|j| scaled[j]));
         for r in axis_rotations() {
-            let rc = mat_vec(&r, cj);
-            let t = sub(cm, rc);
-            let q: [[f64; 3]; 20] = std::array::from_fn(|j| add(mat_vec(&r, scaled[j]), t));
+            let t = cm - r * cj;
+            let q: Joints = std::array::from_fn(|j| r * scaled[j] + t);
             let f = fit(mesh, &q, usable, height);
             let c = coverage(mesh, &q, usable, height);
             if f / FIT_LIMIT + c / COVER_LIMIT < best_score {
@@ -190,7 +178,7 @@ pub(crate) fn align(
         }
     }
     for q in p.iter_mut() {
-        *q = best.apply(*q);
+        *q = best.apply(q);
     }
     Ok(best)
 }

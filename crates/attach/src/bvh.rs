@@ -2,6 +2,7 @@
 //! heat (Baran & Popović 2007, §4: a bone is visible from a vertex when the segment between them
 //! crosses no triangle).
 
+use nalgebra::{Point3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// Triangles per leaf.
@@ -9,8 +10,8 @@ const LEAF: usize = 4;
 
 #[derive(Debug, Clone)]
 struct Node {
-    lo: [f64; 3],
-    hi: [f64; 3],
+    lo: Point3<f64>,
+    hi: Point3<f64>,
     /// Leaf: `start..start+count` into `order`; inner: `count == 0`, children `start`, `start+1`.
     start: usize,
     count: usize,
@@ -21,20 +22,16 @@ struct Node {
 pub(crate) struct TriangleBvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
-    tris: Vec<[[f64; 3]; 3]>,
+    tris: Vec<[Point3<f64>; 3]>,
     ids: Vec<[u32; 3]>,
 }
 
-fn bounds(tris: &[[[f64; 3]; 3]], idx: &[u32]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for &t in idx {
-        for p in &tris[t as usize] {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+fn bounds<'a>(points: impl Iterator<Item = &'a Point3<f64>>) -> (Point3<f64>, Point3<f64>) {
+    let mut lo = Point3::from([f64::INFINITY; 3]);
+    let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
+    for p in points {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
     }
     (lo, hi)
 }
@@ -42,29 +39,25 @@ fn bounds(tris: &[[[f64; 3]; 3]], idx: &[u32]) -> ([f64; 3], [f64; 3]) {
 impl TriangleBvh {
     /// Builds the hierarchy over every triangle of `mesh`.
     pub(crate) fn new(mesh: &TriMesh) -> Self {
-        let tris: Vec<[[f64; 3]; 3]> = (0..mesh.num_triangles()).map(|t| mesh.corners(t)).collect();
-        let centroids: Vec<[f64; 3]> = tris
+        let tris: Vec<[Point3<f64>; 3]> = (0..mesh.num_triangles())
+            .map(|t| mesh.corners(t).map(Point3::from))
+            .collect();
+        let centroids: Vec<Point3<f64>> = tris
             .iter()
-            .map(|c| {
-                [
-                    (c[0][0] + c[1][0] + c[2][0]) / 3.0,
-                    (c[0][1] + c[1][1] + c[2][1]) / 3.0,
-                    (c[0][2] + c[1][2] + c[2][2]) / 3.0,
-                ]
-            })
+            .map(|c| Point3::from((c[0].coords + c[1].coords + c[2].coords) / 3.0))
             .collect();
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
         // Iterative build: (node index, start, end).
         nodes.push(Node {
-            lo: [0.0; 3],
-            hi: [0.0; 3],
+            lo: Point3::origin(),
+            hi: Point3::origin(),
             start: 0,
             count: 0,
         });
         let mut stack = vec![(0usize, 0usize, order.len())];
         while let Some((ni, s, e)) = stack.pop() {
-            let (lo, hi) = bounds(&tris, &order[s..e]);
+            let (lo, hi) = bounds(order[s..e].iter().flat_map(|&t| &tris[t as usize]));
             nodes[ni].lo = lo;
             nodes[ni].hi = hi;
             if e - s <= LEAF {
@@ -72,17 +65,10 @@ impl TriangleBvh {
                 nodes[ni].count = e - s;
                 continue;
             }
-            let mut clo = [f64::INFINITY; 3];
-            let mut chi = [f64::NEG_INFINITY; 3];
-            for &t in &order[s..e] {
-                let c = centroids[t as usize];
-                for k in 0..3 {
-                    clo[k] = clo[k].min(c[k]);
-                    chi[k] = chi[k].max(c[k]);
-                }
-            }
+            let (clo, chi) = bounds(order[s..e].iter().map(|&t| &centroids[t as usize]));
+            let span = chi - clo;
             let axis = (0..3)
-                .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
+                .max_by(|&a, &b| span[a].total_cmp(&span[b]))
                 .unwrap_or(0);
             let mid = (s + e) / 2;
             order[s..e].select_nth_unstable_by(mid - s, |&a, &b| {
@@ -91,8 +77,8 @@ impl TriangleBvh {
             let left = nodes.len();
             for _ in 0..2 {
                 nodes.push(Node {
-                    lo: [0.0; 3],
-                    hi: [0.0; 3],
+                    lo: Point3::origin(),
+                    hi: Point3::origin(),
                     start: 0,
                     count: 0,
                 });
@@ -113,17 +99,22 @@ impl TriangleBvh {
     /// True if the open segment `a → b` crosses a triangle that does not contain vertex
     /// `skip_vertex` (the segment's own start vertex, whose incident triangles it touches at
     /// `t = 0`).
-    pub(crate) fn segment_blocked(&self, a: [f64; 3], b: [f64; 3], skip_vertex: u32) -> bool {
+    pub(crate) fn segment_blocked(
+        &self,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+        skip_vertex: u32,
+    ) -> bool {
         if self.nodes.is_empty() || self.tris.is_empty() {
             return false;
         }
-        let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let d = b - a;
         let inv = d.map(|x| if x != 0.0 { 1.0 / x } else { f64::INFINITY });
         let mut stack = Vec::with_capacity(64);
         stack.push(0usize);
         while let Some(ni) = stack.pop() {
             let n = &self.nodes[ni];
-            if !slab_hit(a, inv, d, n.lo, n.hi) {
+            if !slab_hit(a, &inv, &d, &n.lo, &n.hi) {
                 continue;
             }
             if n.count > 0 {
@@ -131,7 +122,7 @@ impl TriangleBvh {
                     if self.ids[t as usize].contains(&skip_vertex) {
                         continue;
                     }
-                    if segment_triangle(a, d, &self.tris[t as usize]) {
+                    if segment_triangle(a, &d, &self.tris[t as usize]) {
                         return true;
                     }
                 }
@@ -145,7 +136,13 @@ impl TriangleBvh {
 }
 
 /// Segment `a + t·d`, `t ∈ [0, 1]`, against an axis-aligned box (slab test).
-fn slab_hit(a: [f64; 3], inv: [f64; 3], d: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> bool {
+fn slab_hit(
+    a: &Point3<f64>,
+    inv: &Vector3<f64>,
+    d: &Vector3<f64>,
+    lo: &Point3<f64>,
+    hi: &Point3<f64>,
+) -> bool {
     let mut t0 = 0.0f64;
     let mut t1 = 1.0f64;
     for k in 0..3 {
@@ -169,27 +166,26 @@ fn slab_hit(a: [f64; 3], inv: [f64; 3], d: [f64; 3], lo: [f64; 3], hi: [f64; 3])
 }
 
 /// Möller–Trumbore: does `a + t·d` hit the triangle for some `t` in the open interval (0, 1)?
-fn segment_triangle(a: [f64; 3], d: [f64; 3], tri: &[[f64; 3]; 3]) -> bool {
-    use symcorr_mesh::geometry::{cross, dot, sub};
-    let e1 = sub(tri[1], tri[0]);
-    let e2 = sub(tri[2], tri[0]);
-    let p = cross(d, e2);
-    let det = dot(e1, p);
+fn segment_triangle(a: &Point3<f64>, d: &Vector3<f64>, tri: &[Point3<f64>; 3]) -> bool {
+    let e1 = tri[1] - tri[0];
+    let e2 = tri[2] - tri[0];
+    let p = d.cross(&e2);
+    let det = e1.dot(&p);
     if det.abs() < 1e-300 {
         return false;
     }
     let inv = 1.0 / det;
-    let s = sub(a, tri[0]);
-    let u = dot(s, p) * inv;
+    let s = a - tri[0];
+    let u = s.dot(&p) * inv;
     if !(0.0..=1.0).contains(&u) {
         return false;
     }
-    let q = cross(s, e1);
-    let v = dot(d, q) * inv;
+    let q = s.cross(&e1);
+    let v = d.dot(&q) * inv;
     if v < 0.0 || u + v > 1.0 {
         return false;
     }
-    let t = dot(e2, q) * inv;
+    let t = e2.dot(&q) * inv;
     t > 1e-9 && t < 1.0 - 1e-9
 }
 
@@ -230,15 +226,17 @@ mod tests {
     fn segments_through_the_cube_are_blocked_and_inside_ones_are_not() {
         let m = cube();
         let bvh = TriangleBvh::new(&m);
+        let blocked =
+            |a: [f64; 3], b: [f64; 3], skip| bvh.segment_blocked(&a.into(), &b.into(), skip);
         // Outside → inside crosses a face.
-        assert!(bvh.segment_blocked([0.5, 0.5, -1.0], [0.5, 0.5, 0.5], u32::MAX));
+        assert!(blocked([0.5, 0.5, -1.0], [0.5, 0.5, 0.5], u32::MAX));
         // Entirely inside: nothing crossed.
-        assert!(!bvh.segment_blocked([0.2, 0.5, 0.5], [0.8, 0.5, 0.5], u32::MAX));
+        assert!(!blocked([0.2, 0.5, 0.5], [0.8, 0.5, 0.5], u32::MAX));
         // From a corner vertex to the centre: only its own incident faces touch it.
-        assert!(!bvh.segment_blocked(m.positions[0], [0.5, 0.5, 0.5], 0));
+        assert!(!blocked(m.positions[0], [0.5, 0.5, 0.5], 0));
         // From a corner vertex through the cube to the far outside: blocked by the far faces.
-        assert!(bvh.segment_blocked(m.positions[0], [2.0, 2.0, 2.0], 0));
+        assert!(blocked(m.positions[0], [2.0, 2.0, 2.0], 0));
         // Entirely outside and missing the cube.
-        assert!(!bvh.segment_blocked([2.0, 0.0, 0.0], [2.0, 1.0, 1.0], u32::MAX));
+        assert!(!blocked([2.0, 0.0, 0.0], [2.0, 1.0, 1.0], u32::MAX));
     }
 }

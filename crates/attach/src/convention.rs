@@ -46,10 +46,10 @@
 //! `docs/decisions/2026-12-02-attach-convention-heat-vote-and-scans.md`; why the pipeline does
 //! not use it: `docs/decisions/2026-12-01-boundary-convention-off-in-correspondence.md`.
 
-use crate::geom::unit;
+use crate::geom::{unit, Joints};
 use crate::planes::{segment_direction, shared_joint, side_weights, JointPlane};
 use crate::{attach_with_usable, AttachError, AttachOptions, BodySide, Joint, Segment, Skeleton};
-use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
+use nalgebra::{distance, Point3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// The side band grows with the skeleton's measured left/right asymmetry
@@ -161,35 +161,26 @@ pub fn boundaries() -> Vec<(Segment, Segment, Joint)> {
 
 /// The frame of one boundary: origin, three axes, unit length.
 struct Frame {
-    origin: [f64; 3],
-    axes: [[f64; 3]; 3],
+    origin: Point3<f64>,
+    axes: [Vector3<f64>; 3],
     length: f64,
 }
 
 impl Frame {
-    fn new(
-        a: Segment,
-        b: Segment,
-        j: Joint,
-        p: &[[f64; 3]; 20],
-        usable: &[bool; 20],
-    ) -> Option<Frame> {
+    fn new(a: Segment, b: Segment, j: Joint, p: &Joints, usable: &[bool; 20]) -> Option<Frame> {
         let [up, _, facing] = crate::refine::torso_frame(p, usable)?;
-        let length = norm(sub(
-            p[Joint::ShoulderCenter.index()],
-            p[Joint::HipCenter.index()],
-        ));
-        let e1 = unit(sub(
-            segment_direction(b, j, p, usable)?,
-            segment_direction(a, j, p, usable)?,
-        ))?;
+        let length = distance(
+            &p[Joint::ShoulderCenter.index()],
+            &p[Joint::HipCenter.index()],
+        );
+        let e1 = unit(segment_direction(b, j, p, usable)? - segment_direction(a, j, p, usable)?)?;
         // The reference for e2: the torso's facing direction carried to e1 by the smallest
         // rotation from the segment pair's rest direction (limbs hang down, −up; the midline
         // points up), so the frame of a forearm reaching forward turns with it instead of
         // being spun by noise where facing ∥ e1. Near the opposite direction (an arm straight
         // overhead) that rotation is undefined: facing projected as is.
         let rest = if a.side() != BodySide::Midline || b.side() != BodySide::Midline {
-            scale(up, -1.0)
+            -up
         } else {
             up
         };
@@ -197,8 +188,8 @@ impl Frame {
             Some(r) => r,
             None => facing,
         };
-        let e2 = unit(sub(reference, scale(e1, dot(reference, e1))))?;
-        let e3 = cross(e1, e2);
+        let e2 = unit(reference - e1 * reference.dot(&e1))?;
+        let e3 = e1.cross(&e2);
         (length > 0.0).then_some(Frame {
             origin: p[j.index()],
             axes: [e1, e2, e3],
@@ -206,25 +197,22 @@ impl Frame {
         })
     }
 
-    fn coordinates(&self, x: [f64; 3]) -> [f64; 3] {
-        let d = sub(x, self.origin);
-        self.axes.map(|e| dot(d, e) / self.length)
+    fn coordinates(&self, x: &Point3<f64>) -> Vector3<f64> {
+        let d = x - self.origin;
+        Vector3::from(self.axes.map(|e| d.dot(&e) / self.length))
     }
 }
 
 /// `v` rotated by the smallest rotation taking unit `from` to unit `to` (Rodrigues);
 /// `None` when they are (nearly) opposite and the rotation is undefined.
-fn rotate_between(from: [f64; 3], to: [f64; 3], v: [f64; 3]) -> Option<[f64; 3]> {
-    let c = dot(from, to);
+fn rotate_between(from: Vector3<f64>, to: Vector3<f64>, v: Vector3<f64>) -> Option<Vector3<f64>> {
+    let c = from.dot(&to);
     if !(c > -0.9) {
         return None;
     }
-    let k = cross(from, to);
+    let k = from.cross(&to);
     // R v = c v + k × v + k (k·v) / (1 + c)
-    Some(add(
-        add(scale(v, c), cross(k, v)),
-        scale(k, dot(k, v) / (1.0 + c)),
-    ))
+    Some(v * c + k.cross(&v) + k * (k.dot(&v) / (1.0 + c)))
 }
 
 fn evaluate(plane: &[f64; 5], u: [f64; 4]) -> f64 {
@@ -242,7 +230,7 @@ fn heat_vote(w: &[f64; 17], a: Segment, b: Segment) -> f64 {
 }
 
 /// A vertex's features for a rule between `a` and `b`: frame coordinates and the heat vote.
-fn features(frame: &Frame, x: [f64; 3], w: &[f64; 17], a: Segment, b: Segment) -> [f64; 4] {
+fn features(frame: &Frame, x: &Point3<f64>, w: &[f64; 17], a: Segment, b: Segment) -> [f64; 4] {
     let u = frame.coordinates(x);
     [u[0], u[1], u[2], heat_vote(w, a, b)]
 }
@@ -293,7 +281,7 @@ impl BoundaryConvention {
             let area = body.mesh.vertex_areas();
             let mean_area = area.iter().sum::<f64>() / area.len().max(1) as f64;
             for (k, &(a, b, j)) in pairs.iter().enumerate() {
-                let Some(frame) = Frame::new(a, b, j, &att.joints.to_arrays(), &usable) else {
+                let Some(frame) = Frame::new(a, b, j, &att.joints.positions, &usable) else {
                     continue;
                 };
                 let vertices = body.labels.iter().zip(&att.labels);
@@ -303,7 +291,7 @@ impl BoundaryConvention {
                     let Some(r) = r else { continue };
                     if (r == a || r == b) && (g == a || g == b) {
                         let w = att.weights.segment_weights(v);
-                        data[k].x.push(features(&frame, *x, &w, a, b));
+                        data[k].x.push(features(&frame, &(*x).into(), &w, a, b));
                         data[k].y.push(r == b);
                         data[k].w.push(ar / mean_area);
                     }
@@ -416,7 +404,7 @@ fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; 
 pub(crate) fn apply(
     convention: &BoundaryConvention,
     positions: &[[f64; 3]],
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     usable: &[bool; 20],
     planes: &[JointPlane],
     band: f64,
@@ -436,16 +424,16 @@ pub(crate) fn apply(
         planes
             .iter()
             .find(|pl| pl.a == l && pl.b == l.mirror())
-            .map_or((hc, left), |pl| (pl.origin(p), scale(pl.normal, -1.0)))
+            .map_or((hc, left), |pl| (pl.origin(p), -pl.normal))
     };
     let (hips, clavicles) = (twin(Segment::HipLeft), twin(Segment::ClavicleLeft));
-    let lateral = |x: [f64; 3], s: Segment| {
+    let lateral = |x: &Point3<f64>, s: Segment| {
         let (o, n) = if crate::planes::is_arm(s) {
             clavicles
         } else {
             hips
         };
-        dot(sub(x, o), n)
+        (x - o).dot(&n)
     };
     let frames: Vec<Option<Frame>> = convention
         .rules
@@ -459,9 +447,9 @@ pub(crate) fn apply(
                 if *lab != rule.a && *lab != rule.b {
                     continue;
                 }
-                let x = positions[v];
+                let x = Point3::from(positions[v]);
                 let w = weights(v);
-                let u = features(frame, x, &w, rule.a, rule.b);
+                let u = features(frame, &x, &w, rule.a, rule.b);
                 let new = if evaluate(&rule.plane, u) > 0.0 {
                     rule.b
                 } else {
@@ -474,7 +462,7 @@ pub(crate) fn apply(
                         continue;
                     }
                     if was == 0 {
-                        let sd = lateral(x, new);
+                        let sd = lateral(&x, new);
                         let (l, r) = side_weights(&w);
                         let heat = if l > r {
                             1
@@ -500,6 +488,7 @@ pub(crate) fn apply(
 mod tests {
     use super::*;
     use crate::testbody::t_pose;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     #[test]
     fn logistic_regression_recovers_a_separating_plane() {
@@ -578,16 +567,16 @@ mod tests {
 
     #[test]
     fn rotate_between_is_the_smallest_rotation() {
-        let (x, y, z) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+        let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
         // −y → x is a quarter turn about z: z stays, x goes to y.
-        let r = |v| rotate_between(scale(y, -1.0), x, v).unwrap();
-        let close = |a: [f64; 3], b: [f64; 3]| norm(sub(a, b)) < 1e-12;
-        assert!(close(r(scale(y, -1.0)), x));
+        let r = |v| rotate_between(-y, x, v).unwrap();
+        let close = |a: Vector3<f64>, b: Vector3<f64>| abs_diff_eq!(a, b, epsilon = 1e-12);
+        assert!(close(r(-y), x));
         assert!(close(r(z), z));
         assert!(close(r(x), y));
         // Identity when from == to; undefined when opposite.
         assert!(close(rotate_between(z, z, x).unwrap(), x));
-        assert!(rotate_between(z, scale(z, -1.0), x).is_none());
+        assert!(rotate_between(z, -z, x).is_none());
     }
 
     #[test]
@@ -612,20 +601,18 @@ mod tests {
         // w = (1, 0, 0), c = 0 in the boundary frame is the joint plane itself.
         let sk = t_pose(1.0);
         let usable = [true; 20];
-        let planes = crate::planes::joint_planes(&sk.to_arrays(), &usable);
+        let planes = crate::planes::joint_planes(&sk.positions, &usable);
         for pl in &planes {
             if pl.a.mirror() == pl.b {
                 continue;
             }
-            let f = Frame::new(pl.a, pl.b, pl.joint, &sk.to_arrays(), &usable).unwrap();
-            for k in 0..3 {
-                assert!((f.axes[0][k] - pl.normal[k]).abs() < 1e-9, "{pl:?}");
-            }
+            let f = Frame::new(pl.a, pl.b, pl.joint, &sk.positions, &usable).unwrap();
+            assert_abs_diff_eq!(f.axes[0], pl.normal, epsilon = 1e-9);
             // The axes are orthonormal.
             for i in 0..3 {
                 for k in 0..3 {
-                    let d = dot(f.axes[i], f.axes[k]);
-                    assert!((d - f64::from(u8::from(i == k))).abs() < 1e-9);
+                    let d = f.axes[i].dot(&f.axes[k]);
+                    assert_abs_diff_eq!(d, f64::from(u8::from(i == k)), epsilon = 1e-9);
                 }
             }
         }
@@ -646,7 +633,7 @@ mod tests {
         use Segment as S;
         let sk = t_pose(1.0);
         let usable = [true; 20];
-        let p = sk.to_arrays();
+        let p = sk.positions;
         let planes = crate::planes::joint_planes(&p, &usable);
         let hc = p[Joint::HipCenter.index()];
         // Two rules: the first gives every pelvis/hip_right vertex to the pelvis (offset −10),

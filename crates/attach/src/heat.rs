@@ -16,11 +16,11 @@
 //! bone's label.
 
 use crate::bvh::TriangleBvh;
-use crate::geom::closest_on_segment;
+use crate::geom::{closest_on_segment, Joints};
 use crate::{AttachError, BoneWeights, ComponentReport, BONES};
 use faer::Mat;
+use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
-use symcorr_mesh::geometry::{cross, dot, norm, sub};
 use symcorr_mesh::TriMesh;
 use symcorr_spectral::{Laplacian, DEGENERATE_REL};
 
@@ -46,20 +46,20 @@ struct Source {
 }
 
 fn sources(
-    x: [f64; 3],
-    normal: [f64; 3],
+    x: Point3<f64>,
+    normal: Vector3<f64>,
     v: u32,
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     active: &[usize],
     reach: &[f64; 19],
     bvh: &TriangleBvh,
 ) -> Source {
     // Distances divided by the bone's reach: a bone with reach 2 claims vertices twice as far.
-    let mut d: Vec<(f64, usize, [f64; 3])> = active
+    let mut d: Vec<(f64, usize, Point3<f64>)> = active
         .iter()
         .map(|&b| {
             let (q, d) =
-                closest_on_segment(x, p[BONES[b].parent.index()], p[BONES[b].child.index()]);
+                closest_on_segment(&x, &p[BONES[b].parent.index()], &p[BONES[b].child.index()]);
             (d / reach[b], b, q)
         })
         .collect();
@@ -81,7 +81,7 @@ fn sources(
         // vertex's tangent plane: where two limbs touch or interpenetrate (inner thighs, a
         // linear-blend-skinned groin) the segment to the *other* limb's bone may cross no
         // triangle, but it leaves this limb through its outward normal.
-        if facing(normal, x, d[i].2) || bvh.segment_blocked(x, d[i].2, v) {
+        if facing(&normal, &x, &d[i].2) || bvh.segment_blocked(&x, &d[i].2, v) {
             continue;
         }
         let mut bones = vec![d[i].1];
@@ -89,7 +89,7 @@ fn sources(
             if dk > di * (1.0 + TIE) {
                 break;
             }
-            if !facing(normal, x, qk) && !bvh.segment_blocked(x, qk, v) {
+            if !facing(&normal, &x, &qk) && !bvh.segment_blocked(&x, &qk, v) {
                 bones.push(bk);
             }
         }
@@ -104,9 +104,9 @@ fn sources(
 
 /// True if `q` lies in front of the surface at `x` (outward `normal`): more than
 /// [`FRONT`] of the way along the normal.
-fn facing(normal: [f64; 3], x: [f64; 3], q: [f64; 3]) -> bool {
-    let e = sub(q, x);
-    dot(normal, e) > FRONT * norm(e)
+fn facing(normal: &Vector3<f64>, x: &Point3<f64>, q: &Point3<f64>) -> bool {
+    let e = q - x;
+    normal.dot(&e) > FRONT * e.norm()
 }
 
 /// Cosine between a vertex's outward normal and the direction to a bone above which the bone is
@@ -116,7 +116,7 @@ const FRONT: f64 = 0.0;
 /// Computes bone-heat weights for `active` bones (indices into [`BONES`]) with joints `p`.
 pub(crate) fn bone_heat(
     mesh: &TriMesh,
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     active: &[usize],
     reach: &[f64; 19],
     c: f64,
@@ -130,14 +130,10 @@ pub(crate) fn bone_heat(
         .iter()
         .copied()
         .filter(|t| {
-            let a = mesh.positions[t[0] as usize];
-            let e = [
-                sub(mesh.positions[t[1] as usize], a),
-                sub(mesh.positions[t[2] as usize], mesh.positions[t[1] as usize]),
-                sub(a, mesh.positions[t[2] as usize]),
-            ];
-            let longest = e.iter().map(|x| dot(*x, *x)).fold(0.0, f64::max);
-            let area2 = norm(cross(e[0], e[1]));
+            let [a, b, c] = t.map(|v| Point3::from(mesh.positions[v as usize]));
+            let e = [b - a, c - b, a - c];
+            let longest = e.iter().map(|x| x.dot(x)).fold(0.0, f64::max);
+            let area2 = e[0].cross(&e[1]).norm();
             area2 > DEGENERATE_REL * longest && area2 > 0.0
         })
         .collect();
@@ -151,17 +147,16 @@ pub(crate) fn bone_heat(
             }
         }
     }
-    let nearest_only = |x: [f64; 3]| -> usize {
+    let bone_distance = |x: &Point3<f64>, b: usize| {
+        closest_on_segment(x, &p[BONES[b].parent.index()], &p[BONES[b].child.index()])
+    };
+    let nearest_only = |x: Point3<f64>| -> usize {
         active
             .iter()
             .copied()
             .min_by(|&a, &b| {
-                let da =
-                    closest_on_segment(x, p[BONES[a].parent.index()], p[BONES[a].child.index()]).1
-                        / reach[a];
-                let db =
-                    closest_on_segment(x, p[BONES[b].parent.index()], p[BONES[b].child.index()]).1
-                        / reach[b];
+                let da = bone_distance(&x, a).1 / reach[a];
+                let db = bone_distance(&x, b).1 / reach[b];
                 da.total_cmp(&db)
             })
             .unwrap_or(0)
@@ -174,7 +169,7 @@ pub(crate) fn bone_heat(
             .iter()
             .map(|t| t.map(|v| new_id[v as usize]))
             .collect();
-        let sub_pos: Vec<[f64; 3]> = old_id.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let sub_pos: Vec<_> = old_id.iter().map(|&v| mesh.positions[v as usize]).collect();
         let sub_mesh = TriMesh {
             positions: sub_pos,
             triangles: sub_tris,
@@ -188,27 +183,25 @@ pub(crate) fn bone_heat(
         let in_front = (0..m)
             .into_par_iter()
             .filter(|&i| {
-                let x = sub_mesh.positions[i];
+                let x = Point3::from(sub_mesh.positions[i]);
                 let q = active
                     .iter()
-                    .map(|&b| {
-                        closest_on_segment(x, p[BONES[b].parent.index()], p[BONES[b].child.index()])
-                    })
+                    .map(|&b| bone_distance(&x, b))
                     .min_by(|a, b| a.1.total_cmp(&b.1))
                     .map_or(x, |c| c.0);
-                dot(normals[i], sub(q, x)) > 0.0
+                Vector3::from(normals[i]).dot(&(q - x)) > 0.0
             })
             .count();
         if 2 * in_front > m {
             for n in &mut normals {
-                *n = [-n[0], -n[1], -n[2]];
+                *n = (-Vector3::from(*n)).into();
             }
         }
         let src: Vec<Source> = (0..m)
             .into_par_iter()
             .map(|i| {
-                let x = sub_mesh.positions[i];
-                sources(x, normals[i], old_id[i], p, active, reach, &bvh)
+                let x = Point3::from(sub_mesh.positions[i]);
+                sources(x, normals[i].into(), old_id[i], p, active, reach, &bvh)
             })
             .collect();
         let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;
@@ -258,7 +251,7 @@ pub(crate) fn bone_heat(
                 .collect();
             let s: f64 = row.iter().map(|r| r.1).sum();
             if !(s > 0.0) {
-                row = vec![(nearest_only(sub_mesh.positions[i]), 1.0)];
+                row = vec![(nearest_only(sub_mesh.positions[i].into()), 1.0)];
                 nearest_bone_vertices += 1;
             } else {
                 for r in &mut row {
@@ -270,7 +263,7 @@ pub(crate) fn bone_heat(
     }
     for v in 0..n {
         if new_id[v] == u32::MAX {
-            rows[v] = vec![(nearest_only(mesh.positions[v]), 1.0)];
+            rows[v] = vec![(nearest_only(mesh.positions[v].into()), 1.0)];
             nearest_bone_vertices += 1;
         }
     }

@@ -8,7 +8,8 @@
 //! # Data flow (DESIGN.md, Algorithm 1)
 //! mesh + skeleton → joint repair (untracked joints rebuilt along their chain or dropped) →
 //! frame alignment ([`FrameAlignment`]: units by a power of ten, then one of 24 axis rotations)
-//! → handedness check ([`MirrorCheck`], [`MirrorPolicy`]) → joint refinement (limb joints to
+//! → handedness check ([`MirrorCheck`], [`MirrorPolicy`]; on its own: [`check_handedness`],
+//! and as a verdict for a scan: [`handedness_verdict`]) → joint refinement (limb joints to
 //! their cross-section's centre) → bone heat (`(L + M·H) W = M·H·P`, one sparse Cholesky for
 //! all 19 bones; [`BoneWeights`]) → labels: the segment with the largest weight, side first;
 //! joint planes between neighbouring segments ([`AttachOptions::joint_planes`]); the midline
@@ -55,6 +56,7 @@ mod convention;
 mod convention_makehuman;
 mod error;
 mod geom;
+mod handedness;
 mod heat;
 pub mod palette;
 mod planes;
@@ -66,10 +68,12 @@ pub use convention::{
     SIDE_MARGIN,
 };
 pub use error::AttachError;
+pub use handedness::{handedness_verdict, Handedness, HandednessReport};
 pub use symcorr_skeleton::{
     BodySide, Bone, Joint, Plane, SagittalPlanes, Segment, Skeleton, BONES,
 };
 
+use nalgebra::{Point3, Rotation3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// What to do when the skeleton's left and right are swapped relative to the mesh.
@@ -148,10 +152,11 @@ impl Default for AttachOptions {
 pub struct FrameAlignment {
     /// Uniform scale (a power of ten; 1 when units agreed).
     pub scale: f64,
-    /// Rotation, row-major (identity unless the joints did not fit as given).
-    pub rotation: [[f64; 3]; 3],
+    /// Rotation (identity unless the joints did not fit as given; then one of the 24 that
+    /// permute the axes).
+    pub rotation: Rotation3<f64>,
     /// Translation in mesh units.
-    pub translation: [f64; 3],
+    pub translation: Vector3<f64>,
     /// Median distance from a joint to the nearest mesh vertex, in skeleton heights, as given
     /// (after the scale only).
     pub fit_before: f64,
@@ -167,8 +172,8 @@ impl FrameAlignment {
     pub fn identity() -> Self {
         FrameAlignment {
             scale: 1.0,
-            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            translation: [0.0; 3],
+            rotation: Rotation3::identity(),
+            translation: Vector3::zeros(),
             fit_before: f64::NAN,
             fit_after: f64::NAN,
             coverage: f64::NAN,
@@ -178,16 +183,13 @@ impl FrameAlignment {
     /// True if anything other than the identity was applied.
     pub fn is_identity(&self) -> bool {
         self.scale == 1.0
-            && self.translation == [0.0; 3]
-            && self.rotation == FrameAlignment::identity().rotation
+            && self.translation == Vector3::zeros()
+            && self.rotation == Rotation3::identity()
     }
 
     /// Applies the similarity to a point.
-    pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
-        symcorr_mesh::geometry::add(
-            symcorr_mesh::geometry::scale(geom::mat_vec(&self.rotation, p), self.scale),
-            self.translation,
-        )
+    pub fn apply(&self, p: &Point3<f64>) -> Point3<f64> {
+        (self.rotation * p) * self.scale + self.translation
     }
 }
 
@@ -212,7 +214,7 @@ pub struct MirrorCheck {
     pub mesh_vertices: usize,
     /// The skeleton's facing direction (unit, `left × up` of the torso frame: left = right → left
     /// shoulders and hips, up = hip centre → shoulder centre); `None` if the torso is degenerate.
-    pub facing: Option<[f64; 3]>,
+    pub facing: Option<Vector3<f64>>,
     /// True if the sides were swapped (policy [`MirrorPolicy::Fix`]).
     pub swapped: bool,
 }
@@ -278,9 +280,9 @@ pub struct JointMove {
     /// The joint.
     pub joint: Joint,
     /// Position before (mesh frame, after alignment).
-    pub from: [f64; 3],
+    pub from: Point3<f64>,
     /// Position after.
-    pub to: [f64; 3],
+    pub to: Point3<f64>,
     /// Why: `"cross-section centre"`, `"depth centre"`, `"bone length"`.
     pub reason: &'static str,
 }
@@ -288,7 +290,7 @@ pub struct JointMove {
 impl JointMove {
     /// Distance moved, in mesh units.
     pub fn distance(&self) -> f64 {
-        symcorr_mesh::geometry::dist(self.from, self.to)
+        nalgebra::distance(&self.from, &self.to)
     }
 }
 
@@ -538,7 +540,7 @@ pub(crate) fn attach_with_usable(
         }
     }
     lap("labels", &mut clock);
-    let mut joints = Skeleton::from_arrays(positions);
+    let mut joints = Skeleton::from_positions(positions);
     for j in Joint::ALL {
         joints.confidence[j.index()] = if usable[j.index()] {
             skeleton.confidence[j.mirror_if(mirror.swapped).index()].max(0.0)

@@ -23,9 +23,9 @@
 //! `docs/decisions/2026-11-23-attach-midline-guard-band.md`,
 //! `docs/decisions/2026-11-23-attach-left-right-labels.md`.
 
-use crate::geom::unit;
+use crate::geom::{unit, Joints};
 use crate::{BodySide, Bone, Joint, Segment};
-use symcorr_mesh::geometry::{add, dot, norm, scale, sub};
+use nalgebra::{distance, Point3, Vector3};
 
 /// One boundary: segments `a` and `b` meet at `joint`; `normal` points into `b`'s side.
 #[derive(Debug, Clone, Copy)]
@@ -33,12 +33,12 @@ pub(crate) struct JointPlane {
     pub a: Segment,
     pub b: Segment,
     pub joint: Joint,
-    pub normal: [f64; 3],
+    pub normal: Vector3<f64>,
 }
 
 impl JointPlane {
     /// The point the plane passes through: its joint.
-    pub(crate) fn origin(&self, p: &[[f64; 3]; 20]) -> [f64; 3] {
+    pub(crate) fn origin(&self, p: &Joints) -> Point3<f64> {
         p[self.joint.index()]
     }
 }
@@ -49,9 +49,9 @@ impl JointPlane {
 pub(crate) fn segment_direction(
     s: Segment,
     j: Joint,
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     usable: &[bool; 20],
-) -> Option<[f64; 3]> {
+) -> Option<Vector3<f64>> {
     let ok = |x: Joint| usable[x.index()];
     if !ok(j) {
         return None;
@@ -63,7 +63,7 @@ pub(crate) fn segment_direction(
     {
         let other = if u == j { v } else { u };
         return if ok(other) {
-            unit(sub(p[other.index()], p[j.index()]))
+            unit(p[other.index()] - p[j.index()])
         } else {
             None
         };
@@ -75,8 +75,8 @@ pub(crate) fn segment_direction(
     if !(ok(u) && ok(v)) {
         return None;
     }
-    let mid = scale(add(p[u.index()], p[v.index()]), 0.5);
-    unit(sub(mid, p[j.index()]))
+    let mid = Point3::from((p[u.index()].coords + p[v.index()].coords) * 0.5);
+    unit(mid - p[j.index()])
 }
 
 /// The skeleton joint two segments share, if any (the first found along `a`'s bones).
@@ -92,17 +92,17 @@ pub(crate) fn shared_joint(a: Segment, b: Segment) -> Option<Joint> {
 
 /// Unit trunk axis, hip centre → shoulder centre (the longest midline baseline, least affected
 /// by joint noise).
-pub(crate) fn trunk_axis(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[f64; 3]> {
+pub(crate) fn trunk_axis(p: &Joints, usable: &[bool; 20]) -> Option<Vector3<f64>> {
     let (h, s) = (Joint::HipCenter.index(), Joint::ShoulderCenter.index());
     if !(usable[h] && usable[s]) {
         return None;
     }
-    unit(sub(p[s], p[h]))
+    unit(p[s] - p[h])
 }
 
 /// The planes between every two segments that share a joint (skipping bones that were dropped
 /// or are degenerate).
-pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<JointPlane> {
+pub(crate) fn joint_planes(p: &Joints, usable: &[bool; 20]) -> Vec<JointPlane> {
     let mut out = Vec::new();
     for (i, &a) in Segment::ALL.iter().enumerate() {
         for &b in &Segment::ALL[i + 1..] {
@@ -116,7 +116,7 @@ pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<Joint
                 continue;
             };
             // d_A into the joint is −da; the bisector of (−da, db) is db − da.
-            let mut n = sub(db, da);
+            let mut n = db - da;
             // Between left/right twins the bisector is the body's sagittal plane, which
             // contains the trunk axis: keep only the part of the normal perpendicular to it.
             // With one twin bone noisy (a hip joint moved onto the surface near the hip
@@ -124,7 +124,7 @@ pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<Joint
             // the plane cuts through the other thigh, whose vertices then took the wrong side.
             if a.mirror() == b {
                 if let Some(up) = trunk_axis(p, usable) {
-                    n = sub(n, scale(up, dot(n, up)));
+                    n -= up * n.dot(&up);
                 }
             }
             if let Some(normal) = unit(n) {
@@ -144,7 +144,7 @@ pub(crate) fn joint_planes(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Vec<Joint
 /// vertex moved from a thigh to a hip can then move on to the pelvis).
 pub(crate) fn apply(
     positions: &[[f64; 3]],
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     planes: &[JointPlane],
     labels: &mut [Segment],
 ) {
@@ -153,7 +153,7 @@ pub(crate) fn apply(
             let o = p[pl.joint.index()];
             for (x, l) in positions.iter().zip(labels.iter_mut()) {
                 if *l == pl.a || *l == pl.b {
-                    *l = if dot(sub(*x, o), pl.normal) > 0.0 {
+                    *l = if (Point3::from(*x) - o).dot(&pl.normal) > 0.0 {
                         pl.b
                     } else {
                         pl.a
@@ -169,16 +169,16 @@ pub(crate) fn apply(
 /// the hip, thigh, shin, upper-arm and forearm bones of the two sides. Returns the root mean
 /// square of the available measures (mesh units), an estimate of the joints' noise; `None`
 /// if no measure is available.
-pub(crate) fn joint_asymmetry(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<f64> {
+pub(crate) fn joint_asymmetry(p: &Joints, usable: &[bool; 20]) -> Option<f64> {
     use Joint as J;
     let ok = |js: &[Joint]| js.iter().all(|j| usable[j.index()]);
     let at = |j: Joint| p[j.index()];
-    let len = |a: Joint, b: Joint| norm(sub(at(a), at(b)));
+    let len = |a: Joint, b: Joint| distance(&at(a), &at(b));
     let mut m = Vec::new();
     if ok(&[J::HipCenter, J::HipLeft, J::HipRight]) {
-        if let Some(u) = unit(sub(at(J::HipLeft), at(J::HipRight))) {
-            let mid = scale(add(at(J::HipLeft), at(J::HipRight)), 0.5);
-            m.push(dot(sub(at(J::HipCenter), mid), u));
+        if let Some(u) = unit(at(J::HipLeft) - at(J::HipRight)) {
+            let mid = Point3::from((at(J::HipLeft).coords + at(J::HipRight).coords) * 0.5);
+            m.push((at(J::HipCenter) - mid).dot(&u));
         }
     }
     let hip_bones = ((J::HipCenter, J::HipLeft), (J::HipCenter, J::HipRight));
@@ -250,7 +250,7 @@ pub(crate) fn keep_limb_sides(heat_labels: &[Segment], labels: &mut [Segment]) -
 /// error; a midline label there is a disagreement, a twin label would be a left/right swap.
 pub(crate) fn midline_guard(
     positions: &[[f64; 3]],
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     planes: &[JointPlane],
     band: f64,
     labels: &mut [Segment],
@@ -266,12 +266,13 @@ pub(crate) fn midline_guard(
         let o = p[lr.joint.index()];
         let head_torso = find(S::Torso, S::Head);
         for (x, lab) in positions.iter().zip(labels.iter_mut()) {
-            if (*lab != l && *lab != r) || dot(sub(*x, o), lr.normal).abs() >= band {
+            let x = Point3::from(*x);
+            if (*lab != l && *lab != r) || (x - o).dot(&lr.normal).abs() >= band {
                 continue;
             }
             *lab = match (l, head_torso) {
                 (S::HipLeft, _) => S::Pelvis,
-                (_, Some(ht)) if dot(sub(*x, p[ht.joint.index()]), ht.normal) > 0.0 => S::Head,
+                (_, Some(ht)) if (x - p[ht.joint.index()]).dot(&ht.normal) > 0.0 => S::Head,
                 _ => S::Torso,
             };
             changed += 1;
@@ -284,6 +285,7 @@ pub(crate) fn midline_guard(
 mod tests {
     use super::*;
     use crate::testbody::t_pose;
+    use approx::assert_relative_eq;
 
     fn plane(planes: &[JointPlane], a: Segment, b: Segment) -> JointPlane {
         *planes.iter().find(|p| p.a == a && p.b == b).unwrap()
@@ -292,15 +294,15 @@ mod tests {
     #[test]
     fn a_symmetric_skeleton_has_no_asymmetry_and_a_noisy_one_does() {
         let sk = t_pose(1.0);
-        let a = joint_asymmetry(&sk.to_arrays(), &[true; 20]).unwrap();
+        let a = joint_asymmetry(&sk.positions, &[true; 20]).unwrap();
         assert!(a < 1e-12, "{a}");
         // The left leg below the hip moved 4 cm along the thigh: the left thigh is 4 cm longer,
         // every other measure unchanged, so the RMS of the six measures is 4/√6 cm.
-        let mut p = sk.to_arrays();
+        let mut p = sk.positions;
         let (hip, knee) = (p[Joint::HipLeft.index()], p[Joint::KneeLeft.index()]);
-        let d = scale(crate::geom::unit(sub(knee, hip)).unwrap(), 0.04);
+        let d = unit(knee - hip).unwrap() * 0.04;
         for j in [Joint::KneeLeft, Joint::AnkleLeft, Joint::FootLeft] {
-            p[j.index()] = add(p[j.index()], d);
+            p[j.index()] += d;
         }
         let b = joint_asymmetry(&p, &[true; 20]).unwrap();
         assert!((b - 0.04 / 6.0f64.sqrt()).abs() < 1e-9, "{b}");
@@ -343,7 +345,7 @@ mod tests {
     #[test]
     fn planes_bisect_the_bones_at_their_shared_joint() {
         let sk = t_pose(1.0);
-        let planes = joint_planes(&sk.to_arrays(), &[true; 20]);
+        let planes = joint_planes(&sk.positions, &[true; 20]);
         // 20 pairs of segments share a joint (3 at the hip centre, 6 at the shoulder centre,
         // 1 at the spine, and 5 along each side).
         assert_eq!(planes.len(), 20);
@@ -357,14 +359,14 @@ mod tests {
         assert!(lr.normal[0] < -0.99, "{:?}", lr.normal);
         // Every normal is a unit vector.
         for p in &planes {
-            assert!((dot(p.normal, p.normal) - 1.0).abs() < 1e-9);
+            assert_relative_eq!(p.normal.norm_squared(), 1.0, epsilon = 1e-9);
         }
     }
 
     #[test]
     fn labels_follow_the_side_of_the_plane_and_the_guard_takes_the_midline() {
         let sk = t_pose(1.0);
-        let p = sk.to_arrays();
+        let p = sk.positions;
         let planes = joint_planes(&p, &[true; 20]);
         let spine = p[Joint::Spine.index()];
         let hc = p[Joint::HipCenter.index()];

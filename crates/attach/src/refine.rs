@@ -25,9 +25,9 @@
 //! `docs/decisions/2026-12-02-attach-refinement-off-circle.md`,
 //! `docs/decisions/2026-12-02-attach-noisy-joint-limit.md`.
 
-use crate::geom::{closest_on_segment, unit};
+use crate::geom::{closest_on_segment, unit, Joints};
 use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
-use symcorr_mesh::geometry::{add, cross, dist, dot, norm, scale, sub};
+use nalgebra::{distance, Matrix3, Point3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// A swap needs the combined facing evidence ([`crate::MirrorCheck::evidence`]) below
@@ -40,28 +40,28 @@ pub const MIRROR_MARGIN: f64 = 0.45;
 
 /// The torso frame `(up, left, facing)`: up = hip centre → shoulder centre, left = right → left
 /// shoulders and hips (made orthogonal to up), facing = left × up (right-handed).
-pub(crate) fn torso_frame(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> Option<[[f64; 3]; 3]> {
+pub(crate) fn torso_frame(p: &Joints, usable: &[bool; 20]) -> Option<[Vector3<f64>; 3]> {
     use Joint as J;
     let u = |j: Joint| usable[j.index()];
-    let up = unit(sub(p[J::ShoulderCenter.index()], p[J::HipCenter.index()]))?;
-    let mut l = [0.0; 3];
+    let up = unit(p[J::ShoulderCenter.index()] - p[J::HipCenter.index()])?;
+    let mut l = Vector3::zeros();
     for (a, b) in [
         (J::ShoulderLeft, J::ShoulderRight),
         (J::HipLeft, J::HipRight),
     ] {
         if u(a) && u(b) {
-            l = add(l, sub(p[a.index()], p[b.index()]));
+            l += p[a.index()] - p[b.index()];
         }
     }
-    let left = unit(sub(l, scale(up, dot(l, up))))?;
-    let facing = cross(left, up);
+    let left = unit(l - up * l.dot(&up))?;
+    let facing = left.cross(&up);
     Some([up, left, facing])
 }
 
 /// Facing evidence from the skeleton's feet and from the mesh around the ankles.
 pub(crate) fn mirror_check(
     mesh: &TriMesh,
-    p: &[[f64; 3]; 20],
+    p: &Joints,
     usable: &[bool; 20],
     height: f64,
 ) -> MirrorCheck {
@@ -82,16 +82,16 @@ pub(crate) fn mirror_check(
         // The torso's facing direction made perpendicular to this shin: with a flexed hip or a
         // bent knee the foot turns with the shin (kneeling: the toes point down, not forward),
         // so the foot is compared with the facing direction carried into the shin's frame.
-        let (facing, left) = match unit(sub(k, a)) {
-            Some(s) => match unit(sub(facing, scale(s, dot(facing, s)))) {
-                Some(f) if dot(facing, s).abs() < 0.95 => (f, unit(cross(s, f)).unwrap_or(left)),
+        let (facing, left) = match unit(k - a) {
+            Some(s) => match unit(facing - s * facing.dot(&s)) {
+                Some(f) if facing.dot(&s).abs() < 0.95 => (f, unit(s.cross(&f)).unwrap_or(left)),
                 _ => (facing, left),
             },
             None => (facing, left),
         };
         if usable[ankle.index()] && usable[foot.index()] {
-            if let Some(d) = unit(sub(f, a)) {
-                sk += dot(d, facing);
+            if let Some(d) = unit(f - a) {
+                sk += d.dot(&facing);
                 nsk += 1;
             }
         }
@@ -99,19 +99,21 @@ pub(crate) fn mirror_check(
             continue;
         }
         // The foot: surface below the ankle (along the shin), near it laterally.
-        let Some(shin) = unit(sub(k, a)) else {
+        let Some(shin) = unit(k - a) else {
             continue;
         };
         let reach = 0.16 * height;
         let (mut fwd, mut back) = (0.0f64, 0.0f64);
         let mut n = 0;
         for v in &mesh.positions {
-            let e = sub(*v, a);
-            if dot(e, shin) > 0.02 * height || norm(e) > reach || dot(e, left).abs() > 0.06 * height
+            let e = Point3::from(*v) - a;
+            if e.dot(&shin) > 0.02 * height
+                || e.norm() > reach
+                || e.dot(&left).abs() > 0.06 * height
             {
                 continue;
             }
-            let t = dot(e, facing);
+            let t = e.dot(&facing);
             fwd = fwd.max(t);
             back = back.max(-t);
             n += 1;
@@ -135,7 +137,7 @@ pub(crate) fn mirror_check(
 /// how bent the leg is (offset / thigh length, from 0 below 0.05 to 1 at 0.25: a straight leg
 /// says nothing), averaged over the legs. Independent of the feet, so it holds where the feet are
 /// unreliable (a kneeling or sitting pose, a foot joint on the surface).
-fn knee_evidence(p: &[[f64; 3]; 20], usable: &[bool; 20], facing: [f64; 3]) -> Option<f64> {
+fn knee_evidence(p: &Joints, usable: &[bool; 20], facing: Vector3<f64>) -> Option<f64> {
     use Joint as J;
     let mut sum = 0.0;
     let mut n = 0;
@@ -147,17 +149,17 @@ fn knee_evidence(p: &[[f64; 3]; 20], usable: &[bool; 20], facing: [f64; 3]) -> O
             continue;
         }
         let (h, k, a) = (p[hip.index()], p[knee.index()], p[ankle.index()]);
-        let (q, _) = closest_on_segment(k, h, a);
-        let off = sub(k, q);
-        let thigh = dist(h, k);
+        let (q, _) = closest_on_segment(&k, &h, &a);
+        let off = k - q;
+        let thigh = distance(&h, &k);
         if !(thigh > 0.0) {
             continue;
         }
         n += 1;
         let Some(d) = unit(off) else { continue };
         // Offsets under 5 % of the thigh (2 cm on an adult) are joint noise on a straight leg.
-        let bend = ((norm(off) / thigh - 0.05) / 0.2).clamp(0.0, 1.0);
-        sum += bend * dot(d, facing);
+        let bend = ((off.norm() / thigh - 0.05) / 0.2).clamp(0.0, 1.0);
+        sum += bend * d.dot(&facing);
     }
     (n > 0).then(|| sum / n as f64)
 }
@@ -239,36 +241,30 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
     let mx = pts.iter().map(|p| p[0]).sum::<f64>() / n;
     let my = pts.iter().map(|p| p[1]).sum::<f64>() / n;
     // Minimise Σ (x² + y² + D x + E y + F)²  →  3×3 normal equations.
-    let mut a = [[0.0; 3]; 3];
-    let mut b = [0.0; 3];
+    let mut a = Matrix3::<f64>::zeros();
+    let mut b = Vector3::<f64>::zeros();
     for p in pts {
         let (x, y) = (p[0] - mx, p[1] - my);
-        let row = [x, y, 1.0];
+        let row = Vector3::new(x, y, 1.0);
         let z = -(x * x + y * y);
         for i in 0..3 {
             for k in 0..3 {
-                a[i][k] += row[i] * row[k];
+                a[(i, k)] += row[i] * row[k];
             }
             b[i] += row[i] * z;
         }
     }
-    let det = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(&a);
-    let scale_ = a[0][0] * a[1][1] * a[2][2];
+    // Cramer's rule; nalgebra's 3×3 determinant is the same cofactor expansion along row 0.
+    let d = a.determinant();
+    let scale_ = a[(0, 0)] * a[(1, 1)] * a[(2, 2)];
     if d.abs() <= 1e-12 * scale_.abs() || d == 0.0 {
         return None;
     }
     let mut sol = [0.0; 3];
-    for c in 0..3 {
+    for (c, s) in sol.iter_mut().enumerate() {
         let mut m = a;
-        for r in 0..3 {
-            m[r][c] = b[r];
-        }
-        sol[c] = det(&m) / d;
+        m.set_column(c, &b);
+        *s = m.determinant() / d;
     }
     let (cx, cy) = (-sol[0] / 2.0, -sol[1] / 2.0);
     let r2 = cx * cx + cy * cy - sol[2];
@@ -285,20 +281,20 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
 const OFF_CIRCLE: f64 = 0.05;
 
 /// Two unit vectors spanning the plane perpendicular to `n`.
-fn plane_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let t = if n[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
+fn plane_basis(n: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let t = if n.x.abs() < 0.9 {
+        Vector3::x()
     } else {
-        [0.0, 1.0, 0.0]
+        Vector3::y()
     };
-    let e1 = unit(cross(n, t)).unwrap_or([0.0, 0.0, 1.0]);
-    (e1, cross(n, e1))
+    let e1 = unit(n.cross(&t)).unwrap_or_else(Vector3::z);
+    (e1, n.cross(&e1))
 }
 
 /// Refines the joint positions in place.
 pub(crate) fn refine(
     mesh: &TriMesh,
-    p: &mut [[f64; 3]; 20],
+    p: &mut Joints,
     usable: &[bool; 20],
     height: f64,
     options: &AttachOptions,
@@ -309,7 +305,12 @@ pub(crate) fn refine(
     let mean_edge = {
         let e = mesh.edges();
         e.iter()
-            .map(|&[a, b]| dist(mesh.positions[a as usize], mesh.positions[b as usize]))
+            .map(|&[a, b]| {
+                distance(
+                    &mesh.positions[a as usize].into(),
+                    &mesh.positions[b as usize].into(),
+                )
+            })
             .sum::<f64>()
             / e.len().max(1) as f64
     };
@@ -336,15 +337,15 @@ pub(crate) fn refine(
                 None => continue,
             },
             Kind::Limb => {
-                let a = parent.and_then(|q| unit(sub(x, orig[q.index()])));
-                let b = child.and_then(|c| unit(sub(orig[c.index()], x)));
+                let a = parent.and_then(|q| unit(x - orig[q.index()]));
+                let b = child.and_then(|c| unit(orig[c.index()] - x));
                 let len = parent
-                    .map(|q| dist(x, orig[q.index()]))
+                    .map(|q| distance(&x, &orig[q.index()]))
                     .into_iter()
-                    .chain(child.map(|c| dist(x, orig[c.index()])))
+                    .chain(child.map(|c| distance(&x, &orig[c.index()])))
                     .fold(0.0, f64::max);
                 let axis = match (a, b) {
-                    (Some(a), Some(b)) => unit(add(a, b)).unwrap_or(a),
+                    (Some(a), Some(b)) => unit(a + b).unwrap_or(a),
                     (Some(a), None) | (None, Some(a)) => a,
                     (None, None) => continue,
                 };
@@ -359,13 +360,13 @@ pub(crate) fn refine(
         };
         let set: Vec<u32> = (0..mesh.num_vertices() as u32)
             .filter(|&v| {
-                let e = sub(mesh.positions[v as usize], x);
-                let h = dot(e, axis);
-                h.abs() <= half && norm(sub(e, scale(axis, h))) <= radius
+                let e = Point3::from(mesh.positions[v as usize]) - x;
+                let h = e.dot(&axis);
+                h.abs() <= half && (e - axis * h).norm() <= radius
             })
             .collect();
         let (e1, e2) = plane_basis(axis);
-        let mut best: Option<([f64; 3], f64)> = None;
+        let mut best: Option<(Point3<f64>, f64)> = None;
         let mut open = false;
         for piece in pieces(&set, &adj, &mut mark, stamp as u32 + 1) {
             if k != Kind::Limb && piece.iter().any(|&v| on_boundary[v as usize]) {
@@ -377,20 +378,20 @@ pub(crate) fn refine(
                 let Some(f) = frame else { continue };
                 let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
                 for &v in &piece {
-                    let t = dot(sub(mesh.positions[v as usize], x), f[2]);
+                    let t = (Point3::from(mesh.positions[v as usize]) - x).dot(&f[2]);
                     lo = lo.min(t);
                     hi = hi.max(t);
                 }
                 if piece.len() < 5 {
                     continue;
                 }
-                add(x, scale(f[2], 0.5 * (lo + hi)))
+                x + f[2] * (0.5 * (lo + hi))
             } else {
                 let pts: Vec<[f64; 2]> = piece
                     .iter()
                     .map(|&v| {
-                        let e = sub(mesh.positions[v as usize], x);
-                        [dot(e, e1), dot(e, e2)]
+                        let e = Point3::from(mesh.positions[v as usize]) - x;
+                        [e.dot(&e1), e.dot(&e2)]
                     })
                     .collect();
                 let Some((c, r)) = circle_fit(&pts) else {
@@ -405,9 +406,9 @@ pub(crate) fn refine(
                 if r > radius || c[0].hypot(c[1]) > r + OFF_CIRCLE * height {
                     continue;
                 }
-                add(x, add(scale(e1, c[0]), scale(e2, c[1])))
+                x + (e1 * c[0] + e2 * c[1])
             };
-            let d = dist(centre, x);
+            let d = distance(&centre, &x);
             if best.is_none_or(|b| d < b.1) {
                 best = Some((centre, d));
             }
@@ -466,7 +467,7 @@ fn descendants(j: Joint) -> Vec<Joint> {
 /// Sets left/right bone pairs that differ by more than `tol` (relative) to their mean length,
 /// moving the child joint (and everything below it) along its bone.
 fn symmetric_bone_lengths(
-    p: &mut [[f64; 3]; 20],
+    p: &mut Joints,
     usable: &[bool; 20],
     tol: f64,
     moves: &mut Vec<JointMove>,
@@ -475,20 +476,20 @@ fn symmetric_bone_lengths(
         if ![la, lb, ra, rb].iter().all(|j| usable[j.index()]) {
             continue;
         }
-        let ll = dist(p[la.index()], p[lb.index()]);
-        let lr = dist(p[ra.index()], p[rb.index()]);
+        let ll = distance(&p[la.index()], &p[lb.index()]);
+        let lr = distance(&p[ra.index()], &p[rb.index()]);
         let mean = 0.5 * (ll + lr);
         if !(mean > 0.0) || (ll - lr).abs() <= tol * mean {
             continue;
         }
         for (a, b, l) in [(la, lb, ll), (ra, rb, lr)] {
-            let Some(d) = unit(sub(p[b.index()], p[a.index()])) else {
+            let Some(d) = unit(p[b.index()] - p[a.index()]) else {
                 continue;
             };
-            let delta = scale(d, mean - l);
+            let delta = d * (mean - l);
             let from = p[b.index()];
             for q in descendants(b) {
-                p[q.index()] = add(p[q.index()], delta);
+                p[q.index()] += delta;
             }
             moves.push(JointMove {
                 joint: b,
@@ -502,10 +503,10 @@ fn symmetric_bone_lengths(
 
 /// Distance from `x` to the nearest bone segment (for tests and diagnostics).
 #[allow(dead_code)]
-pub(crate) fn nearest_bone_distance(x: [f64; 3], p: &[[f64; 3]; 20]) -> f64 {
+pub(crate) fn nearest_bone_distance(x: &Point3<f64>, p: &Joints) -> f64 {
     BONES
         .iter()
-        .map(|b| closest_on_segment(x, p[b.parent.index()], p[b.child.index()]).1)
+        .map(|b| closest_on_segment(x, &p[b.parent.index()], &p[b.child.index()]).1)
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -514,7 +515,7 @@ mod tests {
     use super::*;
 
     /// An open tube of `radius` around the line through `centre` along unit `axis`.
-    fn tube(centre: [f64; 3], axis: [f64; 3], radius: f64) -> TriMesh {
+    fn tube(centre: Point3<f64>, axis: Vector3<f64>, radius: f64) -> TriMesh {
         let (e1, e2) = plane_basis(axis);
         let (rings, k) = (9usize, 24usize);
         let mut positions = Vec::new();
@@ -522,8 +523,8 @@ mod tests {
             let h = 0.004 * (i as f64 - 4.0);
             for j in 0..k {
                 let t = std::f64::consts::TAU * j as f64 / k as f64;
-                let off = add(scale(e1, radius * t.cos()), scale(e2, radius * t.sin()));
-                positions.push(add(add(centre, scale(axis, h)), off));
+                let off = e1 * (radius * t.cos()) + e2 * (radius * t.sin());
+                positions.push((centre + axis * h + off).into());
             }
         }
         let mut triangles = Vec::new();
@@ -543,21 +544,21 @@ mod tests {
         // cross-section, 10 cm from the joint: the wrist stays where it is. A tube of forearm
         // radius 2 cm from the joint is the wrist's own cross-section: it moves there.
         let sk = crate::testbody::t_pose(1.0);
-        let p = sk.to_arrays();
+        let p = sk.positions;
         let (e, w, h) = (
             p[Joint::ElbowLeft.index()],
             p[Joint::WristLeft.index()],
             p[Joint::HandLeft.index()],
         );
-        let axis = unit(add(unit(sub(w, e)).unwrap(), unit(sub(h, w)).unwrap())).unwrap();
+        let axis = unit(unit(w - e).unwrap() + unit(h - w).unwrap()).unwrap();
         let (e1, _) = plane_basis(axis);
         let usable = [true; 20];
         let options = AttachOptions::default();
         for (offset, radius, moved) in [(0.10, 0.005, false), (0.02, 0.03, true)] {
-            let mesh = tube(add(w, scale(e1, offset)), axis, radius);
+            let mesh = tube(w + e1 * offset, axis, radius);
             let mut q = p;
             let r = refine(&mesh, &mut q, &usable, 1.7, &options);
-            let d = dist(q[Joint::WristLeft.index()], w);
+            let d = distance(&q[Joint::WristLeft.index()], &w);
             if moved {
                 assert!((d - offset).abs() < 1e-3, "moved {d}");
             } else {

@@ -1,11 +1,12 @@
 //! Joint repair before attachment: missing, untracked or non-finite joints are rebuilt from
 //! their chain where that is well defined, otherwise dropped (with their bones).
 
+use crate::geom::{lerp, Joints};
 use crate::{AttachError, Joint, JointRepair, Skeleton, BONES};
-use symcorr_mesh::geometry::{dist, lerp};
+use nalgebra::{distance, Point3};
 
 pub(crate) struct Repaired {
-    pub positions: [[f64; 3]; 20],
+    pub positions: Joints,
     pub usable: [bool; 20],
     pub repaired: Vec<(Joint, JointRepair)>,
 }
@@ -37,7 +38,7 @@ const RULES: [(Joint, Joint, Joint, f64); 17] = {
 };
 
 pub(crate) fn repair(sk: &Skeleton) -> Result<Repaired, AttachError> {
-    let mut positions = sk.to_arrays();
+    let mut positions = sk.positions;
     let mut usable = [false; 20];
     for j in 0..20 {
         let finite = positions[j].iter().all(|c| c.is_finite());
@@ -49,7 +50,7 @@ pub(crate) fn repair(sk: &Skeleton) -> Result<Repaired, AttachError> {
         let mut changed = false;
         for &(j, a, b, t) in &RULES {
             if !usable[j.index()] && usable[a.index()] && usable[b.index()] {
-                positions[j.index()] = lerp(positions[a.index()], positions[b.index()], t);
+                positions[j.index()] = lerp(&positions[a.index()], &positions[b.index()], t);
                 usable[j.index()] = true;
                 repaired.push((j, JointRepair::Interpolated));
                 changed = true;
@@ -90,28 +91,26 @@ pub(crate) fn repair(sk: &Skeleton) -> Result<Repaired, AttachError> {
 }
 
 /// Bounding-box diagonal of the usable joints (0 if fewer than two).
-pub(crate) fn extent(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> f64 {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
+pub(crate) fn extent(p: &Joints, usable: &[bool; 20]) -> f64 {
+    let mut lo = Point3::from([f64::INFINITY; 3]);
+    let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
     let mut n = 0;
     for j in 0..20 {
         if usable[j] {
             n += 1;
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[j][k]);
-                hi[k] = hi[k].max(p[j][k]);
-            }
+            lo = lo.inf(&p[j]);
+            hi = hi.sup(&p[j]);
         }
     }
     if n < 2 {
         return 0.0;
     }
-    dist(lo, hi)
+    distance(&lo, &hi)
 }
 
 /// Pose-independent skeleton height: head → shoulder centre → spine → hip centre, plus the
 /// longer leg chain (hip → knee → ankle). Falls back to the joints' extent.
-pub(crate) fn skeleton_height(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> f64 {
+pub(crate) fn skeleton_height(p: &Joints, usable: &[bool; 20]) -> f64 {
     use Joint as J;
     let chain = |c: &[Joint]| -> Option<f64> {
         let mut s = 0.0;
@@ -119,7 +118,7 @@ pub(crate) fn skeleton_height(p: &[[f64; 3]; 20], usable: &[bool; 20]) -> f64 {
             if !usable[w[0].index()] || !usable[w[1].index()] {
                 return None;
             }
-            s += dist(p[w[0].index()], p[w[1].index()]);
+            s += distance(&p[w[0].index()], &p[w[1].index()]);
         }
         Some(s)
     };

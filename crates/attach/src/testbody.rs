@@ -4,8 +4,8 @@
 
 use crate::geom::closest_on_segment;
 use crate::{bone_segment, Joint, Segment, Skeleton, BONES};
+use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
-use symcorr_mesh::geometry::{add, scale, sub};
 use symcorr_mesh::TriMesh;
 
 /// Capsule radius per bone of [`BONES`] (metres at scale 1).
@@ -17,8 +17,8 @@ pub const RADII: [f64; 19] = [
 /// An A-pose skeleton in metres × `s`: y up, facing +z, the subject's left at +x.
 pub fn t_pose(s: f64) -> Skeleton {
     use Joint as J;
-    let mut p = [[0.0; 3]; 20];
-    let mut set = |j: Joint, x: [f64; 3]| p[j.index()] = scale(x, s);
+    let mut p = [Point3::origin(); 20];
+    let mut set = |j: Joint, x: [f64; 3]| p[j.index()] = Point3::from(x) * s;
     set(J::HipCenter, [0.0, 1.0, 0.0]);
     set(J::Spine, [0.0, 1.2, 0.0]);
     set(J::ShoulderCenter, [0.0, 1.45, 0.0]);
@@ -56,19 +56,15 @@ pub fn t_pose(s: f64) -> Skeleton {
         set(an, [0.16 * side, 0.10, 0.0]);
         set(fo, [0.17 * side, 0.04, 0.14]);
     }
-    Skeleton::from_arrays(p)
+    Skeleton::from_positions(p)
 }
 
 /// Signed distance to the capsule union and the nearest capsule's bone.
-fn sdf(x: [f64; 3], sk: &Skeleton, s: f64) -> (f64, usize) {
+fn sdf(x: &Point3<f64>, sk: &Skeleton, s: f64) -> (f64, usize) {
     let mut best = (f64::INFINITY, 0);
     for (b, bone) in BONES.iter().enumerate() {
-        let d = closest_on_segment(
-            x,
-            sk.position(bone.parent).into(),
-            sk.position(bone.child).into(),
-        )
-        .1 - RADII[b] * s;
+        let d = closest_on_segment(x, &sk.position(bone.parent), &sk.position(bone.child)).1
+            - RADII[b] * s;
         if d < best.0 {
             best = (d, b);
         }
@@ -84,34 +80,30 @@ pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
         &sk.position(Joint::HipCenter),
         &sk.position(Joint::ShoulderCenter),
     ) / 0.45;
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in &sk.to_arrays() {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k] - 0.2 * s);
-            hi[k] = hi[k].max(p[k] + 0.2 * s);
-        }
+    let margin = Vector3::repeat(0.2 * s);
+    let mut lo = Point3::from([f64::INFINITY; 3]);
+    let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
+    for p in &sk.positions {
+        lo = lo.inf(&(p - margin));
+        hi = hi.sup(&(p + margin));
     }
-    let dims: [usize; 3] = std::array::from_fn(|k| ((hi[k] - lo[k]) / step).ceil() as usize + 1);
-    let at = |i: usize, j: usize, k: usize| -> [f64; 3] {
-        [
-            lo[0] + i as f64 * step,
-            lo[1] + j as f64 * step,
-            lo[2] + k as f64 * step,
-        ]
+    let span = hi - lo;
+    let dims: [usize; 3] = std::array::from_fn(|k| (span[k] / step).ceil() as usize + 1);
+    let at = |i: usize, j: usize, k: usize| -> Point3<f64> {
+        lo + Vector3::new(i as f64, j as f64, k as f64) * step
     };
     let idx = |i: usize, j: usize, k: usize| (k * dims[1] + j) * dims[0] + i;
     let mut f = vec![0.0; dims[0] * dims[1] * dims[2]];
     for k in 0..dims[2] {
         for j in 0..dims[1] {
             for i in 0..dims[0] {
-                f[idx(i, j, k)] = sdf(at(i, j, k), sk, s).0;
+                f[idx(i, j, k)] = sdf(&at(i, j, k), sk, s).0;
             }
         }
     }
     // One vertex per cell with a sign change: the mean of its edges' zero crossings.
     let mut cell_vertex: HashMap<(usize, usize, usize), u32> = HashMap::new();
-    let mut positions = Vec::new();
+    let mut positions: Vec<[f64; 3]> = Vec::new();
     let corner = |c: usize| [(c & 1), (c >> 1) & 1, (c >> 2) & 1];
     const EDGES: [(usize, usize); 12] = [
         (0, 1),
@@ -137,7 +129,7 @@ pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
                 if val.iter().all(|&v| v < 0.0) || val.iter().all(|&v| v >= 0.0) {
                     continue;
                 }
-                let mut acc = [0.0; 3];
+                let mut acc = Vector3::zeros();
                 let mut n = 0.0;
                 for (a, b) in EDGES {
                     if (val[a] < 0.0) != (val[b] < 0.0) {
@@ -145,12 +137,12 @@ pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
                         let (oa, ob) = (corner(a), corner(b));
                         let pa = at(i + oa[0], j + oa[1], k + oa[2]);
                         let pb = at(i + ob[0], j + ob[1], k + ob[2]);
-                        acc = add(acc, add(pa, scale(sub(pb, pa), t)));
+                        acc += (pa + (pb - pa) * t).coords;
                         n += 1.0;
                     }
                 }
                 cell_vertex.insert((i, j, k), positions.len() as u32);
-                positions.push(scale(acc, 1.0 / n));
+                positions.push((acc * (1.0 / n)).into());
             }
         }
     }
@@ -199,7 +191,7 @@ pub fn capsule_body(sk: &Skeleton, step: f64) -> (TriMesh, Vec<Segment>) {
     }
     let labels = positions
         .iter()
-        .map(|&x| bone_segment(sdf(x, sk, s).1))
+        .map(|&x| bone_segment(sdf(&x.into(), sk, s).1))
         .collect();
     (
         TriMesh {

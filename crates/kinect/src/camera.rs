@@ -27,6 +27,7 @@
 //! intrinsics.
 
 use crate::error::KinectError;
+use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -39,11 +40,11 @@ pub const INTRINSICS_FORMAT: &str = "symcorr.intrinsics/1";
 /// ```
 /// use symcorr_kinect::Intrinsics;
 /// let k = Intrinsics::kinect_v1();
-/// let p = [0.3, -0.2, 2.0];
-/// let [u, v] = k.project(p);
+/// let p = nalgebra::Point3::new(0.3, -0.2, 2.0);
+/// let [u, v] = k.project(&p);
 /// assert!(u > k.cx && v > k.cy); // +x → right of centre (mirrored image), −y → below centre
-/// let q = k.unproject(u, v, p[2]);
-/// assert!((q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12);
+/// let q = k.unproject(u, v, p.z);
+/// assert!((q - p).norm() < 1e-12);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "IntrinsicsJson", into = "IntrinsicsJson")]
@@ -155,20 +156,17 @@ impl Intrinsics {
 
     /// Projects a camera-space point (metres) to pixel coordinates `[u, v]` (see the module docs).
     /// Points with z ≤ 0 give non-finite or meaningless pixels; callers check `z > 0`.
-    pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
-        [
-            self.cx + self.fx * p[0] / p[2],
-            self.cy - self.fy * p[1] / p[2],
-        ]
+    pub fn project(&self, p: &Point3<f64>) -> [f64; 2] {
+        [self.cx + self.fx * p.x / p.z, self.cy - self.fy * p.y / p.z]
     }
 
     /// The camera-space point (metres) seen at pixel `(u, v)` with depth `depth_m` (its z).
-    pub fn unproject(&self, u: f64, v: f64, depth_m: f64) -> [f64; 3] {
-        [
+    pub fn unproject(&self, u: f64, v: f64, depth_m: f64) -> Point3<f64> {
+        Point3::new(
             (u - self.cx) * depth_m / self.fx,
             (self.cy - v) * depth_m / self.fy,
             depth_m,
-        ]
+        )
     }
 
     /// Reads a `symcorr.intrinsics/1` JSON file.

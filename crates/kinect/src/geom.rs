@@ -1,13 +1,13 @@
-//! 3-vector helpers: the arithmetic is symcorr-mesh's (one owner); only the normalisation
-//! with this crate's tolerance lives here.
+//! The one 3-vector helper nalgebra lacks in the form this crate needs.
 
-pub(crate) use symcorr_mesh::geometry::{add, cross, dot, lerp, norm, scale, sub};
+use nalgebra::Vector3;
 
-/// Unit vector, or `None` for a (near-)zero vector.
-pub(crate) fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
-    let n = norm(a);
+/// Unit vector, or `None` for a (near-)zero or non-finite vector. `v · (1/|v|)`, not
+/// nalgebra's `v / |v|`: the rounding the imported fixtures were produced with.
+pub(crate) fn normalize(v: Vector3<f64>) -> Option<Vector3<f64>> {
+    let n = v.norm();
     if n > 1e-12 && n.is_finite() {
-        Some(scale(a, 1.0 / n))
+        Some(v * (1.0 / n))
     } else {
         None
     }

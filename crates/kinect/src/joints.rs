@@ -15,9 +15,11 @@
 
 use crate::error::KinectError;
 use crate::mapping::{normalise_name, Partial, SkeletonKind, KINECT_V2_NECK};
-use serde::ser::{SerializeMap, SerializeSeq};
-use serde::{Serialize, Serializer};
-use serde_json::Value;
+use nalgebra::Point3;
+use serde::de::{self, MapAccess, Visitor};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use serde_json::error::Category;
 use std::path::Path;
 use symcorr_skeleton::{Joint, Skeleton};
 
@@ -176,18 +178,109 @@ fn read_text(path: &Path) -> Result<(String, String), KinectError> {
     Ok((text, file))
 }
 
+/// The `symcorr.joints/1` file as written (`F` = [`FrameFile`]) and as read (`F` = a frame not
+/// yet checked, so that an error in it names its frame).
+#[derive(Debug, Serialize, Deserialize)]
+struct JointsFile<F> {
+    format: Option<String>,
+    skeleton: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    units: Option<String>,
+    frames: Option<Vec<F>>,
+}
+
+/// One frame of a `symcorr.joints/1` file, joint names as in the file.
+#[derive(Debug, Serialize, Deserialize)]
+struct FrameFile {
+    #[serde(
+        default,
+        deserialize_with = "some_number",
+        skip_serializing_if = "Option::is_none"
+    )]
+    time_s: Option<f64>,
+    joints: Option<Named<[f64; 3]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    confidence: Option<Named<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    interpolated: Option<Vec<String>>,
+}
+
+/// `time_s` is optional, but `null` is not a time.
+fn some_number<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    f64::deserialize(d)
+        .map(Some)
+        .map_err(|e| de::Error::custom(format!("time_s: {e}")))
+}
+
+/// A JSON object kept as `(name, value)` pairs in file order (written in that order too: the
+/// joints in SDK order). An error in a value names its key.
+#[derive(Debug)]
+struct Named<T>(Vec<(String, T)>);
+
+/// What a value of a [`Named`] object is, for error messages.
+trait Entry {
+    const WHAT: &'static str;
+}
+
+impl Entry for [f64; 3] {
+    const WHAT: &'static str = "joint";
+}
+
+impl Entry for f64 {
+    const WHAT: &'static str = "confidence of";
+}
+
+impl<T: Serialize> Serialize for Named<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de, T: Deserialize<'de> + Entry> Deserialize<'de> for Named<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de> + Entry> Visitor<'de> for V<T> {
+            type Value = Named<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Named<T>, A::Error> {
+                let mut out = Vec::new();
+                while let Some(k) = map.next_key::<String>()? {
+                    let v = map
+                        .next_value::<T>()
+                        .map_err(|e| de::Error::custom(format!("{} {k:?}: {e}", T::WHAT)))?;
+                    out.push((k, v));
+                }
+                Ok(Named(out))
+            }
+        }
+        d.deserialize_map(V(std::marker::PhantomData))
+    }
+}
+
 /// Parses `symcorr.joints/1` JSON.
 pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError> {
     let json_err = |message: String| KinectError::Json {
         file: file.to_string(),
         message,
     };
-    let root: Value = serde_json::from_str(text.trim_start_matches('\u{feff}'))
-        .map_err(|e| json_err(format!("invalid JSON: {e}")))?;
-    let obj = root
-        .as_object()
-        .ok_or_else(|| json_err("expected a JSON object at the top level".into()))?;
-    match obj.get("format").and_then(Value::as_str) {
+    let text = text.trim_start_matches('\u{feff}');
+    let root: JointsFile<serde_json::Value> = serde_json::from_str(text).map_err(|e| {
+        json_err(match e.classify() {
+            // serde would also read a struct from an array.
+            Category::Data if !text.trim_start().starts_with('{') => {
+                "expected a JSON object at the top level".into()
+            }
+            Category::Data => format!("not a symcorr.joints/1 file: {e}"),
+            _ => format!("invalid JSON: {e}"),
+        })
+    })?;
+    match root.format.as_deref() {
         Some(JOINTS_FORMAT) => {}
         Some(other) => {
             return Err(json_err(format!(
@@ -196,23 +289,24 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
         }
         None => return Err(json_err(format!("missing \"format\": {JOINTS_FORMAT:?}"))),
     }
-    let kind_name = obj
-        .get("skeleton")
-        .and_then(Value::as_str)
+    let kind_name = root
+        .skeleton
         .ok_or_else(|| json_err("missing \"skeleton\" (a string)".into()))?;
-    let kind = SkeletonKind::from_name(kind_name).ok_or_else(|| KinectError::UnknownSkeleton {
+    let kind = SkeletonKind::from_name(&kind_name).ok_or_else(|| KinectError::UnknownSkeleton {
         file: file.to_string(),
-        name: kind_name.to_string(),
+        name: kind_name.clone(),
     })?;
-    let unit_scale = match obj.get("units") {
-        None => 1.0,
-        Some(Value::String(u)) if u == "m" => 1.0,
-        Some(Value::String(u)) if u == "mm" => 0.001,
-        Some(u) => return Err(json_err(format!("units is {u}, expected \"m\" or \"mm\""))),
+    let unit_scale = match root.units.as_deref() {
+        None | Some("m") => 1.0,
+        Some("mm") => 0.001,
+        Some(u) => {
+            return Err(json_err(format!(
+                "units is {u:?}, expected \"m\" or \"mm\""
+            )))
+        }
     };
-    let frames = obj
-        .get("frames")
-        .and_then(Value::as_array)
+    let frames = root
+        .frames
         .ok_or_else(|| json_err("missing \"frames\" (an array)".into()))?;
     if frames.is_empty() {
         return Err(KinectError::NoBody {
@@ -220,203 +314,148 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
             message: "the joint file has no frames".into(),
         });
     }
-    let names = kind.joint_names();
-    let mut out = Vec::with_capacity(frames.len());
-    for (fi, frame) in frames.iter().enumerate() {
-        let ferr = |message: String| KinectError::Frame {
-            file: file.to_string(),
-            frame: fi,
-            message,
-        };
-        let fobj = frame
-            .as_object()
-            .ok_or_else(|| ferr("expected an object".into()))?;
-        let time_s = match fobj.get("time_s") {
-            None => fi as f64 / KINECT_FPS,
-            Some(t) => t
-                .as_f64()
-                .filter(|t| t.is_finite())
-                .ok_or_else(|| ferr(format!("time_s is {t}, expected a number")))?,
-        };
-        let joints = fobj
-            .get("joints")
-            .and_then(Value::as_object)
-            .ok_or_else(|| ferr("missing \"joints\" (an object)".into()))?;
-        // Native index → (position, confidence).
-        let mut native: Vec<Option<[f64; 3]>> = vec![None; names.len()];
-        for (name, value) in joints {
-            let norm = normalise_name(name);
-            let idx = names.iter().position(|n| *n == norm).ok_or_else(|| {
-                ferr(format!(
-                    "unknown joint {name:?} for skeleton {:?}",
-                    kind.name()
-                ))
-            })?;
-            let arr = value
-                .as_array()
-                .filter(|a| a.len() == 3)
-                .ok_or_else(|| ferr(format!("joint {name:?}: expected [x, y, z]")))?;
-            let mut p = [0.0; 3];
-            for (k, v) in arr.iter().enumerate() {
-                p[k] = v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
-                    ferr(format!(
-                        "joint {name:?}: coordinate {v} is not a finite number"
-                    ))
-                })? * unit_scale;
-            }
-            native[idx] = Some(p);
-        }
-        let mut conf: Vec<f64> = vec![1.0; names.len()];
-        if let Some(c) = fobj.get("confidence") {
-            let cobj = c
-                .as_object()
-                .ok_or_else(|| ferr("\"confidence\" must be an object".into()))?;
-            for (name, value) in cobj {
-                let norm = normalise_name(name);
-                let idx = names
-                    .iter()
-                    .position(|n| *n == norm)
-                    .ok_or_else(|| ferr(format!("confidence for unknown joint {name:?}")))?;
-                conf[idx] = value
-                    .as_f64()
-                    .filter(|c| (0.0..=1.0).contains(c))
-                    .ok_or_else(|| {
-                        ferr(format!(
-                            "confidence of {name:?} is {value}, expected a number in [0, 1]"
-                        ))
-                    })?;
-            }
-        }
-        let mut flagged = [false; 20];
-        if let Some(list) = fobj.get("interpolated") {
-            let arr = list
-                .as_array()
-                .ok_or_else(|| ferr("\"interpolated\" must be an array of joint names".into()))?;
-            for v in arr {
-                let j = v
-                    .as_str()
-                    .and_then(|s| Joint::from_name(&normalise_name(s)))
-                    .ok_or_else(|| {
-                        ferr(format!("interpolated: {v} is not a kinect_v1 joint name"))
-                    })?;
-                flagged[j.index()] = true;
-            }
-        }
-        let mut partial = Partial::new();
-        for (idx, p) in native.iter().enumerate() {
-            if let (Some(p), Some(j)) = (p, kind.canonical(idx)) {
-                partial.set(j, *p, conf[idx]);
-            }
-        }
-        if kind == SkeletonKind::KinectV2
-            && partial.positions[Joint::ShoulderCenter.index()].is_none()
-        {
-            if let Some(p) = native[KINECT_V2_NECK] {
-                partial.set(Joint::ShoulderCenter, p, conf[KINECT_V2_NECK]);
-            }
-        }
-        if kind == SkeletonKind::KinectV1 {
-            if let Some(j) = Joint::ALL
-                .into_iter()
-                .find(|j| partial.positions[j.index()].is_none())
-            {
-                return Err(ferr(format!("missing joint {:?}", j.name())));
-            }
-        }
-        let mut skeleton = partial.complete().map_err(|j| {
-            ferr(format!(
-                "missing joint {:?} cannot be interpolated (or its estimate is not finite)",
-                j.name()
-            ))
-        })?;
-        for (i, f) in flagged.iter().enumerate() {
-            skeleton.interpolated[i] |= *f;
-        }
-        out.push(JointFrame { time_s, skeleton });
-    }
+    let out = frames
+        .into_iter()
+        .enumerate()
+        .map(|(fi, frame)| {
+            frame_from_json(frame, fi, kind, unit_scale).map_err(|message| KinectError::Frame {
+                file: file.to_string(),
+                frame: fi,
+                message,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(JointLog {
         skeleton_kind: kind,
         frames: out,
     })
 }
 
+/// Frame `fi` of a `symcorr.joints/1` file on the canonical skeleton; the error is the message.
+fn frame_from_json(
+    frame: serde_json::Value,
+    fi: usize,
+    kind: SkeletonKind,
+    unit_scale: f64,
+) -> Result<JointFrame, String> {
+    if !frame.is_object() {
+        // serde would also read a struct from an array.
+        return Err("expected an object".into());
+    }
+    let frame = FrameFile::deserialize(frame).map_err(|e| e.to_string())?;
+    let names = kind.joint_names();
+    let native_index = |name: &str| {
+        let norm = normalise_name(name);
+        names.iter().position(|n| *n == norm)
+    };
+    let time_s = match frame.time_s {
+        None => fi as f64 / KINECT_FPS,
+        Some(t) if t.is_finite() => t,
+        Some(t) => return Err(format!("time_s is {t}, expected a number")),
+    };
+    let joints = frame
+        .joints
+        .ok_or_else(|| "missing \"joints\" (an object)".to_string())?;
+    // Native index → position.
+    let mut native: Vec<Option<Point3<f64>>> = vec![None; names.len()];
+    for (name, p) in joints.0 {
+        let idx = native_index(&name)
+            .ok_or_else(|| format!("unknown joint {name:?} for skeleton {:?}", kind.name()))?;
+        if let Some(v) = p.iter().find(|x| !x.is_finite()) {
+            return Err(format!(
+                "joint {name:?}: coordinate {v} is not a finite number"
+            ));
+        }
+        native[idx] = Some(Point3::from(p) * unit_scale);
+    }
+    let mut conf: Vec<f64> = vec![1.0; names.len()];
+    for (name, c) in frame.confidence.map_or_else(Vec::new, |c| c.0) {
+        let idx =
+            native_index(&name).ok_or_else(|| format!("confidence for unknown joint {name:?}"))?;
+        if !(0.0..=1.0).contains(&c) {
+            return Err(format!(
+                "confidence of {name:?} is {c}, expected a number in [0, 1]"
+            ));
+        }
+        conf[idx] = c;
+    }
+    let mut flagged = [false; 20];
+    for name in frame.interpolated.unwrap_or_default() {
+        let j = Joint::from_name(&normalise_name(&name))
+            .ok_or_else(|| format!("interpolated: {name:?} is not a kinect_v1 joint name"))?;
+        flagged[j.index()] = true;
+    }
+    let mut partial = Partial::new();
+    for (idx, p) in native.iter().enumerate() {
+        if let (Some(p), Some(j)) = (p, kind.canonical(idx)) {
+            partial.set(j, *p, conf[idx]);
+        }
+    }
+    if kind == SkeletonKind::KinectV2 && partial.positions[Joint::ShoulderCenter.index()].is_none()
+    {
+        if let Some(p) = native[KINECT_V2_NECK] {
+            partial.set(Joint::ShoulderCenter, p, conf[KINECT_V2_NECK]);
+        }
+    }
+    if kind == SkeletonKind::KinectV1 {
+        if let Some(j) = Joint::ALL
+            .into_iter()
+            .find(|j| partial.positions[j.index()].is_none())
+        {
+            return Err(format!("missing joint {:?}", j.name()));
+        }
+    }
+    let mut skeleton = partial.complete().map_err(|j| {
+        format!(
+            "missing joint {:?} cannot be interpolated (or its estimate is not finite)",
+            j.name()
+        )
+    })?;
+    for (i, f) in flagged.iter().enumerate() {
+        skeleton.interpolated[i] |= *f;
+    }
+    Ok(JointFrame { time_s, skeleton })
+}
+
 /// The `symcorr.joints/1` text of a log: skeleton `kinect_v1` (the canonical joints), units `m`,
 /// joints in SDK order, an `interpolated` list of joint names per frame when any joint is.
 pub fn to_json_string(log: &JointLog) -> String {
+    let named =
+        |f: &dyn Fn(Joint) -> f64| Named(Joint::ALL.map(|j| (j.name().to_string(), f(j))).to_vec());
+    let file = JointsFile {
+        format: Some(JOINTS_FORMAT.to_string()),
+        skeleton: Some(SkeletonKind::KinectV1.name().to_string()),
+        units: Some("m".to_string()),
+        frames: Some(
+            log.frames
+                .iter()
+                .map(|f| {
+                    let sk = &f.skeleton;
+                    let interpolated: Vec<String> = Joint::ALL
+                        .into_iter()
+                        .filter(|j| sk.interpolated[j.index()])
+                        .map(|j| j.name().to_string())
+                        .collect();
+                    FrameFile {
+                        time_s: Some(f.time_s),
+                        joints: Some(Named(
+                            Joint::ALL
+                                .map(|j| (j.name().to_string(), sk.positions[j.index()].into()))
+                                .to_vec(),
+                        )),
+                        confidence: Some(named(&|j| sk.confidence[j.index()])),
+                        interpolated: (!interpolated.is_empty()).then_some(interpolated),
+                    }
+                })
+                .collect(),
+        ),
+    };
     // Serialising plain numbers, strings and maps cannot fail.
-    serde_json::to_string(&LogOut(log)).unwrap_or_default()
+    serde_json::to_string(&file).unwrap_or_default()
 }
 
 /// Writes a log as `symcorr.joints/1` (see [`to_json_string`]), atomically: a temporary file in
 /// the same directory, then a rename, so a failure never leaves a half-written file.
 pub fn write_joints_json(path: impl AsRef<Path>, log: &JointLog) -> Result<(), KinectError> {
     crate::atomic_write(path.as_ref(), to_json_string(log).as_bytes())
-}
-
-struct LogOut<'a>(&'a JointLog);
-struct FrameOut<'a>(&'a JointFrame);
-struct JointsOut<'a>(&'a Skeleton);
-struct ConfOut<'a>(&'a Skeleton);
-struct InterpOut<'a>(&'a Skeleton);
-
-impl Serialize for LogOut<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(4))?;
-        m.serialize_entry("format", JOINTS_FORMAT)?;
-        m.serialize_entry("skeleton", SkeletonKind::KinectV1.name())?;
-        m.serialize_entry("units", "m")?;
-        let frames: Vec<FrameOut> = self.0.frames.iter().map(FrameOut).collect();
-        m.serialize_entry("frames", &frames)?;
-        m.end()
-    }
-}
-
-impl Serialize for FrameOut<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let sk = &self.0.skeleton;
-        let any = sk.interpolated.iter().any(|&b| b);
-        let mut m = s.serialize_map(Some(if any { 4 } else { 3 }))?;
-        m.serialize_entry("time_s", &self.0.time_s)?;
-        m.serialize_entry("joints", &JointsOut(sk))?;
-        m.serialize_entry("confidence", &ConfOut(sk))?;
-        if any {
-            m.serialize_entry("interpolated", &InterpOut(sk))?;
-        }
-        m.end()
-    }
-}
-
-impl Serialize for JointsOut<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(20))?;
-        for j in Joint::ALL {
-            m.serialize_entry(j.name(), &<[f64; 3]>::from(self.0.positions[j.index()]))?;
-        }
-        m.end()
-    }
-}
-
-impl Serialize for ConfOut<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(20))?;
-        for j in Joint::ALL {
-            m.serialize_entry(j.name(), &self.0.confidence[j.index()])?;
-        }
-        m.end()
-    }
-}
-
-impl Serialize for InterpOut<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let list: Vec<&str> = Joint::ALL
-            .into_iter()
-            .filter(|j| self.0.interpolated[j.index()])
-            .map(Joint::name)
-            .collect();
-        let mut q = s.serialize_seq(Some(list.len()))?;
-        for n in list {
-            q.serialize_element(n)?;
-        }
-        q.end()
-    }
 }

@@ -10,11 +10,11 @@
 //!   window ([`FrameSelect`]) → one [`Skeleton`] for symcorr-attach.
 //! * Depth: a PNG-16 frame ([`depth`]) or an OpenNI2 stream (`openni2`) + [`Intrinsics`]
 //!   ([`camera`]) → organised point cloud → [`scan_mesh`] (background, floor and depth
-//!   discontinuities removed; [`scan`]). [`handedness`] checks a skeleton's left/right against
-//!   a mesh (symcorr-attach's check).
+//!   discontinuities removed; [`scan`]). Whether a skeleton's left/right agree with a scan is
+//!   symcorr-attach's `handedness_verdict` (this crate depends on mesh and skeleton only).
 //!
 //! ```
-//! use symcorr_attach::Joint;
+//! use symcorr_skeleton::Joint;
 //! use symcorr_kinect::{read_joints, FrameSelect, Intrinsics, SkeletonKind};
 //! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/kinect/standing_nite.json");
 //! let log = read_joints(path).unwrap(); // NiTE's 15 joints, in millimetres
@@ -24,7 +24,7 @@
 //! assert!((head[2] - 2.5).abs() < 1e-9);
 //! // NiTE has no wrists: interpolated 80 % of the way elbow → hand, and flagged.
 //! assert!(skeleton.interpolated[Joint::WristLeft.index()]);
-//! let [u, v] = Intrinsics::kinect_v1().project(head.into()); // pixel of the head in the depth image
+//! let [u, v] = Intrinsics::kinect_v1().project(&head); // pixel of the head in the depth image
 //! assert!(u.is_finite() && v.is_finite());
 //! ```
 //!
@@ -44,13 +44,12 @@
 //! * OpenNI2 is initialised once per process and never shut down (`oniShutdown` crashes on
 //!   this machine's OpenNI 2.2).
 //!
-//! [`Skeleton`]: symcorr_attach::Skeleton
+//! [`Skeleton`]: symcorr_skeleton::Skeleton
 
 pub mod camera;
 pub mod depth;
 mod error;
 mod geom;
-pub mod handedness;
 pub mod joints;
 pub mod mapping;
 pub mod ntu;
@@ -64,7 +63,6 @@ pub mod sdk_text;
 pub use camera::Intrinsics;
 pub use depth::{read_depth_png16, write_depth_png16, DepthFrame};
 pub use error::KinectError;
-pub use handedness::{check_handedness, Handedness, HandednessReport};
 pub use joints::{
     read_joints, read_joints_with_format, write_joints_json, JointFormat, JointFrame, JointLog,
 };

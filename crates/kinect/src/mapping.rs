@@ -30,7 +30,7 @@
 //! ## Interpolation rules (any source)
 //!
 //! A canonical joint that is missing is estimated from its bone-chain neighbours, in this order
-//! of preference, and flagged in [`Skeleton::interpolated`](symcorr_attach::Skeleton) with
+//! of preference, and flagged in [`Skeleton::interpolated`](symcorr_skeleton::Skeleton) with
 //! confidence `0.5 × min(confidence of the joints used)`:
 //! hip_center = mid(hips); shoulder_center = mid(shoulders); spine = 30 % hip_center → shoulder_center;
 //! head = shoulder_center + 0.5·(shoulder_center − spine); wrist = 80 % elbow → hand;
@@ -40,7 +40,8 @@
 //! (DESIGN.md: left/right are the subject's sides; in Kinect camera space a subject facing the
 //! sensor faces −z).
 
-use crate::geom::{add, cross, lerp, norm, normalize, scale, sub};
+use crate::geom::normalize;
+use nalgebra::{distance, Point3, Vector3};
 use symcorr_skeleton::{Joint, Skeleton};
 
 /// The skeleton a tracker reports.
@@ -233,7 +234,7 @@ pub(crate) fn normalise_name(name: &str) -> String {
 /// A partially known canonical skeleton: what an importer measured.
 #[derive(Debug, Clone)]
 pub(crate) struct Partial {
-    pub positions: [Option<[f64; 3]>; 20],
+    pub positions: [Option<Point3<f64>>; 20],
     pub confidence: [f64; 20],
 }
 
@@ -245,12 +246,12 @@ impl Partial {
         }
     }
 
-    pub fn set(&mut self, j: Joint, p: [f64; 3], c: f64) {
+    pub fn set(&mut self, j: Joint, p: Point3<f64>, c: f64) {
         self.positions[j.index()] = Some(p);
         self.confidence[j.index()] = c;
     }
 
-    fn get(&self, j: Joint) -> Option<([f64; 3], f64)> {
+    fn get(&self, j: Joint) -> Option<(Point3<f64>, f64)> {
         self.positions[j.index()].map(|p| (p, self.confidence[j.index()]))
     }
 
@@ -275,7 +276,7 @@ impl Partial {
                 break;
             }
         }
-        let mut positions = [[0.0; 3]; 20];
+        let mut positions = [Point3::origin(); 20];
         for j in Joint::ALL {
             match self.positions[j.index()] {
                 // Interpolating between huge (finite) coordinates can overflow to infinity.
@@ -284,29 +285,28 @@ impl Partial {
             }
         }
         Ok(Skeleton {
-            positions: positions.map(Into::into),
+            positions,
             confidence: self.confidence,
             interpolated,
         })
     }
 
-    fn mid(&self, a: Joint, b: Joint) -> Option<([f64; 3], f64)> {
-        let (pa, ca) = self.get(a)?;
-        let (pb, cb) = self.get(b)?;
-        Some((lerp(pa, pb, 0.5), ca.min(cb)))
+    fn mid(&self, a: Joint, b: Joint) -> Option<(Point3<f64>, f64)> {
+        self.at(a, b, 0.5)
     }
 
-    fn at(&self, a: Joint, b: Joint, t: f64) -> Option<([f64; 3], f64)> {
+    /// `a + t (b − a)` (not nalgebra's `lerp`, which rounds differently).
+    fn at(&self, a: Joint, b: Joint, t: f64) -> Option<(Point3<f64>, f64)> {
         let (pa, ca) = self.get(a)?;
         let (pb, cb) = self.get(b)?;
-        Some((lerp(pa, pb, t), ca.min(cb)))
+        Some((pa + (pb - pa) * t, ca.min(cb)))
     }
 
     /// Facing direction of the subject: (left − right) × up.
-    fn facing(&self) -> Option<[f64; 3]> {
+    fn facing(&self) -> Option<Vector3<f64>> {
         let (hc, _) = self.get(Joint::HipCenter)?;
         let (sc, _) = self.get(Joint::ShoulderCenter)?;
-        let up = sub(sc, hc);
+        let up = sc - hc;
         let lr = self
             .get(Joint::HipLeft)
             .zip(self.get(Joint::HipRight))
@@ -314,11 +314,11 @@ impl Partial {
                 self.get(Joint::ShoulderLeft)
                     .zip(self.get(Joint::ShoulderRight))
             })?;
-        let left = sub(lr.0 .0, lr.1 .0);
-        normalize(cross(left, up))
+        let left = lr.0 .0 - lr.1 .0;
+        normalize(left.cross(&up))
     }
 
-    fn estimate(&self, j: Joint) -> Option<([f64; 3], f64)> {
+    fn estimate(&self, j: Joint) -> Option<(Point3<f64>, f64)> {
         use Joint as J;
         let side = |l: J, r: J| if is_left(j) { l } else { r };
         match j {
@@ -328,7 +328,7 @@ impl Partial {
             J::Head => {
                 let (sc, c1) = self.get(J::ShoulderCenter)?;
                 let (sp, c2) = self.get(J::Spine)?;
-                Some((add(sc, scale(sub(sc, sp), 0.5)), c1.min(c2)))
+                Some((sc + (sc - sp) * 0.5, c1.min(c2)))
             }
             J::WristLeft | J::WristRight => self.at(
                 side(J::ElbowLeft, J::ElbowRight),
@@ -360,8 +360,8 @@ impl Partial {
                 let (k, c1) = self.get(side(J::KneeLeft, J::KneeRight))?;
                 let (a, c2) = self.get(side(J::AnkleLeft, J::AnkleRight))?;
                 let f = self.facing()?;
-                let shin = norm(sub(k, a));
-                Some((add(a, scale(f, 0.3 * shin)), c1.min(c2)))
+                let shin = distance(&k, &a);
+                Some((a + f * (0.3 * shin), c1.min(c2)))
             }
         }
     }

@@ -20,6 +20,7 @@ use crate::error::KinectError;
 use crate::joints::{BodySelect, JointFrame, JointLog, KINECT_FPS};
 use crate::mapping::{Partial, SkeletonKind};
 use crate::sdk_text::tokens;
+use nalgebra::Point3;
 
 struct Lines<'a> {
     inner: std::iter::Enumerate<std::str::Lines<'a>>,
@@ -69,7 +70,7 @@ impl<'a> Lines<'a> {
     }
 }
 
-type Body = (u64, [([f64; 3], u8); 25]);
+type Body = (u64, [(Point3<f64>, u8); 25]);
 
 /// Parses an NTU RGB+D `.skeleton` file keeping the selected body; `file` names it in errors.
 pub fn parse_ntu(text: &str, file: &str, select: BodySelect) -> Result<JointLog, KinectError> {
@@ -128,7 +129,7 @@ pub fn parse_ntu(text: &str, file: &str, select: BodySelect) -> Result<JointLog,
                 }
                 (line, t) = lines.next_tokens("joint 0")?;
             }
-            let mut joints = [([0.0; 3], 0u8); 25];
+            let mut joints = [(Point3::origin(), 0u8); 25];
             for (ji, joint) in joints.iter_mut().enumerate() {
                 if ji > 0 {
                     (line, t) = lines.next_tokens(&format!("joint {ji}"))?;
@@ -157,7 +158,7 @@ pub fn parse_ntu(text: &str, file: &str, select: BodySelect) -> Result<JointLog,
                         format!("frame {fi}, body {bi}, joint {ji}: tracking state {:?}, expected 0, 1 or 2", t[11]),
                     )
                 })?;
-                *joint = ([v[0], v[1], v[2]], state);
+                *joint = (Point3::new(v[0], v[1], v[2]), state);
             }
             bodies.push((id, joints));
         }

@@ -15,8 +15,8 @@
 //! ```
 
 use crate::error::KinectError;
-use crate::geom::{norm, sub};
 use crate::joints::JointLog;
+use nalgebra::{distance, Point3};
 use symcorr_skeleton::{Bone, Skeleton, BONES};
 
 /// Which skeleton of a log to use.
@@ -179,8 +179,9 @@ impl JointLog {
                 self.frames.last().map_or(0.0, |f| f.time_s)
             )));
         }
-        let med = |frames: &[&Skeleton]| -> [[f64; 3]; 20] {
-            let mut m = [[0.0; 3]; 20];
+        // Per-coordinate medians: not a point any frame had, but robust per axis.
+        let med = |frames: &[&Skeleton]| -> [Point3<f64>; 20] {
+            let mut m = [Point3::origin(); 20];
             for (j, mj) in m.iter_mut().enumerate() {
                 for (k, c) in mj.iter_mut().enumerate() {
                     let mut v: Vec<f64> = frames.iter().map(|s| s.positions[j][k]).collect();
@@ -194,7 +195,7 @@ impl JointLog {
             .iter()
             .map(|s| {
                 let mut d: Vec<f64> = (0..20)
-                    .map(|j| norm(sub(s.positions[j].into(), center[j])))
+                    .map(|j| distance(&s.positions[j], &center[j]))
                     .collect();
                 median(&mut d)
             })
@@ -208,7 +209,7 @@ impl JointLog {
             .map(|(s, _)| *s)
             .collect();
         // The median frame always satisfies the limit, so `kept` is never empty.
-        let mut out = Skeleton::from_arrays(center);
+        let mut out = Skeleton::from_positions(center);
         for j in 0..20 {
             for k in 0..3 {
                 let vals: Vec<(f64, f64)> = kept

@@ -20,7 +20,8 @@
 use crate::camera::Intrinsics;
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
-use crate::geom::{cross, dot, norm, normalize, sub};
+use crate::geom::normalize;
+use nalgebra::{Point3, Vector3};
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Skeleton};
 
@@ -97,7 +98,7 @@ pub fn depth_to_points(
     k: &Intrinsics,
     min_depth_m: f64,
     max_depth_m: f64,
-) -> Result<Vec<Option<[f64; 3]>>, KinectError> {
+) -> Result<Vec<Option<Point3<f64>>>, KinectError> {
     k.validate()?;
     if frame.width != k.width
         || frame.height != k.height
@@ -173,9 +174,9 @@ impl Rng {
 
 /// RANSAC plane among `points` whose normal is within 35° of `up`; returns (plane, inlier count).
 fn ransac_floor(
-    points: &[[f64; 3]],
-    up: [f64; 3],
-    below: Option<[f64; 3]>,
+    points: &[Point3<f64>],
+    up: Vector3<f64>,
+    below: Option<Point3<f64>>,
     opts: &ScanOptions,
 ) -> Option<([f64; 4], usize)> {
     if points.len() < 3 {
@@ -188,25 +189,25 @@ fn ransac_floor(
         let a = points[rng.below(points.len())];
         let b = points[rng.below(points.len())];
         let c = points[rng.below(points.len())];
-        let Some(mut n) = normalize(cross(sub(b, a), sub(c, a))) else {
+        let Some(mut n) = normalize((b - a).cross(&(c - a))) else {
             continue;
         };
-        if dot(n, up) < 0.0 {
-            n = [-n[0], -n[1], -n[2]];
+        if n.dot(&up) < 0.0 {
+            n = -n;
         }
-        if dot(n, up) < cos_max {
+        if n.dot(&up) < cos_max {
             continue;
         }
-        let d = -dot(n, a);
+        let d = -n.dot(&a.coords);
         // The floor is under the subject: the hip centre must be well above it.
         if let Some(h) = below {
-            if dot(n, h) + d < 0.3 {
+            if n.dot(&h.coords) + d < 0.3 {
                 continue;
             }
         }
         let count = points
             .iter()
-            .filter(|p| (dot(n, **p) + d).abs() <= opts.floor_threshold_m)
+            .filter(|p| (n.dot(&p.coords) + d).abs() <= opts.floor_threshold_m)
             .count();
         if best.is_none_or(|(_, c)| count > c) {
             best = Some(([n[0], n[1], n[2], d], count));
@@ -232,17 +233,17 @@ pub fn scan_mesh(
         ..ScanReport::default()
     };
     if let Some(s) = skeleton {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
+        let margin = Vector3::repeat(opts.background_margin_m);
+        let mut lo = Point3::from([f64::INFINITY; 3]);
+        let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
         for p in &s.positions {
-            for c in 0..3 {
-                lo[c] = lo[c].min(p[c] - opts.background_margin_m);
-                hi[c] = hi[c].max(p[c] + opts.background_margin_m);
-            }
+            lo = lo.inf(&(p - margin));
+            hi = hi.sup(&(p + margin));
         }
         for p in points.iter_mut() {
             if let Some(q) = p {
-                if (0..3).any(|c| q[c] < lo[c] || q[c] > hi[c]) {
+                let outside = (0..3).any(|c| q[c] < lo[c] || q[c] > hi[c]);
+                if outside {
                     *p = None;
                     report.background_removed += 1;
                 }
@@ -252,21 +253,19 @@ pub fn scan_mesh(
     if opts.remove_floor {
         let up = skeleton
             .and_then(|s| {
-                normalize(sub(
-                    s.position(Joint::ShoulderCenter).into(),
-                    s.position(Joint::HipCenter).into(),
-                ))
+                normalize(s.position(Joint::ShoulderCenter) - s.position(Joint::HipCenter))
             })
-            .unwrap_or([0.0, 1.0, 0.0]);
-        let hip = skeleton.map(|s| s.position(Joint::HipCenter).into());
-        let candidates: Vec<[f64; 3]> = points.iter().flatten().copied().collect();
+            .unwrap_or_else(Vector3::y);
+        let hip = skeleton.map(|s| s.position(Joint::HipCenter));
+        let candidates: Vec<Point3<f64>> = points.iter().flatten().copied().collect();
         if let Some((plane, count)) = ransac_floor(&candidates, up, hip, opts) {
             // A handful of coplanar points is not a floor.
             if count >= 50 && count * 50 >= candidates.len() {
                 report.floor_plane = Some(plane);
                 for p in points.iter_mut() {
                     if let Some(q) = p {
-                        if (dot([plane[0], plane[1], plane[2]], *q) + plane[3]).abs()
+                        if (Vector3::new(plane[0], plane[1], plane[2]).dot(&q.coords) + plane[3])
+                            .abs()
                             <= opts.floor_threshold_m
                         {
                             *p = None;
@@ -280,7 +279,7 @@ pub fn scan_mesh(
 
     // Grid triangulation.
     let (w, h) = (frame.width as usize, frame.height as usize);
-    let ok = |a: [f64; 3], b: [f64; 3]| (a[2] - b[2]).abs() <= opts.discontinuity_m;
+    let ok = |a: Point3<f64>, b: Point3<f64>| (a.z - b.z).abs() <= opts.discontinuity_m;
     let mut tris: Vec<[usize; 3]> = Vec::new();
     for v in 0..h.saturating_sub(1) {
         for u in 0..w.saturating_sub(1) {
@@ -353,7 +352,7 @@ pub fn scan_mesh(
         index[px] = n as u32;
         // Every used pixel belongs to a triangle, whose corners all have points.
         if let Some(p) = points[px] {
-            positions.push(p);
+            positions.push(p.into());
         }
         pixel_ids.push(px as u32);
     }
@@ -370,6 +369,7 @@ pub fn scan_mesh(
 }
 
 /// The mean distance from the points to a plane `[n, d]` (helper for reports and tests).
-pub fn plane_distance(plane: [f64; 4], p: [f64; 3]) -> f64 {
-    (dot([plane[0], plane[1], plane[2]], p) + plane[3]) / norm([plane[0], plane[1], plane[2]])
+pub fn plane_distance(plane: [f64; 4], p: &Point3<f64>) -> f64 {
+    let n = Vector3::new(plane[0], plane[1], plane[2]);
+    (n.dot(&p.coords) + plane[3]) / n.norm()
 }

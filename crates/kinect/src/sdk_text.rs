@@ -57,7 +57,7 @@ pub fn parse_kinect_text(text: &str, file: &str) -> Result<JointLog, KinectError
             let k = 1 + 3 * j.index();
             let p = [values[k], values[k + 1], values[k + 2]];
             if p != [0.0, 0.0, 0.0] {
-                partial.set(j, p, 1.0);
+                partial.set(j, p.into(), 1.0);
             }
         }
         let skeleton = partial.complete().map_err(|j| {

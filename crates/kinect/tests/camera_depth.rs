@@ -1,6 +1,7 @@
 //! Intrinsics conventions and PNG-16 depth frames.
 
 use approx::assert_abs_diff_eq;
+use nalgebra::Point3;
 use symcorr_kinect::depth::{decode_depth_png16, encode_depth_png16};
 use symcorr_kinect::{read_depth_png16, write_depth_png16, DepthFrame, Intrinsics, KinectError};
 
@@ -56,16 +57,16 @@ fn kinect_v1_intrinsics_match_the_sdk_field_of_view() {
 fn projection_directions_follow_the_documented_convention() {
     let k = Intrinsics::kinect_v1();
     // The optical axis lands on the principal point.
-    assert_eq!(k.project([0.0, 0.0, 2.0]), [k.cx, k.cy]);
+    assert_eq!(k.project(&Point3::new(0.0, 0.0, 2.0)), [k.cx, k.cy]);
     // +y (up) → smaller v (rows grow downward).
-    assert!(k.project([0.0, 0.5, 2.0])[1] < k.cy);
+    assert!(k.project(&Point3::new(0.0, 0.5, 2.0))[1] < k.cy);
     // +x (sensor's left) → larger u (SDK v1's mirrored depth image).
-    assert!(k.project([0.5, 0.0, 2.0])[0] > k.cx);
+    assert!(k.project(&Point3::new(0.5, 0.0, 2.0))[0] > k.cx);
     // SDK formula at 320×240: x_pixel = 160 + x·285.63/z.
-    let u = k.project([0.3, 0.0, 1.5])[0];
+    let u = k.project(&Point3::new(0.3, 0.0, 1.5))[0];
     assert_abs_diff_eq!(u / 2.0, 160.0 + 0.3 * 285.63 / 1.5, epsilon = 1e-9);
     // Farther → closer to the centre.
-    assert!(k.project([0.5, 0.0, 4.0])[0] < k.project([0.5, 0.0, 2.0])[0]);
+    assert!(k.project(&Point3::new(0.5, 0.0, 4.0))[0] < k.project(&Point3::new(0.5, 0.0, 2.0))[0]);
 }
 
 #[test]
@@ -80,12 +81,10 @@ fn unproject_inverts_project() {
     };
     for i in 0..50 {
         let t = i as f64;
-        let p = [t.sin(), (1.3 * t).cos(), 0.5 + 0.1 * t];
-        let [u, v] = k.project(p);
-        let q = k.unproject(u, v, p[2]);
-        for c in 0..3 {
-            assert_abs_diff_eq!(q[c], p[c], epsilon = 1e-12);
-        }
+        let p = Point3::new(t.sin(), (1.3 * t).cos(), 0.5 + 0.1 * t);
+        let [u, v] = k.project(&p);
+        let q = k.unproject(u, v, p.z);
+        assert_abs_diff_eq!(q, p, epsilon = 1e-12);
     }
 }
 

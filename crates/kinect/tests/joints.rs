@@ -508,3 +508,72 @@ fn interpolation_overflow_is_an_error_not_an_infinite_joint() {
     let e = parse_joints(nite, "n.json").unwrap_err();
     assert!(matches!(e, KinectError::Frame { frame: 0, .. }), "{e}");
 }
+
+/// Every `symcorr.joints/1` file under fixtures/ (recursively).
+fn fixture_joint_files() -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut dirs = vec![PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")];
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else if p.extension().is_some_and(|x| x == "json")
+                && std::fs::read_to_string(&p)
+                    .unwrap()
+                    .contains("symcorr.joints/1")
+            {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The typed reader gives exactly the numbers written in the bundled files: every
+/// `kinect_v1` file's coordinates (times the unit), times, confidences and interpolation flags,
+/// read here independently as plain JSON values, match bit for bit.
+#[test]
+fn bundled_joint_files_parse_to_the_values_they_contain() {
+    let files = fixture_joint_files();
+    let mut v1_files = 0;
+    for path in &files {
+        let log = read_joints(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let text = std::fs::read_to_string(path).unwrap();
+        let root: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let frames = root["frames"].as_array().unwrap();
+        assert_eq!(log.frames.len(), frames.len(), "{}", path.display());
+        if root["skeleton"] != "kinect_v1" {
+            continue;
+        }
+        v1_files += 1;
+        let unit = if root["units"] == "mm" { 0.001 } else { 1.0 };
+        for (fi, (frame, parsed)) in frames.iter().zip(&log.frames).enumerate() {
+            let expected_time = frame["time_s"].as_f64().unwrap_or(fi as f64 / 30.0);
+            assert_eq!(parsed.time_s.to_bits(), expected_time.to_bits());
+            let sk = &parsed.skeleton;
+            for (name, xyz) in frame["joints"].as_object().unwrap() {
+                let j = Joint::from_name(name).unwrap();
+                for k in 0..3 {
+                    let want = xyz[k].as_f64().unwrap() * unit;
+                    let got = sk.positions[j.index()][k];
+                    assert_eq!(got.to_bits(), want.to_bits(), "{} {name}", path.display());
+                }
+            }
+            for j in Joint::ALL {
+                let c = frame["confidence"][j.name()].as_f64().unwrap_or(1.0);
+                assert_eq!(sk.confidence[j.index()].to_bits(), c.to_bits());
+                let flagged = frame["interpolated"]
+                    .as_array()
+                    .is_some_and(|a| a.iter().any(|n| n == j.name()));
+                assert_eq!(sk.interpolated[j.index()], flagged);
+            }
+        }
+    }
+    assert!(
+        v1_files >= 20,
+        "{v1_files} kinect_v1 files of {}",
+        files.len()
+    );
+}

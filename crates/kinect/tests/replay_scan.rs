@@ -1,12 +1,11 @@
 //! Joint-log replay, handedness against a mesh, and depth → scan meshing on analytically rendered
 //! depth frames.
 
+use nalgebra::{distance, Point3, Vector3};
 use std::path::PathBuf;
+use symcorr_attach::{handedness_verdict, Handedness};
 use symcorr_kinect::scan::{depth_to_points, fuse_depth_frames, scan_mesh, ScanOptions};
-use symcorr_kinect::{
-    check_handedness, read_joints, DepthFrame, FrameSelect, Handedness, Intrinsics, JointLog,
-    KinectError,
-};
+use symcorr_kinect::{read_joints, DepthFrame, FrameSelect, Intrinsics, JointLog, KinectError};
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Bone, Joint, Skeleton};
 
@@ -181,12 +180,12 @@ fn blocky_body() -> TriMesh {
 fn handedness_detects_swapped_sides_from_the_feet() {
     let s = standing();
     let mesh = blocky_body();
-    let ok = check_handedness(&s, &mesh, 0.01);
+    let ok = handedness_verdict(&mesh, &s, 0.01);
     assert_eq!(ok.verdict, Handedness::Consistent, "{ok:?}");
     // Facing the sensor: −z.
     assert!(ok.facing[2] < -0.99, "{:?}", ok.facing);
     assert!(ok.foot_offset_m > 0.02);
-    let swapped = check_handedness(&s.swap_sides(), &mesh, 0.01);
+    let swapped = handedness_verdict(&mesh, &s.swap_sides(), 0.01);
     assert_eq!(swapped.verdict, Handedness::Swapped, "{swapped:?}");
     assert!((swapped.foot_offset_m + ok.foot_offset_m).abs() < 1e-9);
     // No geometry near the feet: undetermined.
@@ -194,7 +193,7 @@ fn handedness_detects_swapped_sides_from_the_feet() {
     push_box(&mut p, &mut t, [-0.18, -0.05, 2.4], [0.18, 0.5, 2.6]);
     let torso = TriMesh::new(p, t).unwrap();
     assert_eq!(
-        check_handedness(&s, &torso, 0.01).verdict,
+        handedness_verdict(&torso, &s, 0.01).verdict,
         Handedness::Undetermined
     );
 }
@@ -206,23 +205,23 @@ const BLOB: [f64; 3] = [0.4, 0.35, 2.45];
 /// Ray-cast depth (mm) of a scene: a sphere (the "subject"), a small blob beside it, the floor
 /// y = −1 and a wall z = 4, seen through `k`.
 fn render(k: &Intrinsics) -> DepthFrame {
-    let sphere = |d: [f64; 3], c: [f64; 3], r: f64| -> Option<f64> {
-        let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let b = -2.0 * (d[0] * c[0] + d[1] * c[1] + d[2] * c[2]);
-        let cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2] - r * r;
+    let sphere = |d: Vector3<f64>, c: Vector3<f64>, r: f64| -> Option<f64> {
+        let a = d.dot(&d);
+        let b = -2.0 * d.dot(&c);
+        let cc = c.dot(&c) - r * r;
         let disc = b * b - 4.0 * a * cc;
         (disc >= 0.0).then(|| (-b - disc.sqrt()) / (2.0 * a))
     };
     let mut data = Vec::new();
     for v in 0..k.height {
         for u in 0..k.width {
-            let d = k.unproject(u as f64, v as f64, 1.0);
+            let d = k.unproject(u as f64, v as f64, 1.0).coords;
             let mut t: f64 = 4.0;
             if d[1] < 0.0 {
                 t = t.min(-1.0 / d[1]);
             }
             for (c, r) in [(C, R), (BLOB, 0.05)] {
-                if let Some(s) = sphere(d, c, r) {
+                if let Some(s) = sphere(d, c.into(), r) {
                     t = t.min(s);
                 }
             }
@@ -267,13 +266,14 @@ fn scan_keeps_only_the_subject_surface() {
     assert!(m.num_vertices() > 500, "{}", m.num_vertices());
     assert_eq!(scan.pixel_ids.len(), m.num_vertices());
     for (i, p) in m.positions.iter().enumerate() {
-        let r = ((p[0] - C[0]).powi(2) + (p[1] - C[1]).powi(2) + (p[2] - C[2]).powi(2)).sqrt();
+        let p = Point3::from(*p);
+        let r = distance(&p, &C.into());
         assert!(
             (r - R).abs() < 0.01,
             "vertex {i} at {p:?} is not on the sphere (r = {r})"
         );
         // The pixel id map points back at the pixel the vertex came from.
-        let [u, v] = k.project(*p);
+        let [u, v] = k.project(&p);
         let id = scan.pixel_ids[i];
         assert!(
             (u - (id % k.width) as f64).abs() < 1e-6 && (v - (id / k.width) as f64).abs() < 1e-6

@@ -139,9 +139,12 @@ pub fn labels_file(
             alignment: Alignment {
                 fit_after: al.fit_after,
                 fit_before: al.fit_before,
-                rotation: al.rotation,
+                // Row-major, as the file has always stored it.
+                rotation: std::array::from_fn(|i| {
+                    std::array::from_fn(|j| al.rotation.matrix()[(i, j)])
+                }),
                 scale: al.scale,
-                translation: al.translation,
+                translation: al.translation.into(),
             },
             boundaries: boundaries.to_string(),
             components: d

@@ -177,7 +177,7 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
         if p.iter().any(|q| q[2] <= near) {
             continue;
         }
-        let s = p.map(|q| k.project(q));
+        let s = p.map(|q| k.project(&q.into()));
         let area = edge(s[0], s[1], s[2]);
         if area.abs() < 1e-12 {
             continue;
@@ -226,7 +226,7 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
                 let i = v * w + u;
                 if z < zbuf[i] {
                     zbuf[i] = z;
-                    let x = k.unproject(q[0], q[1], z);
+                    let x: [f64; 3] = k.unproject(q[0], q[1], z).into();
                     let mut best = (0, f64::INFINITY);
                     for (c, pc) in p.iter().enumerate() {
                         let d = sub(x, *pc);
@@ -262,7 +262,7 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
     if !planes.is_empty() {
         for v in 0..h {
             for u in 0..w {
-                let dc = k.unproject(u as f64, v as f64, 1.0); // z = 1
+                let dc: [f64; 3] = k.unproject(u as f64, v as f64, 1.0).into(); // z = 1
                 let dw = crate::math::mul_v(&rt, dc);
                 for &(n, c) in &planes {
                     let denom = dot(n, dw);

@@ -258,7 +258,7 @@ fn rendered_pixels_back_project_onto_their_ground_truth_vertex_surface() {
             continue;
         }
         let (u, row) = ((i % k.width as usize) as f64, (i / k.width as usize) as f64);
-        let p = to_world.apply(k.unproject(u, row, r.depth_mm[i] as f64 / 1000.0));
+        let p = to_world.apply(k.unproject(u, row, r.depth_mm[i] as f64 / 1000.0).into());
         let dist = vt[v as usize]
             .iter()
             .map(|&t| point_triangle_distance(p, posed.mesh.corners(t as usize)))

@@ -9,8 +9,8 @@ use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
 use symcorr_kinect::{
-    check_handedness, read_depth_png16, read_joints, read_joints_with_format, scan_mesh,
-    DepthFrame, FrameSelect, Handedness, Intrinsics, ScanOptions,
+    read_depth_png16, read_joints, read_joints_with_format, scan_mesh, DepthFrame, FrameSelect,
+    Intrinsics, ScanOptions,
 };
 
 /// Arguments of `symcorr scan`.
@@ -149,8 +149,8 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
         r.floor_removed,
         r.component_vertices_removed
     );
-    let hand = check_handedness(&skeleton, &scan.mesh, 0.01);
-    if hand.verdict == Handedness::Swapped {
+    let hand = symcorr_attach::handedness_verdict(&scan.mesh, &skeleton, 0.01);
+    if hand.verdict == symcorr_attach::Handedness::Swapped {
         eprintln!(
             "symcorr: warning: the skeleton's left/right look swapped relative to the scan \
              (feet point {:.3} m backwards)",
