@@ -31,6 +31,10 @@ impl Segment {
     /// Number of body segments.
     pub const COUNT: usize = 17;
 
+    /// The midline segments, whose [`Segment::side`] is [`BodySide::Midline`]: single segments
+    /// with a left and a right half, which a sagittal plane splits.
+    pub const MIDLINE: [Segment; 3] = [Segment::Pelvis, Segment::Torso, Segment::Head];
+
     /// All 17 segments, index = label.
     pub const ALL: [Segment; Segment::COUNT] = [
         Segment::Pelvis,

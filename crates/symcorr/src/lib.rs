@@ -57,14 +57,15 @@ pub mod cache;
 pub mod figures;
 pub mod formats;
 pub mod io;
+mod midline;
 pub mod output;
 mod pipeline;
 
+pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
-    midline_halves, midline_sagittal, symmetric_midline_halves, Correspondence, Method,
-    MethodReport, Mode, PaperData, Pipeline, PipelineOptions, PrepareOptions, PreparedMesh,
-    RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES,
-    PARTIAL_BOUNDARY_RATIO,
+    Correspondence, Method, MethodReport, Mode, PaperData, Pipeline, PipelineOptions,
+    PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS,
+    DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES, PARTIAL_BOUNDARY_RATIO,
 };
 
 /// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.

@@ -1,19 +1,19 @@
 //! The pipeline API: per-mesh preparation ([`PreparedMesh`]) and pairwise matching
 //! ([`Pipeline::run`]).
 
+use crate::midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 use crate::{OptionError, PipelineError};
-use nalgebra::Point3;
 use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Attachment};
 use symcorr_correspond::{
     articulated_match, base_profile, coverage, explain_point, farthest_point_sample,
-    landmark_coordinates, match_points, outward_normals, refine_dense, refine_symmetry_plane,
-    skeleton_landmarks, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, Descriptors,
-    FilterStats, Match, MatchOptions, Pair, PaperFilter, PaperInputs, PointExplanation,
-    RefineOptions, RefinedInputs, SpectralBasis,
+    landmark_coordinates, match_points, outward_normals, refine_dense, skeleton_landmarks,
+    ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, Descriptors, FilterStats, Match,
+    MatchOptions, Pair, PaperFilter, PaperInputs, PointExplanation, RefineOptions, RefinedInputs,
+    SpectralBasis,
 };
 use symcorr_mesh::{repair, RepairOptions, RepairReport, TriMesh};
-use symcorr_skeleton::{BodySide, Joint, Plane, SagittalPlanes, Segment, Skeleton};
+use symcorr_skeleton::{BodySide, Segment, Skeleton};
 use symcorr_spectral::{
     base_vertex_set, eigenpairs, gaussian_curvature, si_hks, EdgeGraph, EigenOptions,
     HeatGeodesics, Laplacian, SiHksParams,
@@ -189,12 +189,12 @@ impl PreparedMesh {
         let area = mesh.total_area();
         let paper = match sp.paper {
             Some((descriptors, base_set, profile)) => Some(PaperData {
-                halves: sides(midline_halves(
+                halves: midline_halves(
                     &mesh,
                     &attachment.labels,
                     &attachment.joints,
                     options.midline_margin * area.sqrt(),
-                )),
+                ),
                 sagittal: midline_sagittal(&mesh, &attachment.labels, &attachment.joints),
                 descriptors,
                 curvature: sp.curvature,
@@ -335,129 +335,6 @@ impl Needs {
     }
 }
 
-/// The side of the skeleton's sagittal plane of each vertex on a midline segment (pelvis,
-/// torso, head): `+1` on the subject's left, `-1` on the right, `0` within `margin` of the
-/// plane and on every limb segment.
-///
-/// The plane of each segment is spanned by its own joints, so it follows a twisted spine: for
-/// the pelvis it passes through the midpoint of the hips with normal `hip_left − hip_right`;
-/// for the head through the midpoint of the shoulders with normal `shoulder_left −
-/// shoulder_right`; for the torso through the mean of both midpoints with the sum of both
-/// normals. (Measured: one plane fitted to seven joints for all three segments did worse —
-/// flip rate 0.24 % vs 0.20 % with exact joints, 1.17 % vs 0.96 % with σ = 3 cm.)
-///
-/// The skull (head vertices beyond half the neck → head bone) is the exception: no joint
-/// says how the head is turned against the shoulders, so its plane is the shoulders' refined
-/// by the skull's own left/right symmetry ([`refine_symmetry_plane`]); the neck keeps the
-/// shoulders' plane. Measured with the sagittal band (58 pairs, sparse): flips 13 → 11 of
-/// 47.6k with exact joints, 146 → 118 with σ = 3 cm (mean 0.0542 → 0.0524). Refining the
-/// whole head, torso or pelvis plane by symmetry instead did worse with exact joints (the
-/// neck bends in the random poses; 56 flips). Known limit: the refinement (nearest-point
-/// reflect–refit) corrects a turn only partly — on the generated random poses the skull's
-/// left/right consistency error falls by about a third, and on a smooth synthetic egg-shaped
-/// skull turned 15° it moves the plane by about 1° (tests/midline.rs checks only that a
-/// symmetric skull stays split correctly).
-pub fn midline_halves(
-    mesh: &TriMesh,
-    labels: &[Segment],
-    joints: &Skeleton,
-    margin: f64,
-) -> Vec<i8> {
-    midline_signed_distances(mesh, labels, joints)
-        .into_iter()
-        .map(|side| {
-            if side > margin {
-                1
-            } else if side < -margin {
-                -1
-            } else {
-                0
-            }
-        })
-        .collect()
-}
-
-/// Sagittal halves as body sides (`+1` left, `-1` right, `0` midline).
-fn sides(halves: Vec<i8>) -> Vec<BodySide> {
-    halves
-        .into_iter()
-        .map(|h| BodySide::of_signed_distance(f64::from(h), 0.0))
-        .collect()
-}
-
-/// The sagittal coordinate of each vertex on a midline segment (pelvis, torso, head) for the
-/// sagittal band (symcorr-correspond's `sagittal_band`, beyond the paper): the signed distance
-/// to the segment's plane of [`midline_halves`] (`+` on the subject's left) over the segment's
-/// half-width on this mesh — the 90th percentile of the segment's |distances| — so that bodies
-/// of different build compare; `0` on every limb segment.
-pub fn midline_sagittal(mesh: &TriMesh, labels: &[Segment], joints: &Skeleton) -> Vec<f64> {
-    let mut d = midline_signed_distances(mesh, labels, joints);
-    for seg in [Segment::Pelvis, Segment::Torso, Segment::Head] {
-        let mut abs: Vec<f64> = d
-            .iter()
-            .zip(labels)
-            .filter(|(_, &l)| l == seg)
-            .map(|(x, _)| x.abs())
-            .collect();
-        if abs.is_empty() {
-            continue;
-        }
-        let k = (abs.len() * 9 / 10).min(abs.len() - 1);
-        abs.select_nth_unstable_by(k, f64::total_cmp);
-        let width = abs[k];
-        for (x, &l) in d.iter_mut().zip(labels) {
-            if l == seg {
-                *x = if width > 0.0 { *x / width } else { 0.0 };
-            }
-        }
-    }
-    d
-}
-
-/// Signed distance of each midline vertex to its segment's joint plane ([`midline_halves`]),
-/// `0` on limb segments.
-fn midline_signed_distances(mesh: &TriMesh, labels: &[Segment], joints: &Skeleton) -> Vec<f64> {
-    let planes = SagittalPlanes::of(joints);
-    let arrays = |pl: Plane| -> ([f64; 3], [f64; 3]) { (pl.origin.into(), pl.normal.into()) };
-    // The skull: head vertices beyond half the neck → head bone. No joint tells how the head
-    // is turned against the shoulders, so its plane comes from the skull's own left/right
-    // symmetry, starting from the shoulder normal through the head joint.
-    let neck = joints.position(Joint::ShoulderCenter);
-    let top = joints.position(Joint::Head);
-    let bone = top - neck;
-    let bone_sq = bone.norm_squared();
-    let on_skull =
-        |x: [f64; 3]| bone_sq > 0.0 && (Point3::from(x) - neck).dot(&bone) > SKULL_START * bone_sq;
-    let skull: Vec<[f64; 3]> = mesh
-        .positions
-        .iter()
-        .zip(labels)
-        .filter(|(x, &l)| l == Segment::Head && on_skull(**x))
-        .map(|(x, _)| *x)
-        .collect();
-    let stride = skull.len().div_ceil(1500).max(1);
-    let skull: Vec<[f64; 3]> = skull.into_iter().step_by(stride).collect();
-    let skull_plane = refine_symmetry_plane(&skull, top.into(), planes.shoulders.normal.into(), 10);
-    mesh.positions
-        .iter()
-        .zip(labels)
-        .map(|(&x, s)| {
-            let (o, n) = match s {
-                Segment::Pelvis => arrays(planes.pelvis),
-                Segment::Torso => arrays(planes.torso),
-                Segment::Head if on_skull(x) => skull_plane,
-                Segment::Head => arrays(planes.shoulders),
-                _ => return 0.0,
-            };
-            symcorr_mesh::geometry::dot(symcorr_mesh::geometry::sub(x, o), n)
-        })
-        .collect()
-}
-
-/// Where the skull's own plane takes over from the shoulders' ([`midline_halves`]), as a
-/// fraction of the neck → head bone.
-const SKULL_START: f64 = 0.5;
-
 struct Spectral {
     curvature: Vec<f64>,
     /// Descriptors, base set and profile (the paper's).
@@ -529,11 +406,7 @@ impl RefineData {
         let landmarks = landmark_coordinates(&heat, &sources, mesh.total_area())?;
         timings.push(("landmarks".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        let halves = sides(symmetric_midline_halves(
-            mesh,
-            &attachment.labels,
-            &attachment.joints,
-        ));
+        let halves = symmetric_midline_halves(mesh, &attachment.labels, &attachment.joints);
         timings.push(("symmetry_planes".into(), t.elapsed().as_secs_f64()));
         Ok(RefineData {
             basis: eig.vectors,
@@ -544,50 +417,6 @@ impl RefineData {
             descriptors,
         })
     }
-}
-
-/// The joint-built sagittal planes of [`midline_halves`] (margin 0), each refined by the
-/// surface's own left/right symmetry ([`refine_symmetry_plane`] on the segment's vertices, at
-/// most 1,500 of them): a noisy shoulder line or a head turned against the shoulders tilts the
-/// joint plane by many degrees, the surface's symmetry plane does not. Measured on the
-/// generated bodies with σ = 3 cm joints (refined method): flips 1.0 % → 0.06 %.
-pub fn symmetric_midline_halves(mesh: &TriMesh, labels: &[Segment], joints: &Skeleton) -> Vec<i8> {
-    let planes = SagittalPlanes::of(joints);
-    let fit = |seg: Segment, plane: Plane| {
-        let pts: Vec<[f64; 3]> = mesh
-            .positions
-            .iter()
-            .zip(labels)
-            .filter(|(_, &l)| l == seg)
-            .map(|(x, _)| *x)
-            .collect();
-        let stride = pts.len().div_ceil(1500).max(1);
-        let pts: Vec<[f64; 3]> = pts.into_iter().step_by(stride).collect();
-        refine_symmetry_plane(&pts, plane.origin.into(), plane.normal.into(), 10)
-    };
-    let refined = [
-        fit(Segment::Pelvis, planes.pelvis),
-        fit(Segment::Torso, planes.torso),
-        fit(Segment::Head, planes.shoulders),
-    ];
-    mesh.positions
-        .iter()
-        .zip(labels)
-        .map(|(&x, s)| {
-            let (o, n) = match s {
-                Segment::Pelvis => refined[0],
-                Segment::Torso => refined[1],
-                Segment::Head => refined[2],
-                _ => return 0,
-            };
-            let d = symcorr_mesh::geometry::sub(x, o);
-            if symcorr_mesh::geometry::dot(d, n) >= 0.0 {
-                1
-            } else {
-                -1
-            }
-        })
-        .collect()
 }
 
 type Timings = Vec<(String, f64)>;
@@ -1094,6 +923,7 @@ fn run_paper(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Point3;
     use symcorr_attach::testbody::{capsule_body, t_pose};
     use symcorr_eval::{evaluate, EvalGraph};
 

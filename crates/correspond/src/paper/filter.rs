@@ -217,7 +217,7 @@ pub fn sagittal_band(
 
 /// Pelvis, torso and head: the segments the sagittal plane cuts into halves.
 pub(crate) fn is_midline(s: Segment) -> bool {
-    matches!(s, Segment::Pelvis | Segment::Torso | Segment::Head)
+    Segment::MIDLINE.contains(&s)
 }
 
 #[cfg(test)]
