@@ -60,12 +60,15 @@ pub mod io;
 mod midline;
 pub mod output;
 mod pipeline;
+mod prepare;
 
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
-    Correspondence, Method, MethodReport, Mode, PaperData, Pipeline, PipelineOptions,
-    PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS,
-    DEFAULT_MIDLINE_MARGIN, DEFAULT_SAMPLES, PARTIAL_BOUNDARY_RATIO,
+    Correspondence, Method, MethodReport, Mode, Pipeline, PipelineOptions, DEFAULT_SAMPLES,
+};
+pub use prepare::{
+    PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS,
+    DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO,
 };
 
 /// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.
