@@ -151,8 +151,8 @@ fn midline_signed_distances(mesh: &TriMesh, labels: &[Segment], joints: &Skeleto
 }
 
 /// The sagittal planes of [`midline_halves`] (margin 0), each refined by the surface's own
-/// left/right symmetry ([`refine_symmetry_plane`] on the segment's vertices, at most
-/// [`SYMMETRY_POINTS`] of them): a noisy shoulder line or a head turned against the shoulders
+/// left/right symmetry ([`refine_symmetry_plane`] on an even sample of at most 1,500 of the
+/// segment's vertices): a noisy shoulder line or a head turned against the shoulders
 /// tilts a joint plane by many degrees, the surface's symmetry plane does not. Every midline
 /// vertex gets a side (one exactly on the plane counts as left); limb vertices are
 /// [`BodySide::Midline`]. The refined method's halves.
