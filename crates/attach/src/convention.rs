@@ -257,8 +257,8 @@ impl BoundaryConvention {
     /// without a reference (`None`) are skipped. Boundaries with fewer than 10 such vertices of
     /// either reference segment get no rule.
     ///
-    /// Errors: [`AttachError::InvalidOption`] when a body's labels do not match its mesh or no
-    /// boundary could be learned; any error of [`attach`](crate::attach).
+    /// Errors: [`AttachError::LabelCount`] when a body's labels do not match its mesh,
+    /// [`AttachError::NothingLearned`] when no boundary could be learned; any error of [`attach`](crate::attach).
     pub fn fit(
         bodies: &[LabelledBody<'_>],
         options: &AttachOptions,
@@ -271,11 +271,10 @@ impl BoundaryConvention {
         let mut data = vec![Samples::default(); pairs.len()];
         for body in bodies {
             if body.labels.len() != body.mesh.num_vertices() {
-                return Err(AttachError::InvalidOption(format!(
-                    "a labelled body has {} labels for {} vertices",
-                    body.labels.len(),
-                    body.mesh.num_vertices()
-                )));
+                return Err(AttachError::LabelCount {
+                    labels: body.labels.len(),
+                    vertices: body.mesh.num_vertices(),
+                });
             }
             let (att, usable) = attach_with_usable(body.mesh, body.skeleton, &plain)?;
             let area = body.mesh.vertex_areas();
@@ -309,9 +308,7 @@ impl BoundaryConvention {
             }
         }
         if rules.is_empty() {
-            return Err(AttachError::InvalidOption(
-                "no segment boundary could be learned from the labelled bodies".into(),
-            ));
+            return Err(AttachError::NothingLearned);
         }
         Ok(BoundaryConvention { rules })
     }

@@ -49,7 +49,38 @@ pub enum AttachError {
     /// The linear solve of bone heat failed.
     #[error("bone heat: {0}")]
     Solver(String),
-    /// Options out of range.
-    #[error("invalid attachment option: {0}")]
-    InvalidOption(String),
+    /// An option is out of its range.
+    #[error("invalid attachment option: {name} = {value} is out of range")]
+    OptionOutOfRange {
+        /// The option's field name in `AttachOptions`.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A boundary convention with joint planes off: the convention would be ignored.
+    #[error("invalid attachment option: a boundary convention replaces joint planes: it needs joint_planes = true")]
+    ConventionNeedsJointPlanes,
+    /// A boundary rule that cannot separate anything.
+    #[error("invalid attachment option: boundary rule {a} / {b} at {joint}: the segments must differ and not be left/right twins, and the plane must be finite ({plane:?})")]
+    InvalidBoundaryRule {
+        /// One segment's name.
+        a: &'static str,
+        /// The other's.
+        b: &'static str,
+        /// The joint the rule is anchored at.
+        joint: &'static str,
+        /// The rule's plane coefficients.
+        plane: [f64; 5],
+    },
+    /// A labelled training body whose label table does not match its mesh.
+    #[error("a labelled body has {labels} labels for {vertices} vertices")]
+    LabelCount {
+        /// Labels given.
+        labels: usize,
+        /// Vertices of the mesh.
+        vertices: usize,
+    },
+    /// No boundary rule could be learned from the labelled bodies.
+    #[error("no segment boundary could be learned from the labelled bodies")]
+    NothingLearned,
 }

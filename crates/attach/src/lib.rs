@@ -611,11 +611,7 @@ pub fn label(mesh: &TriMesh, skeleton: &Skeleton) -> Result<Vec<Segment>, Attach
 }
 
 fn check_options(o: &AttachOptions) -> Result<(), AttachError> {
-    let bad = |name: &str, v: f64| {
-        Err(AttachError::InvalidOption(format!(
-            "{name} = {v} is out of range"
-        )))
-    };
+    let bad = |name: &'static str, value: f64| Err(AttachError::OptionOutOfRange { name, value });
     if !(o.heat_constant.is_finite() && o.heat_constant > 0.0) {
         return bad("heat_constant", o.heat_constant);
     }
@@ -633,23 +629,19 @@ fn check_options(o: &AttachOptions) -> Result<(), AttachError> {
     }
     if let Some(c) = &o.convention {
         if !o.joint_planes {
-            return Err(AttachError::InvalidOption(
-                "a boundary convention replaces joint planes: it needs joint_planes = true".into(),
-            ));
+            return Err(AttachError::ConventionNeedsJointPlanes);
         }
         if let Some(r) = c
             .rules
             .iter()
             .find(|r| r.a == r.b || r.a.mirror() == r.b || !r.plane.iter().all(|x| x.is_finite()))
         {
-            return Err(AttachError::InvalidOption(format!(
-                "boundary rule {} / {} at {}: the segments must differ and not be left/right \
-                 twins, and the plane must be finite ({:?})",
-                r.a.name(),
-                r.b.name(),
-                r.joint.name(),
-                r.plane
-            )));
+            return Err(AttachError::InvalidBoundaryRule {
+                a: r.a.name(),
+                b: r.b.name(),
+                joint: r.joint.name(),
+                plane: r.plane,
+            });
         }
     }
     if let Some(&r) = o

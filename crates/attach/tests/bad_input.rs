@@ -179,7 +179,10 @@ fn an_empty_mesh_and_bad_options_are_errors() {
     };
     assert!(matches!(
         attach(&mesh, &sk, &o),
-        Err(AttachError::InvalidOption(_))
+        Err(AttachError::OptionOutOfRange {
+            name: "heat_constant",
+            ..
+        })
     ));
 }
 
@@ -238,9 +241,20 @@ fn a_malformed_boundary_convention_is_an_error() {
             ..AttachOptions::default()
         };
         match attach(&mesh, &sk, &o) {
-            Err(AttachError::InvalidOption(msg)) => assert!(!msg.contains('\n'), "{msg}"),
+            Err(
+                e @ (AttachError::InvalidBoundaryRule { .. }
+                | AttachError::ConventionNeedsJointPlanes),
+            ) => {
+                let msg = e.to_string();
+                assert!(!msg.contains('\n'), "{msg}");
+                assert_eq!(
+                    joint_planes,
+                    matches!(e, AttachError::InvalidBoundaryRule { .. }),
+                    "{msg}"
+                );
+            }
             other => panic!(
-                "expected InvalidOption, got {:?}",
+                "expected an invalid rule or a convention without joint planes, got {:?}",
                 other.map(|a| a.labels.len())
             ),
         }
