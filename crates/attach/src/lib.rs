@@ -416,6 +416,17 @@ pub struct Attachment {
 /// Errors: [`AttachError::EmptyMesh`], [`AttachError::EmptySkeleton`],
 /// [`AttachError::ScaleMismatch`], [`AttachError::AlignmentFailed`],
 /// [`AttachError::MirroredSkeleton`] (with [`MirrorPolicy::Refuse`]), [`AttachError::Solver`].
+///
+/// ```
+/// use symcorr_attach::{attach, AttachOptions, Segment};
+/// # let (mesh, skeleton) = symcorr_attach::doc_example();
+/// let a = attach(&mesh, &skeleton, &AttachOptions::default()).unwrap();
+/// assert_eq!(a.labels.len(), mesh.num_vertices());
+/// assert!(a.labels.contains(&Segment::ForearmLeft) && a.labels.contains(&Segment::ForearmRight));
+/// // One weight row per vertex over the 19 bones; each row sums to 1.
+/// let sum: f64 = a.weights.row(0).iter().map(|&(_, w)| w).sum();
+/// assert!((sum - 1.0).abs() < 1e-9);
+/// ```
 pub fn attach(
     mesh: &TriMesh,
     skeleton: &Skeleton,
@@ -606,6 +617,22 @@ fn side_first_argmax(s: &[f64; 17]) -> Segment {
 }
 
 /// One segment label per vertex with [`AttachOptions::default`] (see [`attach`]).
+///
+/// ```
+/// use symcorr_attach::{label, Segment};
+/// # let (mesh, skeleton) = symcorr_attach::doc_example();
+/// let labels = label(&mesh, &skeleton).unwrap();
+/// assert_eq!(labels.len(), mesh.num_vertices());
+/// // A vertex at the left hand's joint is labelled with the left forearm, never the right.
+/// let hand = skeleton.position(symcorr_attach::Joint::HandLeft);
+/// let nearest = (0..mesh.num_vertices())
+///     .min_by(|&a, &b| {
+///         let d = |v: usize| (nalgebra::Point3::from(mesh.positions[v]) - hand).norm();
+///         d(a).total_cmp(&d(b))
+///     })
+///     .unwrap();
+/// assert_eq!(labels[nearest], Segment::ForearmLeft);
+/// ```
 pub fn label(mesh: &TriMesh, skeleton: &Skeleton) -> Result<Vec<Segment>, AttachError> {
     attach(mesh, skeleton, &AttachOptions::default()).map(|a| a.labels)
 }
