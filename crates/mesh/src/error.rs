@@ -110,4 +110,24 @@ pub enum MeshError {
         /// Number of vertices.
         vertices: usize,
     },
+    /// An output path is a directory.
+    #[error("{file}: is a directory, not an output file")]
+    OutputIsDirectory {
+        /// The output path as given.
+        file: String,
+    },
+    /// An output path leads to one of the command's inputs (it would destroy it).
+    #[error("{file}: is the input {input}; choose another output path")]
+    OutputIsInput {
+        /// The output path as given.
+        file: String,
+        /// The input it leads to.
+        input: String,
+    },
+    /// Two outputs of one command lead to the same file.
+    #[error("{file}: written twice by one command")]
+    DuplicateOutput {
+        /// The output path as given.
+        file: String,
+    },
 }

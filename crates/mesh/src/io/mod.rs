@@ -47,8 +47,11 @@ use crate::{MeshError, TriMesh};
 mod gltf;
 mod obj;
 mod off;
+mod output;
 mod ply;
 mod text;
+
+pub use output::{check_output, resolve_output, Destination, OutputBatch};
 
 /// A mesh file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -299,7 +302,8 @@ pub fn write_to_bytes(
 }
 
 /// Writes `bytes` to a temporary file next to `path`, syncs it, then renames it over `path`, so
-/// that a failure never leaves a half-written `path`. Every output file of symcorr (meshes, joint
+/// that a failure never leaves a half-written `path` (an [`OutputBatch`] of one file: a
+/// symlink is written through, a device or FIFO in place, a directory refused). Every output file of symcorr (meshes, joint
 /// logs, depth frames, correspondence and label JSON, plots, the eigenpair cache) goes through
 /// this one function.
 ///
@@ -315,27 +319,7 @@ pub fn write_to_bytes(
 /// assert!(symcorr_mesh::io::atomic_write(&dir.path().join("no/such.txt"), b"x").is_err());
 /// ```
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
-    use std::io::Write;
-    let io_err = |source| MeshError::Io {
-        file: path.display().to_string(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".symcorr-tmp-");
-    // Temporary files are created 0600; the output should get the usual mode (0666 minus the
-    // umask, applied by the OS at creation), like a file written directly.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let mut tmp = builder.tempfile_in(&dir).map_err(io_err)?;
-    tmp.write_all(bytes).map_err(io_err)?;
-    tmp.as_file().sync_all().map_err(io_err)?;
-    tmp.persist(path).map_err(|e| io_err(e.error))?;
-    Ok(())
+    let mut batch = OutputBatch::new();
+    batch.add(path, bytes)?;
+    batch.commit().map(|_| ())
 }
