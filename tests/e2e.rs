@@ -455,3 +455,87 @@ fn scan_target_reports_template_points_without_counterpart() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("partial target"), "{stdout}");
 }
+
+/// Outputs never destroy an input, are written through symlinks and into devices in place, and
+/// a command that fails leaves none of its outputs (all are committed together at the end).
+#[test]
+fn outputs_are_checked_first_and_committed_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "s0_walk-10";
+    // A copy of the input, so that a failure here cannot damage the fixtures.
+    let input = dir.path().join("body.ply");
+    std::fs::copy(mesh(name), &input).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let label = |out: &Path, extra: &[&std::ffi::OsStr]| {
+        let mut cmd = bin();
+        cmd.arg("label")
+            .arg(&input)
+            .arg("--joints")
+            .arg(joints(name))
+            .arg("--out")
+            .arg(out)
+            .args(extra);
+        cmd.output().unwrap()
+    };
+    // --out equal to the input (also spelled differently) is refused before any work.
+    for out in [input.clone(), dir.path().join(".").join("body.ply")] {
+        let o = label(&out, &[]);
+        assert_eq!(o.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("is the input"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert_eq!(std::fs::read(&input).unwrap(), before);
+    }
+    // --ply into a missing directory: exit 1, and the labels file is not left behind either.
+    let labels = dir.path().join("labels.json");
+    let missing = dir.path().join("no/such/dir/seg.ply");
+    let o = label(&labels, &[std::ffi::OsStr::new("--ply"), missing.as_os_str()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!labels.exists());
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".symcorr-tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    // A directory as --out is refused.
+    let o = label(dir.path(), &[]);
+    assert_eq!(o.status.code(), Some(1));
+    // A symlink is written through: the link stays, its target gets the labels.
+    #[cfg(unix)]
+    {
+        let target = dir.path().join("real.json");
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let o = label(&link, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(read_json(&target)["format"], "symcorr.labels/1");
+        // /dev/null is written in place and stays a device.
+        let o = label(Path::new("/dev/null"), &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
+    }
+    // match --ply-out pointing at a file: exit 1 and no correspondence file.
+    let corr = dir.path().join("corr.json");
+    let o = bin()
+        .arg("match")
+        .arg(mesh("s0_rest"))
+        .arg(&input)
+        .arg("--template-joints")
+        .arg(joints("s0_rest"))
+        .arg("--target-joints")
+        .arg(joints(name))
+        .arg("--out")
+        .arg(&corr)
+        .arg("--ply-out")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!corr.exists());
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+}

@@ -213,6 +213,25 @@ impl OutputBatch {
         Ok(())
     }
 
+    /// Stages a mesh (and optional per-vertex colours) for `path`, in the format its extension
+    /// names (PLY binary little-endian), like [`crate::io::write`].
+    ///
+    /// Errors: as [`crate::io::write`] and [`OutputBatch::add`].
+    pub fn add_mesh(
+        &mut self,
+        path: &Path,
+        mesh: &crate::TriMesh,
+        colors: Option<&[[u8; 3]]>,
+    ) -> Result<(), MeshError> {
+        let format = super::Format::from_path_or_err(path)?;
+        let bytes = super::write_to_bytes(mesh, colors, format, super::PlyEncoding::default())
+            .map_err(|e| MeshError::InFile {
+                file: path.display().to_string(),
+                source: Box::new(e),
+            })?;
+        self.add(path, &bytes)
+    }
+
     /// Moves every staged file into place (regular files by rename, then devices and FIFOs
     /// written in place) and returns the paths as given to [`OutputBatch::add`].
     ///

@@ -197,7 +197,10 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
     let meshes = args.dataset.join("meshes");
     pipeline.options.prepare.cache = args.cache.policy(&meshes, Some(&meshes), &counts);
     if let Some(j) = &args.json {
-        super::match_cmd::check_output_dir(j)?;
+        // A summary that would land on a dataset file (pairs list, mirror map) is refused.
+        let pairs = args.pairs.iter().map(PathBuf::as_path);
+        let inputs: Vec<&Path> = pairs.collect();
+        symcorr_mesh::io::check_output(j, &inputs).map_err(|e| CliError(e.to_string()))?;
     }
     let dataset =
         Dataset::open(&args.dataset, args.pairs.as_deref()).map_err(|e| CliError(e.to_string()))?;

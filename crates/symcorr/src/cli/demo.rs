@@ -14,7 +14,7 @@ use symcorr::output::{correspondence_json, curve_svg, pair_timings};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions};
 use symcorr_correspond::PaperFilter;
 use symcorr_eval::{cumulative_curve, table1_row, Dataset, EvalGraph};
-use symcorr_mesh::io::atomic_write;
+use symcorr_mesh::io::OutputBatch;
 
 /// Arguments of `symcorr demo`.
 #[derive(clap::Args, Debug)]
@@ -144,7 +144,9 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     spin.finish();
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::with(args.out.display(), e))?;
     let main = &results[0];
-    let mut files = Vec::new();
+    // Staged, then committed together: an error leaves none of the demo's files.
+    let mut batch = OutputBatch::new();
+    let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
     let corr_path = args.out.join("correspondence.json");
     let doc = correspondence_json(
         &ds.meshes[&a_name].display().to_string(),
@@ -154,9 +156,10 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         &main.correspondence,
         &pair_timings(&a, &b, &main.correspondence),
     );
-    atomic_write(&corr_path, doc.to_json().as_bytes()).map_err(|e| CliError(e.to_string()))?;
-    files.push(corr_path);
-    files.extend(write_coloured(&args.out, &a, &b, &main.correspondence)?);
+    batch
+        .add(&corr_path, doc.to_json().as_bytes())
+        .map_err(cli)?;
+    write_coloured(&mut batch, &args.out, &a, &b, &main.correspondence)?;
     let curves: Vec<(String, Vec<(f64, f64)>)> = results
         .iter()
         .zip(variants.iter().map(|v| v.3))
@@ -169,8 +172,8 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         .collect();
     let plot = args.out.join("curve.svg");
     let svg = curve_svg(&format!("{a_name} → {b_name}"), &curves, 0.25);
-    atomic_write(&plot, svg.as_bytes()).map_err(|e| CliError(e.to_string()))?;
-    files.push(plot);
+    batch.add(&plot, svg.as_bytes()).map_err(cli)?;
+    let files = batch.commit().map_err(cli)?;
     let report = BenchReport {
         pairs: results,
         prepare_seconds: BTreeMap::new(),

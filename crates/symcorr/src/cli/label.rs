@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use symcorr::io::{read_mesh, read_skeleton_as};
 use symcorr::output::labels_file;
 use symcorr_attach::{attach, palette, AttachOptions};
-use symcorr_mesh::io::atomic_write;
+use symcorr_mesh::io::{check_output, OutputBatch};
 
 /// Arguments of `symcorr label`.
 #[derive(clap::Args)]
@@ -60,6 +60,14 @@ pub enum Boundaries {
 
 /// Runs `symcorr label`.
 pub fn run(a: LabelArgs) -> Result<(), CliError> {
+    // Every output is checked before any work (not a directory, not an input, its directory
+    // exists).
+    for out in [Some(&a.out), a.ply.as_ref(), a.glb.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        check_output(out, &[&a.mesh, &a.joints]).map_err(|e| CliError(e.to_string()))?;
+    }
     let mesh = read_mesh(&a.mesh).map_err(|e| CliError(e.to_string()))?;
     let format = super::joints_format(a.joints_format.as_deref())?;
     let skeleton =
@@ -92,14 +100,17 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
         boundaries,
         a.weights,
     );
-    atomic_write(&a.out, doc.to_json().as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    // All outputs are staged, then committed together: an error leaves none of them.
+    let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
+    let mut batch = OutputBatch::new();
+    batch.add(&a.out, doc.to_json().as_bytes()).map_err(cli)?;
     let d = &att.diagnostics;
     let al = &d.alignment;
     let colours: Vec<[u8; 3]> = att.labels.iter().map(|&s| palette::colour(s)).collect();
     for path in [&a.ply, &a.glb].into_iter().flatten() {
-        symcorr_mesh::io::write(path, &mesh, Some(&colours))
-            .map_err(|e| CliError(e.to_string()))?;
+        batch.add_mesh(path, &mesh, Some(&colours)).map_err(cli)?;
     }
+    batch.commit().map_err(cli)?;
     eprintln!(
         "labelled {} vertices ({} joints moved, alignment scale {}, mirrored fixed: {}, {} component(s), {} fallback)",
         mesh.num_vertices(),

@@ -12,7 +12,7 @@ use symcorr::output::{
 };
 use symcorr::{figures, Mode, OptionError, Pipeline, PipelineOptions, PreparedMesh};
 use symcorr_correspond::{CandidateOptions, PaperFilter};
-use symcorr_mesh::io::atomic_write;
+use symcorr_mesh::io::{check_output, OutputBatch};
 
 /// Arguments of `symcorr match`.
 #[derive(clap::Args, Debug)]
@@ -285,18 +285,18 @@ pub fn load_prepared(
         .map_err(|e| CliError::with(mesh.display(), e))
 }
 
-/// Writes the four coloured meshes (PLY, and GLB when the mesh crate can) into `dir`.
+/// Stages the four coloured meshes, as PLY and GLB, into `dir` (created if needed) in `batch`.
 pub fn write_coloured(
+    batch: &mut OutputBatch,
     dir: &Path,
     template: &PreparedMesh,
     target: &PreparedMesh,
     corr: &symcorr::Correspondence,
-) -> Result<Vec<PathBuf>, CliError> {
+) -> Result<(), CliError> {
     std::fs::create_dir_all(dir).map_err(|e| CliError::with(dir.display(), e))?;
     let (tc, uc) = match_colours(template, target, corr);
     let ts = segment_colours(template);
     let us = segment_colours(target);
-    let mut written = Vec::new();
     // Written on the input meshes, so vertex `i` of each file is vertex `i` of the input.
     for (name, side, colours) in [
         ("template_matches", template, &tc),
@@ -306,24 +306,38 @@ pub fn write_coloured(
     ] {
         let mesh = side.input_mesh();
         let colours = &input_colours(side, colours);
-        let ply = dir.join(format!("{name}.ply"));
-        symcorr_mesh::io::write(&ply, mesh, Some(colours)).map_err(|e| CliError(e.to_string()))?;
-        written.push(ply);
-        let glb = dir.join(format!("{name}.glb"));
-        // GLB support arrives with the mesh crate's glTF writer; PLY is always written.
-        if symcorr_mesh::io::write(&glb, mesh, Some(colours)).is_ok() {
-            written.push(glb);
+        for ext in ["ply", "glb"] {
+            let path = dir.join(format!("{name}.{ext}"));
+            batch
+                .add_mesh(&path, mesh, Some(colours))
+                .map_err(|e| CliError(e.to_string()))?;
         }
     }
-    Ok(written)
+    Ok(())
 }
 
 pub fn run(args: MatchArgs) -> Result<(), CliError> {
     let pipeline = args.method.pipeline(args.dense)?;
     let format = super::joints_format(args.joints_format.as_deref())?;
-    check_output_dir(&args.out)?;
-    for figure in [&args.base_set_out, &args.lines_out].into_iter().flatten() {
-        check_output_dir(figure)?;
+    // Every output is checked before any work: its directory exists, it is not a directory,
+    // and it is none of the inputs.
+    let inputs = [
+        args.template.as_path(),
+        &args.target,
+        &args.template_joints,
+        &args.target_joints,
+    ];
+    let explain_paths = args.explain.map(|p| explain_paths(&args.out, p));
+    let outputs = [
+        Some(&args.out),
+        args.base_set_out.as_ref(),
+        args.lines_out.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    .chain(explain_paths.iter().flat_map(|(j, p)| [j, p]));
+    for out in outputs {
+        check_output(out, &inputs).map_err(|e| CliError(e.to_string()))?;
     }
     // Figures that need the paper's data are refused before any work.
     let paper = args.method.method == MethodArg::Paper;
@@ -374,28 +388,27 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
         &timings,
     );
     let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    atomic_write(&args.out, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
-    let mut files = vec![args.out.clone()];
+    // All outputs are staged, then committed together: an error leaves none of them.
+    let mut batch = OutputBatch::new();
+    let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
+    batch.add(&args.out, text.as_bytes()).map_err(cli)?;
     if let Some(dir) = &args.ply_out {
-        files.extend(write_coloured(dir, &a, &b, &corr)?);
+        write_coloured(&mut batch, dir, &a, &b, &corr)?;
     }
-    if let Some(point) = args.explain {
-        files.extend(write_explanation(&args, &pipeline, (&a, &b), point)?);
+    if let (Some(point), Some(paths)) = (args.explain, &explain_paths) {
+        write_explanation(&mut batch, &args, &pipeline, (&a, &b), point, paths)?;
     }
     if let Some(path) = &args.base_set_out {
         let (mesh, colours) =
             figures::base_set_figure(&a, &b).map_err(|e| CliError(e.to_string()))?;
-        symcorr_mesh::io::write(path, &mesh, Some(&colours))
-            .map_err(|e| CliError(e.to_string()))?;
-        files.push(path.clone());
+        batch.add_mesh(path, &mesh, Some(&colours)).map_err(cli)?;
     }
     if let Some(path) = &args.lines_out {
         let (mesh, colours) = figures::lines_figure(&a, &b, &corr, args.lines)
             .map_err(|e| CliError(e.to_string()))?;
-        symcorr_mesh::io::write(path, &mesh, Some(&colours))
-            .map_err(|e| CliError(e.to_string()))?;
-        files.push(path.clone());
+        batch.add_mesh(path, &mesh, Some(&colours)).map_err(cli)?;
     }
+    let files = batch.commit().map_err(cli)?;
     let seconds = start.elapsed().as_secs_f64();
     let points = corr.filter_stats().points.max(corr.pairs.len());
     let unseen = corr
@@ -445,11 +458,13 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
 /// `--explain POINT`: the point's explanation as `symcorr.explain/1` JSON and as a figure, named
 /// after `--out` (`corr.json` → `corr.explain-POINT.json`, `corr.explain-POINT.ply`).
 fn write_explanation(
+    batch: &mut OutputBatch,
     args: &MatchArgs,
     pipeline: &Pipeline,
     (a, b): (&PreparedMesh, &PreparedMesh),
     point: u32,
-) -> Result<Vec<PathBuf>, CliError> {
+    (json, ply): &(PathBuf, PathBuf),
+) -> Result<(), CliError> {
     let vertices = a.input_mesh().num_vertices();
     let prepared = a
         .prepared_ids()
@@ -475,27 +490,23 @@ fn write_explanation(
         &e,
     );
     let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    let stem = args.out.with_extension("");
+    batch
+        .add(json, text.as_bytes())
+        .map_err(|e| CliError(e.to_string()))?;
+    let (mesh, colours) = figures::explain_figure(a, b, &e).map_err(|e| CliError(e.to_string()))?;
+    batch
+        .add_mesh(ply, &mesh, Some(&colours))
+        .map_err(|e| CliError(e.to_string()))
+}
+
+/// The two files of `--explain POINT`, named after `--out` (`corr.json` →
+/// `corr.explain-POINT.json`, `corr.explain-POINT.ply`).
+fn explain_paths(out: &Path, point: u32) -> (PathBuf, PathBuf) {
+    let stem = out.with_extension("");
     let named = |ext: &str| {
         let mut p = stem.as_os_str().to_owned();
         p.push(format!(".explain-{point}.{ext}"));
         PathBuf::from(p)
     };
-    let (json, ply) = (named("json"), named("ply"));
-    symcorr_mesh::io::atomic_write(&json, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
-    let (mesh, colours) = figures::explain_figure(a, b, &e).map_err(|e| CliError(e.to_string()))?;
-    symcorr_mesh::io::write(&ply, &mesh, Some(&colours)).map_err(|e| CliError(e.to_string()))?;
-    Ok(vec![json, ply])
-}
-
-/// Fails early (before any work) if the output's directory does not exist.
-pub fn check_output_dir(out: &Path) -> Result<(), CliError> {
-    match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() && !d.is_dir() => Err(CliError(format!(
-            "{}: output directory {} does not exist",
-            out.display(),
-            d.display()
-        ))),
-        _ => Ok(()),
-    }
+    (named("json"), named("ply"))
 }

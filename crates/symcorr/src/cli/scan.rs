@@ -74,6 +74,20 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
     if a.fuse == 0 {
         return Err(CliError("--fuse must be at least 1".into()));
     }
+    // Every output is checked before any work (not a directory, not an input, its directory
+    // exists).
+    let inputs: Vec<&std::path::Path> = [
+        a.oni.as_deref(),
+        a.depth.as_deref(),
+        a.intrinsics.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .chain([a.joints.as_path()])
+    .collect();
+    for out in [Some(&a.out), a.pixel_map.as_ref()].into_iter().flatten() {
+        symcorr_mesh::io::check_output(out, &inputs).map_err(|e| CliError(e.to_string()))?;
+    }
     let log = match super::joints_format(a.joints_format.as_deref())? {
         Some(f) => read_joints_with_format(&a.joints, f),
         None => read_joints(&a.joints),
@@ -126,7 +140,10 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
     };
     let scan =
         scan_mesh(&frame, &k, Some(&skeleton), &opts).map_err(|e| CliError(e.to_string()))?;
-    symcorr_mesh::io::write(&a.out, &scan.mesh, None).map_err(|e| CliError(e.to_string()))?;
+    // Both outputs are staged, then committed together: an error leaves neither.
+    let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
+    let mut batch = symcorr_mesh::io::OutputBatch::new();
+    batch.add_mesh(&a.out, &scan.mesh, None).map_err(cli)?;
     if let Some(p) = &a.pixel_map {
         let json = serde_json::json!({
             "format": "symcorr.pixelmap/1",
@@ -134,11 +151,9 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
             "height": frame.height,
             "pixel_ids": scan.pixel_ids,
         });
-        let tmp = p.with_extension("json.tmp");
-        std::fs::write(&tmp, json.to_string())
-            .and_then(|_| std::fs::rename(&tmp, p))
-            .map_err(|e| CliError::with(p.display(), e))?;
+        batch.add(p, json.to_string().as_bytes()).map_err(cli)?;
     }
+    batch.commit().map_err(cli)?;
     let r = &scan.report;
     println!(
         "scan: {} vertices, {} triangles ({} valid pixels; removed {} background, {} floor, {} in smaller components)",
