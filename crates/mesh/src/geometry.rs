@@ -4,8 +4,8 @@ use nalgebra::{Point3, Vector3};
 
 use crate::TriMesh;
 
-// `sub`, `dot`, `norm` and `dist` remain public only until their last caller outside this crate
-// moves to nalgebra; new code uses `Point3`/`Vector3` directly.
+// `sub`, `dot`, `norm` and `dist` stay public only for `symcorr::pipeline`, their last caller,
+// until it moves to nalgebra; new code uses `Point3`/`Vector3` directly.
 
 /// `a - b`.
 #[inline]

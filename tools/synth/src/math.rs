@@ -92,14 +92,6 @@ pub struct Rigid {
 }
 
 impl Rigid {
-    /// The identity transform.
-    pub fn identity() -> Rigid {
-        Rigid {
-            r: M3::identity(),
-            t: Vector3::zeros(),
-        }
-    }
-
     /// Applies the transform to a point.
     pub fn apply(&self, p: V3) -> V3 {
         (self.r * Vector3::from(p) + self.t).into()
