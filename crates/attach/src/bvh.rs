@@ -167,15 +167,16 @@ fn slab_hit(
 
 /// Möller–Trumbore: does `a + t·d` hit the triangle for some `t` in the open interval (0, 1)?
 fn segment_triangle(a: &Point3<f64>, d: &Vector3<f64>, tri: &[Point3<f64>; 3]) -> bool {
-    let e1 = tri[1] - tri[0];
-    let e2 = tri[2] - tri[0];
+    let [t0, t1, t2] = tri;
+    let e1 = t1 - t0;
+    let e2 = t2 - t0;
     let p = d.cross(&e2);
     let det = e1.dot(&p);
     if det.abs() < 1e-300 {
         return false;
     }
     let inv = 1.0 / det;
-    let s = a - tri[0];
+    let s = a - t0;
     let u = s.dot(&p) * inv;
     if !(0.0..=1.0).contains(&u) {
         return false;

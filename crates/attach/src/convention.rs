@@ -215,8 +215,11 @@ fn rotate_between(from: Vector3<f64>, to: Vector3<f64>, v: Vector3<f64>) -> Opti
     Some(v * c + k.cross(&v) + k * (k.dot(&v) / (1.0 + c)))
 }
 
+/// The side of `plane` (laid out as [`BoundaryRule::plane`]: tilt, offset, heat) that the
+/// features `u` (frame coordinates, heat vote) fall on; summed in that order, as the fit does.
 fn evaluate(plane: &[f64; 5], u: [f64; 4]) -> f64 {
-    plane[0] * u[0] + plane[1] * u[1] + plane[2] * u[2] + plane[3] + plane[4] * u[3]
+    let tilt = Vector3::new(plane[0], plane[1], plane[2]);
+    tilt.dot(&Vector3::new(u[0], u[1], u[2])) + plane[3] + plane[4] * u[3]
 }
 
 /// Floor of a bone-heat weight in [`heat_vote`]'s ratio.
@@ -509,7 +512,7 @@ mod tests {
             assert_eq!(evaluate(&beta, *p) > 0.0, t, "{p:?} {beta:?}");
         }
         // Direction of the normal: proportional to (1, 0.5, 0).
-        let n = (beta[0] * beta[0] + beta[1] * beta[1] + beta[2] * beta[2]).sqrt();
+        let n = Vector3::new(beta[0], beta[1], beta[2]).norm();
         assert!(
             (beta[0] / n - 1.0 / 1.25f64.sqrt()).abs() < 0.05,
             "{beta:?}"

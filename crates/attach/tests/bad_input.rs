@@ -39,10 +39,9 @@ fn non_finite_joints_are_interpolated_or_dropped_and_reported() {
     assert!(rep.contains(&(Joint::FootRight, JointRepair::Dropped)));
     // The interpolated elbow is the midpoint of shoulder and wrist (before refinement moves it
     // by at most the move cap).
-    let want = [0.39, 1.25, 0.0];
+    let want = nalgebra::Point3::new(0.39, 1.25, 0.0);
     let got = a.joints.position(Joint::ElbowLeft);
-    let d = ((got[0] - want[0]).powi(2) + (got[1] - want[1]).powi(2) + (got[2] - want[2]).powi(2))
-        .sqrt();
+    let d = nalgebra::distance(&got, &want);
     assert!(d < 0.08 * a.diagnostics.skeleton_height + 1e-9, "{got:?}");
     // The right foot bone is dropped: no vertex is labelled foot_right.
     assert_eq!(a.diagnostics.dropped_bones, vec![18]);

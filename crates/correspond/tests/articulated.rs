@@ -2,16 +2,21 @@
 //! template onto a bent skeleton (same connectivity, so the identity is the truth), whole and
 //! as a front-only partial view with renumbered vertices.
 
+use nalgebra::Point3;
 use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::{
     articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
     ArticulatedOptions,
 };
-use symcorr_mesh::geometry::dist;
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Skeleton};
 use symcorr_spectral::EdgeGraph;
+
+/// Euclidean distance between two stored mesh positions.
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    nalgebra::distance(&Point3::from(a), &Point3::from(b))
+}
 
 /// Rotates the joints below `pivot` in the chain `chain` by `angle` about the z axis.
 fn bend(sk: &mut Skeleton, pivot: Joint, chain: &[Joint], angle: f64) {

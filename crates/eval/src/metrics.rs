@@ -19,8 +19,8 @@
 //! Vertices unreachable from each other (another connected component) get the Euclidean
 //! distance instead.
 
+use nalgebra::{distance, Point3};
 use rayon::prelude::*;
-use symcorr_mesh::geometry::{norm, sub};
 use symcorr_mesh::TriMesh;
 use symcorr_spectral::{DijkstraScratch, EdgeGraph};
 
@@ -46,7 +46,10 @@ impl EvalGraph {
     }
 
     fn euclid(&self, a: u32, b: u32) -> f64 {
-        norm(sub(self.positions[a as usize], self.positions[b as usize]))
+        distance(
+            &Point3::from(self.positions[a as usize]),
+            &Point3::from(self.positions[b as usize]),
+        )
     }
 
     /// Dijkstra from `source` ([`EdgeGraph::search`]); `visit(v, d)` is called as each vertex

@@ -78,19 +78,9 @@ fn nite_json_maps_fifteen_joints_and_flags_interpolated_ones() {
             Joint::FootRight
         ]
     );
-    let mid = |a: [f64; 3], b: [f64; 3]| {
-        [
-            (a[0] + b[0]) / 2.0,
-            (a[1] + b[1]) / 2.0,
-            (a[2] + b[2]) / 2.0,
-        ]
-    };
     assert!(close(
         s.position(Joint::HipCenter),
-        mid(
-            v1.position(Joint::HipLeft).into(),
-            v1.position(Joint::HipRight).into()
-        )
+        nalgebra::center(&v1.position(Joint::HipLeft), &v1.position(Joint::HipRight))
     ));
     // Feet are extrapolated toward the facing direction: the subject faces the sensor (−z).
     for (a, f) in [

@@ -281,16 +281,9 @@ fn scan_keeps_only_the_subject_surface() {
     }
     // Triangles face the camera (counter-clockwise seen from it).
     for t in 0..m.num_triangles() {
-        let [a, b, c] = m.corners(t);
-        let n = [
-            (b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]),
-            (b[2] - a[2]) * (c[0] - a[0]) - (b[0] - a[0]) * (c[2] - a[2]),
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]),
-        ];
-        assert!(
-            n[0] * a[0] + n[1] * a[1] + n[2] * a[2] < 0.0,
-            "triangle {t} faces away"
-        );
+        let [a, b, c] = m.corners(t).map(Point3::from);
+        let n = (b - a).cross(&(c - a));
+        assert!(n.dot(&a.coords) < 0.0, "triangle {t} faces away");
     }
     let plane = scan.report.floor_plane.expect("floor found");
     assert!(

@@ -1,90 +1,66 @@
 //! Per-element geometry and connectivity of a [`TriMesh`].
 
+use nalgebra::{Point3, Vector3};
+
 use crate::TriMesh;
+
+// `sub`, `dot`, `norm` and `dist` stay public only for `symcorr::pipeline`, their last caller,
+// until it moves to nalgebra; new code uses `Point3`/`Vector3` directly.
 
 /// `a - b`.
 #[inline]
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// `a + b`.
-#[inline]
-pub fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-/// `s · a`.
-#[inline]
-pub fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-/// `a + t (b − a)`.
-#[inline]
-pub fn lerp(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    add(a, scale(sub(b, a), t))
-}
-
-/// Euclidean distance `|a − b|`.
-#[inline]
-pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    norm(sub(a, b))
-}
-
-/// Cross product `a × b`.
-#[inline]
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    (Point3::from(a) - Point3::from(b)).into()
 }
 
 /// Dot product.
 #[inline]
 pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    Vector3::from(a).dot(&Vector3::from(b))
 }
 
 /// Euclidean norm.
 #[inline]
 pub fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
+    Vector3::from(a).norm()
 }
 
-/// `a` scaled to unit length, or `None` if it is (numerically) zero or not finite.
+/// Euclidean distance `|a − b|`.
 #[inline]
-pub fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
-    let l = norm(a);
-    (l > 1e-12 && l.is_finite()).then(|| scale(a, 1.0 / l))
+pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    nalgebra::distance(&Point3::from(a), &Point3::from(b))
 }
 
 /// Closest point to `p` on the segment `a–b`, and its distance.
 ///
 /// ```
+/// use nalgebra::Point3;
 /// use symcorr_mesh::geometry::closest_on_segment;
-/// let (q, d) = closest_on_segment([1.0, 2.0, 0.0], [0.0; 3], [4.0, 0.0, 0.0]);
-/// assert_eq!((q, d), ([1.0, 0.0, 0.0], 2.0));
+/// let (q, d) = closest_on_segment(
+///     &Point3::new(1.0, 2.0, 0.0),
+///     &Point3::origin(),
+///     &Point3::new(4.0, 0.0, 0.0),
+/// );
+/// assert_eq!((q, d), (Point3::new(1.0, 0.0, 0.0), 2.0));
 /// ```
 #[inline]
-pub fn closest_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> ([f64; 3], f64) {
-    let ab = sub(b, a);
-    let l2 = dot(ab, ab);
+pub fn closest_on_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> (Point3<f64>, f64) {
+    let ab = b - a;
+    let l2 = ab.dot(&ab);
     let t = if l2 > 0.0 {
-        (dot(sub(p, a), ab) / l2).clamp(0.0, 1.0)
+        ((p - a).dot(&ab) / l2).clamp(0.0, 1.0)
     } else {
         0.0
     };
-    let q = add(a, scale(ab, t));
-    (q, dist(p, q))
+    let q = a + ab * t;
+    (q, nalgebra::distance(p, &q))
 }
 
-/// `M·p` for a row-major 3×3 matrix.
+/// `(b − a) × (c − a)` for the corners of a triangle: twice its area times its unit normal.
 #[inline]
-pub fn mat_vec(m: &[[f64; 3]; 3], p: [f64; 3]) -> [f64; 3] {
-    [dot(m[0], p), dot(m[1], p), dot(m[2], p)]
+fn corner_cross(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Vector3<f64> {
+    let a = Point3::from(a);
+    (Point3::from(b) - a).cross(&(Point3::from(c) - a))
 }
 
 impl TriMesh {
@@ -93,7 +69,7 @@ impl TriMesh {
         (0..self.num_triangles())
             .map(|t| {
                 let [a, b, c] = self.corners(t);
-                0.5 * norm(cross(sub(b, a), sub(c, a)))
+                0.5 * corner_cross(a, b, c).norm()
             })
             .collect()
     }
@@ -126,10 +102,11 @@ impl TriMesh {
         (0..self.num_triangles())
             .map(|t| {
                 let [a, b, c] = self.corners(t);
-                let n = cross(sub(b, a), sub(c, a));
-                let l = norm(n);
+                let n = corner_cross(a, b, c);
+                let l = n.norm();
+                // Component-wise division, as `normalize` does.
                 if l > 0.0 {
-                    [n[0] / l, n[1] / l, n[2] / l]
+                    (n / l).into()
                 } else {
                     [0.0; 3]
                 }
@@ -139,24 +116,24 @@ impl TriMesh {
 
     /// Area-weighted unit vertex normals (zero vector for an isolated vertex).
     pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
-        let mut acc = vec![[0.0; 3]; self.num_vertices()];
+        let mut acc = vec![Vector3::zeros(); self.num_vertices()];
         for t in 0..self.num_triangles() {
             let [a, b, c] = self.corners(t);
-            let n = cross(sub(b, a), sub(c, a));
+            let n = corner_cross(a, b, c);
             for &v in &self.triangles[t] {
-                let s = &mut acc[v as usize];
-                s[0] += n[0];
-                s[1] += n[1];
-                s[2] += n[2];
+                acc[v as usize] += n;
             }
         }
-        for n in &mut acc {
-            let l = norm(*n);
-            if l > 0.0 {
-                *n = [n[0] / l, n[1] / l, n[2] / l];
-            }
-        }
-        acc
+        acc.into_iter()
+            .map(|n| {
+                let l = n.norm();
+                if l > 0.0 {
+                    (n / l).into()
+                } else {
+                    n.into()
+                }
+            })
+            .collect()
     }
 
     /// Axis-aligned bounding box `(min, max)`.
@@ -264,10 +241,13 @@ mod tests {
     #[test]
     fn outward_normals_on_tetra() {
         let m = tetrahedron();
-        let c = [0.25, 0.25, 0.25];
+        let c = Point3::new(0.25, 0.25, 0.25);
         for (t, n) in m.triangle_normals().iter().enumerate() {
-            let p = m.corners(t)[0];
-            assert!(dot(*n, sub(p, c)) > 0.0, "triangle {t} faces inward");
+            let p = Point3::from(m.corners(t)[0]);
+            assert!(
+                Vector3::from(*n).dot(&(p - c)) > 0.0,
+                "triangle {t} faces inward"
+            );
         }
     }
 }

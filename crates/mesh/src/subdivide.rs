@@ -143,8 +143,8 @@ pub fn loop_subdivide(mesh: &TriMesh) -> Result<Subdivided, MeshError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::norm;
     use crate::testmesh::icosahedron;
+    use nalgebra::{distance, Point3, Vector3};
 
     /// A triangulated n×n grid in the plane z = 0 (with boundary), cells 1 × 0.7.
     fn grid(n: usize) -> TriMesh {
@@ -169,11 +169,12 @@ mod tests {
         assert!(report.is_closed() && report.non_manifold_edges.is_empty());
         // The vertex of edge [a, b] lies between a and b (interior mask: 3/8 + 3/8 + 1/8 + 1/8).
         for (i, &[a, b]) in s.edges.iter().enumerate() {
-            let q = s.mesh.positions[12 + i];
-            let mid: [f64; 3] = std::array::from_fn(|d| {
-                0.5 * (m.positions[a as usize][d] + m.positions[b as usize][d])
-            });
-            assert!(norm(crate::geometry::sub(q, mid)) < 0.3);
+            let q = Point3::from(s.mesh.positions[12 + i]);
+            let mid = nalgebra::center(
+                &Point3::from(m.positions[a as usize]),
+                &Point3::from(m.positions[b as usize]),
+            );
+            assert!(distance(&q, &mid) < 0.3);
         }
     }
 
@@ -186,7 +187,11 @@ mod tests {
         let mut areas = Vec::new();
         for _ in 0..4 {
             m = loop_subdivide(&m).unwrap().mesh;
-            let r: Vec<f64> = m.positions.iter().map(|p| norm(*p)).collect();
+            let r: Vec<f64> = m
+                .positions
+                .iter()
+                .map(|&p| Vector3::from(p).norm())
+                .collect();
             let (lo, hi) = r
                 .iter()
                 .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
@@ -228,7 +233,8 @@ mod tests {
         for v in 0..m.num_vertices() {
             let p = m.positions[v];
             if p[0] > 0.5 && p[0] < 5.5 && p[1] > 0.5 && p[1] < 3.7 {
-                assert!(norm(crate::geometry::sub(s.mesh.positions[v], p)) < 1e-12);
+                let moved = distance(&Point3::from(s.mesh.positions[v]), &Point3::from(p));
+                assert!(moved < 1e-12);
             }
         }
     }

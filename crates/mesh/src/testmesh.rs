@@ -48,8 +48,7 @@ pub const ICO_FACES: [[u32; 3]; 20] = [
 
 /// Unit vector of a non-zero vector.
 pub fn normalize(p: [f64; 3]) -> [f64; 3] {
-    let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-    [p[0] / l, p[1] / l, p[2] / l]
+    nalgebra::Vector3::from(p).normalize().into()
 }
 
 fn build(positions: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> TriMesh {

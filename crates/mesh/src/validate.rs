@@ -17,6 +17,8 @@
 
 use std::fmt;
 
+use nalgebra::Point3;
+
 use crate::{MeshError, TriMesh};
 
 /// Default zero-area tolerance: a triangle whose area is at most this times the squared
@@ -262,12 +264,8 @@ fn classify_triangles(
             degenerate.push(t);
             continue;
         }
-        let [p, q, s] = mesh.corners(t as usize);
-        let area = 0.5
-            * crate::geometry::norm(crate::geometry::cross(
-                crate::geometry::sub(q, p),
-                crate::geometry::sub(s, p),
-            ));
+        let [p, q, s] = mesh.corners(t as usize).map(Point3::from);
+        let area = 0.5 * (q - p).cross(&(s - p)).norm();
         if area <= area_tol {
             zero.push(t);
             continue;

@@ -1,5 +1,6 @@
 //! Validation and repair on hand-made meshes whose defects are known by construction.
 
+use nalgebra::Vector3;
 use proptest::prelude::*;
 use symcorr_mesh::{repair, validate, MeshError, RepairOptions, TriMesh};
 
@@ -10,7 +11,7 @@ fn tetra_at(o: [f64; 3]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
         [0.0, 1.0, 0.0],
         [0.0, 0.0, 1.0],
     ]
-    .map(|q| [q[0] + o[0], q[1] + o[1], q[2] + o[2]]);
+    .map(|q| (Vector3::from(q) + Vector3::from(o)).into());
     (p.to_vec(), vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
 }
 

@@ -1,7 +1,7 @@
 //! Discrete Gaussian curvature (the paper's eq. 4).
 
+use nalgebra::Point3;
 use std::f64::consts::PI;
-use symcorr_mesh::geometry::{cross, dot, norm, sub};
 use symcorr_mesh::TriMesh;
 
 /// Gaussian curvature per vertex, the paper's eq. 4: `gc(p) = 3 (2π − Σ α_i) / Σ A(f_i)`,
@@ -32,13 +32,14 @@ pub fn gaussian_curvature(mesh: &TriMesh) -> Vec<f64> {
     let mut area = vec![0.0; n];
     let mut on_face = vec![false; n];
     for t in &mesh.triangles {
-        let p = t.map(|v| mesh.positions[v as usize]);
-        let a = 0.5 * norm(cross(sub(p[1], p[0]), sub(p[2], p[0])));
+        let p = t.map(|v| Point3::from(mesh.positions[v as usize]));
+        let [p0, p1, p2] = p;
+        let a = 0.5 * (p1 - p0).cross(&(p2 - p0)).norm();
         for k in 0..3 {
-            let u = sub(p[(k + 1) % 3], p[k]);
-            let w = sub(p[(k + 2) % 3], p[k]);
+            let u = p[(k + 1) % 3] - p[k];
+            let w = p[(k + 2) % 3] - p[k];
             let v = t[k] as usize;
-            angle[v] += norm(cross(u, w)).atan2(dot(u, w));
+            angle[v] += u.cross(&w).norm().atan2(u.dot(&w));
             area[v] += a;
             on_face[v] = true;
         }

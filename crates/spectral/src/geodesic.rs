@@ -4,10 +4,10 @@
 use crate::laplacian::cot;
 use crate::{Laplacian, SpectralError, SystemFactor};
 use faer::Mat;
+use nalgebra::{distance, Point3, Vector3};
 use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-use symcorr_mesh::geometry::{cross, dot, norm, sub};
 use symcorr_mesh::TriMesh;
 
 /// The edge graph of a mesh (CSR adjacency with Euclidean edge lengths), built once and
@@ -31,7 +31,10 @@ impl EdgeGraph {
         for (v, list) in nb.iter().enumerate() {
             for &u in list {
                 targets.push(u);
-                lengths.push(norm(sub(mesh.positions[u as usize], mesh.positions[v])));
+                lengths.push(distance(
+                    &Point3::from(mesh.positions[u as usize]),
+                    &Point3::from(mesh.positions[v]),
+                ));
             }
             offsets.push(targets.len());
         }
@@ -251,11 +254,11 @@ struct FaceData {
     tri: [u32; 3],
     /// `N × e_k / (2A)`, e_k the edge opposite corner k (counter-clockwise): the gradient of
     /// the hat function of corner k.
-    grad_hat: [[f64; 3]; 3],
+    grad_hat: [Vector3<f64>; 3],
     /// Edges from corner k to corners k+1 and k+2, with the cotangents of the angles opposite
     /// them (at corners k+2 and k+1).
     cots: [f64; 3],
-    edges: [[f64; 3]; 3],
+    edges: [Vector3<f64>; 3],
 }
 
 /// Heat-method geodesic distances (Crane, Weischedel, Wardetzky 2013) with both linear
@@ -322,10 +325,10 @@ impl HeatGeodesics {
         let h = edges
             .iter()
             .map(|[a, b]| {
-                norm(sub(
-                    mesh.positions[*a as usize],
-                    mesh.positions[*b as usize],
-                ))
+                distance(
+                    &Point3::from(mesh.positions[*a as usize]),
+                    &Point3::from(mesh.positions[*b as usize]),
+                )
             })
             .sum::<f64>()
             / edges.len().max(1) as f64;
@@ -364,27 +367,25 @@ impl HeatGeodesics {
             .triangles
             .iter()
             .map(|&tri| {
-                let p = tri.map(|v| mesh.positions[v as usize]);
-                let nrm = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-                let a2 = norm(nrm);
-                let mut grad_hat = [[0.0; 3]; 3];
+                let p = tri.map(|v| Point3::from(mesh.positions[v as usize]));
+                let [p0, p1, p2] = p;
+                let nrm = (p1 - p0).cross(&(p2 - p0));
+                let a2 = nrm.norm();
+                let mut grad_hat = [Vector3::zeros(); 3];
                 let mut cots = [0.0; 3];
-                let mut edges = [[0.0; 3]; 3];
+                let mut edges = [Vector3::zeros(); 3];
                 let longest = (0..3)
-                    .map(|k| {
-                        let e = sub(p[(k + 1) % 3], p[k]);
-                        dot(e, e)
-                    })
+                    .map(|k| (p[(k + 1) % 3] - p[k]).norm_squared())
                     .fold(0.0, f64::max);
                 if a2 > crate::DEGENERATE_REL * longest && a2 > 0.0 {
-                    let unit = [nrm[0] / a2, nrm[1] / a2, nrm[2] / a2];
+                    // Component-wise division (not a reciprocal multiply), as before.
+                    let unit = nrm / a2;
                     for k in 0..3 {
-                        let e = sub(p[(k + 2) % 3], p[(k + 1) % 3]);
-                        let g = cross(unit, e);
-                        grad_hat[k] = [g[0] / a2, g[1] / a2, g[2] / a2];
+                        let e = p[(k + 2) % 3] - p[(k + 1) % 3];
+                        grad_hat[k] = unit.cross(&e) / a2;
                         // Angle at corner k, opposite edge (k+1, k+2).
-                        cots[k] = cot(sub(p[(k + 1) % 3], p[k]), sub(p[(k + 2) % 3], p[k]));
-                        edges[k] = sub(p[(k + 1) % 3], p[k]);
+                        cots[k] = cot(&(p[(k + 1) % 3] - p[k]), &(p[(k + 2) % 3] - p[k]));
+                        edges[k] = p[(k + 1) % 3] - p[k];
                     }
                 }
                 FaceData {
@@ -430,23 +431,21 @@ impl HeatGeodesics {
         let mut b = vec![0.0; n];
         for f in &self.faces {
             let [i, j, k] = f.tri.map(|v| v as usize);
-            let mut g = [0.0; 3];
+            let mut g = Vector3::zeros();
             for (c, &v) in [i, j, k].iter().enumerate() {
-                for (gd, hd) in g.iter_mut().zip(&f.grad_hat[c]) {
-                    *gd += u[v] * hd;
-                }
+                g += f.grad_hat[c] * u[v];
             }
-            let gn = norm(g);
+            let gn = g.norm();
             if gn == 0.0 || !gn.is_finite() {
                 continue;
             }
-            let x = [-g[0] / gn, -g[1] / gn, -g[2] / gn];
+            let x = -g / gn;
             // Integrated divergence at corner c: ½ (cot θ_{c+2} (e_{c→c+1}·X) + cot θ_{c+1} (e_{c→c+2}·X)).
             for c in 0..3 {
                 let e1 = f.edges[c]; // c → c+1, opposite corner c+2
-                let e2 = sub([0.0; 3], f.edges[(c + 2) % 3]); // c → c+2, opposite corner c+1
+                let e2 = Vector3::zeros() - f.edges[(c + 2) % 3]; // c → c+2, opposite corner c+1
                 let div =
-                    0.5 * (f.cots[(c + 2) % 3] * dot(e1, x) + f.cots[(c + 1) % 3] * dot(e2, x));
+                    0.5 * (f.cots[(c + 2) % 3] * e1.dot(&x) + f.cots[(c + 1) % 3] * e2.dot(&x));
                 b[f.tri[c] as usize] -= div;
             }
         }

@@ -5,7 +5,7 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, MatRef, Side};
-use symcorr_mesh::geometry::{cross, dot, norm, sub};
+use nalgebra::{Point3, Vector3};
 use symcorr_mesh::TriMesh;
 
 /// Cotangents are clamped to `[-COT_CLAMP, COT_CLAMP]`.
@@ -65,9 +65,9 @@ pub struct Laplacian {
 
 /// Cotangent of the angle between `u` and `v`, clamped (see [`COT_CLAMP`]).
 #[inline]
-pub(crate) fn cot(u: [f64; 3], v: [f64; 3]) -> f64 {
-    let c = norm(cross(u, v));
-    let d = dot(u, v);
+pub(crate) fn cot(u: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
+    let c = u.cross(v).norm();
+    let d = u.dot(v);
     if c <= d.abs() / COT_CLAMP {
         COT_CLAMP.copysign(d)
     } else {
@@ -112,14 +112,11 @@ impl Laplacian {
             col_ptr[col] + s.binary_search(&row).unwrap_or(0)
         };
         for t in &mesh.triangles {
-            let p = [
-                mesh.positions[t[0] as usize],
-                mesh.positions[t[1] as usize],
-                mesh.positions[t[2] as usize],
-            ];
-            let e = [sub(p[1], p[0]), sub(p[2], p[1]), sub(p[0], p[2])];
-            let longest = e.iter().map(|x| dot(*x, *x)).fold(0.0, f64::max);
-            let area2 = norm(cross(e[0], e[1]));
+            let p = t.map(|v| Point3::from(mesh.positions[v as usize]));
+            let [p0, p1, p2] = p;
+            let e = [p1 - p0, p2 - p1, p0 - p2];
+            let longest = e.iter().map(|x| x.dot(x)).fold(0.0, f64::max);
+            let area2 = e[0].cross(&e[1]).norm();
             if area2 <= DEGENERATE_REL * longest || area2 == 0.0 {
                 continue;
             }
@@ -128,7 +125,7 @@ impl Laplacian {
                 // Angle at corner k is opposite the edge (k+1, k+2).
                 let a = p[k];
                 let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
-                let w = 0.5 * cot(sub(p[(k + 1) % 3], a), sub(p[(k + 2) % 3], a));
+                let w = 0.5 * cot(&(p[(k + 1) % 3] - a), &(p[(k + 2) % 3] - a));
                 val[pos(i, j)] -= w;
                 val[pos(j, i)] -= w;
                 val[diag_index[i]] += w;

@@ -4,6 +4,7 @@
 //! The generators only use the mesh crate (`TriMesh::new`, the icosahedron of its `testmesh`);
 //! nothing here depends on the spectral code under test.
 
+use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
 use symcorr_mesh::testmesh::{normalize, ICO_FACES, ICO_VERTICES};
 use symcorr_mesh::TriMesh;
@@ -29,7 +30,7 @@ pub fn icosphere(level: usize) -> TriMesh {
                 let key = (a.min(b), a.max(b));
                 m[k] = *mid.entry(key).or_insert_with(|| {
                     let (pa, pb) = (pos[a as usize], pos[b as usize]);
-                    pos.push(normalize([pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]]));
+                    pos.push(normalize((Vector3::from(pa) + Vector3::from(pb)).into()));
                     (pos.len() - 1) as u32
                 });
             }
@@ -52,12 +53,10 @@ pub fn geodesic_sphere(f: usize) -> TriMesh {
     let mut index: HashMap<[i64; 3], u32> = HashMap::new();
     let mut tris = Vec::with_capacity(20 * f * f);
     for fc in ICO_FACES {
-        let [a, b, c] = fc.map(|i| ICO_VERTICES[i as usize]);
+        let [a, b, c] = fc.map(|i| Vector3::from(ICO_VERTICES[i as usize]));
         let mut id = |i: usize, j: usize| -> u32 {
             let w = [(f - i - j) as f64, i as f64, j as f64];
-            let p = normalize(std::array::from_fn(|d| {
-                (w[0] * a[d] + w[1] * b[d] + w[2] * c[d]) / f as f64
-            }));
+            let p = normalize(((a * w[0] + b * w[1] + c * w[2]) / f as f64).into());
             let key = p.map(|x| (x * 1e9).round() as i64);
             *index.entry(key).or_insert_with(|| {
                 pos.push(p);
@@ -134,7 +133,7 @@ pub fn union(a: &TriMesh, b: &TriMesh, shift: [f64; 3]) -> TriMesh {
     pos.extend(
         b.positions
             .iter()
-            .map(|p| [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]),
+            .map(|&p| -> [f64; 3] { (Point3::from(p) + Vector3::from(shift)).into() }),
     );
     let mut tris = a.triangles.clone();
     tris.extend(

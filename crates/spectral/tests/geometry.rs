@@ -4,6 +4,7 @@
 mod common;
 
 use common::*;
+use nalgebra::Vector3;
 use std::f64::consts::PI;
 use symcorr_spectral::*;
 
@@ -105,10 +106,7 @@ fn heat_method_two_components() {
     let p = a.positions[3];
     let anti = (0..n)
         .min_by(|&i, &j| {
-            let f = |k: usize| {
-                let q = a.positions[k];
-                (q[0] + p[0]).powi(2) + (q[1] + p[1]).powi(2) + (q[2] + p[2]).powi(2)
-            };
+            let f = |k: usize| (Vector3::from(a.positions[k]) + Vector3::from(p)).norm_squared();
             f(i).total_cmp(&f(j))
         })
         .unwrap();

@@ -10,6 +10,7 @@ use crate::formats::{
     EXPLAIN_FORMAT, LABELS_FORMAT,
 };
 use crate::{Correspondence, PreparedMesh};
+use nalgebra::{distance_squared, Point3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use symcorr_attach::{palette, Attachment};
@@ -304,12 +305,13 @@ pub fn match_colours(
                 if has[v] {
                     return None;
                 }
-                let p = mesh.positions[v];
+                let p = Point3::from(mesh.positions[v]);
+                let d2 = |i: usize| distance_squared(&p, &Point3::from(mesh.positions[i]));
                 let best = anchors
                     .iter()
                     .min_by(|&&a, &&b| {
-                        let da = d2(p, mesh.positions[anchor(a)]);
-                        let db = d2(p, mesh.positions[anchor(b)]);
+                        let da = d2(anchor(a));
+                        let db = d2(anchor(b));
                         da.total_cmp(&db)
                     })
                     .copied()
@@ -328,10 +330,6 @@ pub fn match_colours(
     let t_col = spread(&template.mesh, &|i| m[i].template as usize);
     let u_col = spread(&target.mesh, &|i| m[i].target as usize);
     (t_col, u_col)
-}
-
-fn d2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
 }
 
 /// Per-vertex colours of `p`'s repaired mesh spread onto the input mesh's vertices (grey for a

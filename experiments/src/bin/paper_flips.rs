@@ -2,6 +2,7 @@
 //! pair of a dataset with the rig's reference labels, flips classified by cause. See `--help`
 //! and experiments/README.md.
 
+use nalgebra::{Point3, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -29,8 +30,7 @@ struct Mesh {
 /// `sym`), as signed distances over √area.
 fn signed_distances(m: &PreparedMesh, sym: u8, skull_t: f64) -> Vec<f64> {
     let j = &m.attachment.joints;
-    let p = |x: Joint| -> [f64; 3] { j.position(x).into() };
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let p = |x: Joint| j.position(x);
     // The pipeline's joint planes, from their one owner.
     let planes = symcorr_attach::SagittalPlanes::of(j);
     let plane = |pl: symcorr_attach::Plane| -> ([f64; 3], [f64; 3]) {
@@ -66,12 +66,9 @@ fn signed_distances(m: &PreparedMesh, sym: u8, skull_t: f64) -> Vec<f64> {
     // Bit 8: the skull (head vertices beyond half the neck→head bone) gets its own plane,
     // fitted by symmetry on the skull alone, starting at the head joint.
     let (sc, hj) = (p(Joint::ShoulderCenter), p(Joint::Head));
-    let bone = sub(hj, sc);
-    let bl2 = bone[0] * bone[0] + bone[1] * bone[1] + bone[2] * bone[2];
-    let tpos = |x: [f64; 3]| {
-        let d = sub(x, sc);
-        (d[0] * bone[0] + d[1] * bone[1] + d[2] * bone[2]) / bl2
-    };
+    let bone = hj - sc;
+    let bl2 = bone.norm_squared();
+    let tpos = |x: [f64; 3]| (Point3::from(x) - sc).dot(&bone) / bl2;
     let skull = if sym & 8 != 0 {
         let pts: Vec<[f64; 3]> = m
             .mesh
@@ -83,7 +80,7 @@ fn signed_distances(m: &PreparedMesh, sym: u8, skull_t: f64) -> Vec<f64> {
             .collect();
         let stride = pts.len().div_ceil(1500).max(1);
         let pts: Vec<[f64; 3]> = pts.into_iter().step_by(stride).collect();
-        Some(refine_symmetry_plane(&pts, hj, sn, 10))
+        Some(refine_symmetry_plane(&pts, hj.into(), sn, 10))
     } else {
         None
     };
@@ -102,8 +99,7 @@ fn signed_distances(m: &PreparedMesh, sym: u8, skull_t: f64) -> Vec<f64> {
                 },
                 _ => return 0.0,
             };
-            let d = sub(x, o);
-            (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / s
+            (Point3::from(x) - Point3::from(o)).dot(&Vector3::from(n)) / s
         })
         .collect()
 }
@@ -172,9 +168,8 @@ fn axial(m: &PreparedMesh) -> Vec<f64> {
             }
             let b = l.bones();
             let (a, c) = (j.position(b[0].parent), j.position(b[b.len() - 1].child));
-            let d = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let e = [x[0] - a[0], x[1] - a[1], x[2] - a[2]];
-            (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+            let d = c - a;
+            (Point3::from(x) - a).dot(&d) / d.norm_squared()
         })
         .collect()
 }
@@ -325,7 +320,10 @@ fn custom(ma: &Mesh, mb: &Mesh, points: &[u32], o: &MatchOptions, r: &Rule) -> V
                     if let Some(rad) = r.diverse {
                         let x = pos[c.vertex as usize];
                         let near = out.iter().any(|o| {
-                            symcorr_mesh::geometry::dist(x, pos[o.vertex as usize]) < rad * s
+                            nalgebra::distance(
+                                &Point3::from(x),
+                                &Point3::from(pos[o.vertex as usize]),
+                            ) < rad * s
                         });
                         if near {
                             continue;

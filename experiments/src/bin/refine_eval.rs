@@ -3,6 +3,7 @@
 //! and experiments/README.md.
 
 use faer::Mat;
+use nalgebra::{Point3, Vector3};
 use std::collections::BTreeMap;
 use std::error::Error;
 use std::path::{Path, PathBuf};
@@ -110,7 +111,6 @@ struct Prep {
 }
 
 fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton, sym: Symmetry) -> Vec<i8> {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     // The pipeline's joint planes, from their one owner.
     let planes = symcorr_attach::SagittalPlanes::of(j);
     let plane = |pl: symcorr_attach::Plane| -> ([f64; 3], [f64; 3]) {
@@ -156,8 +156,7 @@ fn halves(mesh: &TriMesh, labels: &[Segment], j: &Skeleton, sym: Symmetry) -> Ve
                 Segment::Head => (so_h, sn_h),
                 _ => return 0,
             };
-            let d = sub(x, o);
-            if d[0] * n[0] + d[1] * n[1] + d[2] * n[2] >= 0.0 {
+            if (Point3::from(x) - Point3::from(o)).dot(&Vector3::from(n)) >= 0.0 {
                 1
             } else {
                 -1
@@ -206,8 +205,10 @@ fn prepare(mesh: TriMesh, sk: &Skeleton, args: &Args) -> Result<Prep, Box<dyn Er
         let e = mesh.edges();
         e.iter()
             .map(|[a, b]| {
-                let (p, q) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
-                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+                nalgebra::distance(
+                    &Point3::from(mesh.positions[*a as usize]),
+                    &Point3::from(mesh.positions[*b as usize]),
+                )
             })
             .sum::<f64>()
             / e.len() as f64

@@ -2,13 +2,12 @@
 
 use std::collections::{BTreeMap, HashMap};
 
+use nalgebra::{Point3, Vector3};
 use symcorr_mesh::TriMesh;
 
 use crate::assets::{Assets, JointStrategy, BODY_VERTICES};
 use crate::error::{Result, SynthError};
-use crate::math::{
-    blender_to_obj, euler_xyz, obj_to_blender, scale, sub, transpose, vec_roll_to_mat3, Rigid, V3,
-};
+use crate::math::{blender_to_obj, euler_xyz, obj_to_blender, vec_roll_to_mat3, Rigid, V3};
 
 /// MakeHuman units are decimetres; everything symcorr-synth writes is in metres.
 pub const DM_TO_M: f64 = 0.1;
@@ -230,13 +229,10 @@ impl Model {
                     .unwrap_or(&[]),
                 JointStrategy::Mean(v) => v,
             };
-            let mut m = [0.0; 3];
-            for &i in idx {
-                for k in 0..3 {
-                    m[k] += all[i as usize][k];
-                }
-            }
-            obj_to_blender(scale(m, DM_TO_M / idx.len().max(1) as f64))
+            let m = idx
+                .iter()
+                .fold(Vector3::zeros(), |m, &i| m + Vector3::from(all[i as usize]));
+            obj_to_blender((m * (DM_TO_M / idx.len().max(1) as f64)).into())
         };
         let mut bones = Vec::with_capacity(self.order.len());
         let mut bone_index = HashMap::new();
@@ -244,7 +240,7 @@ impl Model {
             let spec = &self.assets.bones[bi];
             let head = joint(&spec.head);
             let tail = joint(&spec.tail);
-            let r = vec_roll_to_mat3(sub(tail, head), spec.roll);
+            let r = vec_roll_to_mat3(Point3::from(tail) - Point3::from(head), spec.roll);
             let parent = spec
                 .parent
                 .as_ref()
@@ -255,12 +251,15 @@ impl Model {
                 parent,
                 head,
                 tail,
-                rest: Rigid { r, t: head },
+                rest: Rigid {
+                    r,
+                    t: Vector3::from(head),
+                },
             });
         }
         let positions: Vec<V3> = all[..BODY_VERTICES]
             .iter()
-            .map(|&p| scale(p, DM_TO_M))
+            .map(|&p| (Vector3::from(p) * DM_TO_M).into())
             .collect();
         let rest_blender = positions.iter().map(|&p| obj_to_blender(p)).collect();
         let rest = TriMesh::new(positions, self.assets.body_triangles.clone())?;
@@ -289,7 +288,7 @@ impl Body<'_> {
         for b in &self.bones {
             let local = Rigid {
                 r: euler_xyz(pose.rotations.get(&b.name).copied().unwrap_or([0.0; 3])),
-                t: [0.0; 3],
+                t: Vector3::zeros(),
             };
             let g = match b.parent {
                 // posed(b) = posed(parent) · rest(parent)⁻¹ · rest(b) · local
@@ -316,14 +315,11 @@ impl Body<'_> {
             .iter()
             .zip(self.model.weights())
             .map(|(&p, ws)| {
-                let mut q = [0.0; 3];
+                let mut q = Vector3::zeros();
                 for &(b, w) in ws {
-                    let s = skin[b].apply(p);
-                    for k in 0..3 {
-                        q[k] += w * s[k];
-                    }
+                    q += Vector3::from(skin[b].apply(p)) * w;
                 }
-                blender_to_obj(q)
+                blender_to_obj(q.into())
             })
             .collect();
         let mesh = TriMesh::new(positions, self.rest.triangles.clone())?;
@@ -355,11 +351,7 @@ impl Body<'_> {
     /// The bone's local axes (columns X, Y, Z) expressed in the OBJ frame — handy to see which
     /// Euler component bends a joint which way.
     pub fn rest_axes_obj(&self, b: usize) -> [V3; 3] {
-        let rt = transpose(&self.bones[b].rest.r);
-        [
-            blender_to_obj(rt[0]),
-            blender_to_obj(rt[1]),
-            blender_to_obj(rt[2]),
-        ]
+        let r = &self.bones[b].rest.r;
+        [0, 1, 2].map(|k| blender_to_obj(r.column(k).into_owned().into()))
     }
 }

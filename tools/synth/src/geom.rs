@@ -6,19 +6,21 @@ use std::collections::HashMap;
 
 use symcorr_mesh::TriMesh;
 
-use crate::math::{cross, dot, norm, sub, V3};
+use nalgebra::{Point3, Vector3};
+
+use crate::math::V3;
 
 /// Generalised winding number of `mesh` at `p` (Jacobson et al. 2013): the sum of the signed
 /// solid angles of the triangles (Van Oosterom & Strackee 1983) over 4π. ≈ 1 inside a closed,
 /// outward-oriented mesh, ≈ 0 outside.
 pub fn winding_number(mesh: &TriMesh, p: V3) -> f64 {
+    let p = Point3::from(p);
     let mut total = 0.0;
     for t in 0..mesh.num_triangles() {
-        let [a, b, c] = mesh.corners(t);
-        let (a, b, c) = (sub(a, p), sub(b, p), sub(c, p));
-        let (la, lb, lc) = (norm(a), norm(b), norm(c));
-        let num = dot(a, cross(b, c));
-        let den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+        let [a, b, c] = mesh.corners(t).map(|q| Point3::from(q) - p);
+        let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+        let num = a.dot(&b.cross(&c));
+        let den = la * lb * lc + a.dot(&b) * lc + b.dot(&c) * la + c.dot(&a) * lb;
         total += 2.0 * num.atan2(den);
     }
     total / (4.0 * std::f64::consts::PI)
@@ -26,26 +28,27 @@ pub fn winding_number(mesh: &TriMesh, p: V3) -> f64 {
 
 fn seg_tri(p: V3, q: V3, [a, b, c]: [V3; 3]) -> bool {
     // Möller–Trumbore on the segment p→q (parameter in [0, 1]).
-    let d = sub(q, p);
-    let e1 = sub(b, a);
-    let e2 = sub(c, a);
-    let h = cross(d, e2);
-    let det = dot(e1, h);
+    let (p, a) = (Point3::from(p), Point3::from(a));
+    let d: Vector3<f64> = Point3::from(q) - p;
+    let e1 = Point3::from(b) - a;
+    let e2 = Point3::from(c) - a;
+    let h = d.cross(&e2);
+    let det = e1.dot(&h);
     if det.abs() < 1e-18 {
         return false;
     }
     let inv = 1.0 / det;
-    let s = sub(p, a);
-    let u = inv * dot(s, h);
+    let s = p - a;
+    let u = inv * s.dot(&h);
     if !(0.0..=1.0).contains(&u) {
         return false;
     }
-    let qv = cross(s, e1);
-    let v = inv * dot(d, qv);
+    let qv = s.cross(&e1);
+    let v = inv * d.dot(&qv);
     if v < 0.0 || u + v > 1.0 {
         return false;
     }
-    let t = inv * dot(e2, qv);
+    let t = inv * e2.dot(&qv);
     (0.0..=1.0).contains(&t)
 }
 
@@ -124,10 +127,10 @@ pub fn self_intersections(
 
 /// Index of the vertex of `mesh` nearest to `p` (brute force; meshes here are small).
 pub fn nearest_vertex(mesh: &TriMesh, p: V3) -> usize {
+    let p = Point3::from(p);
     let mut best = (0, f64::INFINITY);
     for (i, &q) in mesh.positions.iter().enumerate() {
-        let d = sub(p, q);
-        let d = dot(d, d);
+        let d = (p - Point3::from(q)).norm_squared();
         if d < best.1 {
             best = (i, d);
         }

@@ -46,11 +46,14 @@ fn write_camera_files(
         .map_err(|e| SynthError::Invalid(e.to_string()))?;
     write_text(&out.join("intrinsics.json"), &(k + "\n"))?;
     let t = camera.world_to_camera();
+    // The file keeps its layout: rotation as rows, translation as an array.
+    let rotation_rows: [[f64; 3]; 3] = [0, 1, 2].map(|k| t.r.row(k).transpose().into());
+    let translation: [f64; 3] = t.t.into();
     let cam = json!({
         "format": "symcorr.synth-camera/1",
         "position": camera.position,
         "look_at": camera.look_at,
-        "world_to_camera": {"rotation_rows": t.r, "translation": t.t},
+        "world_to_camera": {"rotation_rows": rotation_rows, "translation": translation},
         "body": mesh_ref,
         "realism": {
             "axial_noise": realism.axial_noise, "quantise": realism.quantise,

@@ -48,7 +48,9 @@ use symcorr_skeleton::{Joint, Segment, Skeleton};
 
 use crate::body::{Body, Posed};
 use crate::error::Result;
-use crate::math::{add, dot, scale, sub, V3};
+use nalgebra::{Point3, Vector3};
+
+use crate::math::V3;
 
 /// How a Kinect joint is placed on the rig: the mean of some bone heads/tails, carried by a bone.
 #[derive(Debug, Clone, Copy)]
@@ -144,22 +146,22 @@ pub fn segment_of_bone(name: &str) -> Option<Segment> {
 pub fn kinect_joints(body: &Body<'_>, posed: &Posed) -> Result<Skeleton> {
     let mut positions = [[0.0; 3]; 20];
     for r in JOINT_TABLE {
-        let mut p = [0.0; 3];
+        let mut p = Vector3::zeros();
         for &(bone, tail) in r.points {
             let b = &body.bones[body.bone(bone)?];
-            p = add(p, if tail { b.tail } else { b.head });
+            p += Vector3::from(if tail { b.tail } else { b.head });
         }
-        let p = scale(p, 1.0 / r.points.len() as f64);
-        positions[r.joint.index()] = body.carry(&posed.skin, body.bone(r.carrier)?, p);
+        let p = p * (1.0 / r.points.len() as f64);
+        positions[r.joint.index()] = body.carry(&posed.skin, body.bone(r.carrier)?, p.into());
     }
     Ok(Skeleton::from_arrays(positions))
 }
 
 fn point_segment_distance(p: V3, a: V3, b: V3) -> f64 {
-    let ab = sub(b, a);
-    let t = (dot(sub(p, a), ab) / dot(ab, ab).max(1e-300)).clamp(0.0, 1.0);
-    let d = sub(p, add(a, scale(ab, t)));
-    dot(d, d).sqrt()
+    let (p, a) = (Point3::from(p), Point3::from(a));
+    let ab = Point3::from(b) - a;
+    let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
+    nalgebra::distance(&p, &(a + ab * t))
 }
 
 /// Reference segment label (index into [`Segment::ALL`]) of every vertex of `body` (use the base

@@ -1,99 +1,85 @@
-//! Small 3-D helpers: row-major 3×3 matrices, rigid transforms, Blender Euler angles and the
-//! change of frame between MakeHuman's OBJ frame (y up) and Blender's armature frame (z up).
+//! Small 3-D helpers on nalgebra types: rigid transforms, Blender's bone frames and Euler
+//! angles, and the change of frame between MakeHuman's OBJ frame (y up) and Blender's armature
+//! frame (z up).
 
-/// A 3-vector.
+use nalgebra::{Matrix3, Vector3};
+
+/// A 3-vector as assets, poses and meshes store it; convert with `Vector3::from` /
+/// `Point3::from` for arithmetic.
 pub type V3 = [f64; 3];
-/// A row-major 3×3 matrix (`m[row][col]`).
-pub type M3 = [[f64; 3]; 3];
+/// A 3×3 matrix.
+pub type M3 = Matrix3<f64>;
 
-/// The identity matrix.
-pub const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-
-// Vector arithmetic has one owner in the workspace: symcorr-mesh.
-#[cfg_attr(not(test), allow(unused_imports))]
-pub(crate) use symcorr_mesh::geometry::dist;
-pub(crate) use symcorr_mesh::geometry::{add, cross, dot, norm, scale, sub};
-
-pub(crate) fn normalize(a: V3) -> V3 {
-    let n = norm(a);
+/// `a` scaled to unit length (multiplied by the reciprocal of its norm); a zero vector is
+/// returned unchanged.
+pub(crate) fn normalize(a: Vector3<f64>) -> Vector3<f64> {
+    let n = a.norm();
     if n > 0.0 {
-        scale(a, 1.0 / n)
+        a * (1.0 / n)
     } else {
         a
     }
 }
-/// Matrix product `a · b`.
-pub fn mul(a: &M3, b: &M3) -> M3 {
-    let mut m = [[0.0; 3]; 3];
-    for (r, row) in m.iter_mut().enumerate() {
-        for (c, x) in row.iter_mut().enumerate() {
-            *x = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
-        }
-    }
-    m
-}
-
-/// Matrix–vector product `m · v`.
-pub fn mul_v(m: &M3, v: V3) -> V3 {
-    [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
-}
-
-/// Transpose (the inverse of a rotation).
-pub fn transpose(m: &M3) -> M3 {
-    let mut t = [[0.0; 3]; 3];
-    for (r, row) in m.iter().enumerate() {
-        for (c, x) in row.iter().enumerate() {
-            t[c][r] = *x;
-        }
-    }
-    t
-}
 
 /// Rotation by `angle` radians about the unit `axis` (Rodrigues).
-pub fn axis_angle(axis: V3, angle: f64) -> M3 {
-    let [x, y, z] = normalize(axis);
+pub fn axis_angle(axis: Vector3<f64>, angle: f64) -> M3 {
+    let [x, y, z] = normalize(axis).into();
     let (s, c) = angle.sin_cos();
     let t = 1.0 - c;
-    [
-        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-    ]
+    // Arguments in row-major order.
+    M3::new(
+        t * x * x + c,
+        t * x * y - s * z,
+        t * x * z + s * y,
+        t * x * y + s * z,
+        t * y * y + c,
+        t * y * z - s * x,
+        t * x * z - s * y,
+        t * y * z + s * x,
+        t * z * z + c,
+    )
 }
 
 /// Blender's `XYZ` Euler rotation (the default rotation mode of pose bones and of
 /// `rotation_euler` curves): X first, then Y, then Z, i.e. `R = Rz · Ry · Rx`.
 pub fn euler_xyz(e: V3) -> M3 {
-    let rx = axis_angle([1.0, 0.0, 0.0], e[0]);
-    let ry = axis_angle([0.0, 1.0, 0.0], e[1]);
-    let rz = axis_angle([0.0, 0.0, 1.0], e[2]);
-    mul(&rz, &mul(&ry, &rx))
+    let rx = axis_angle(Vector3::x(), e[0]);
+    let ry = axis_angle(Vector3::y(), e[1]);
+    let rz = axis_angle(Vector3::z(), e[2]);
+    rz * (ry * rx)
 }
 
 /// Blender's `vec_roll_to_mat3`: the rest orientation of a bone whose local +Y points along
 /// `dir` (unit) after the shortest-arc rotation from +Y, then rolled by `roll` about `dir`.
 /// Columns are the bone's local X, Y, Z axes in armature space.
-pub fn vec_roll_to_mat3(dir: V3, roll: f64) -> M3 {
-    let [x, y, z] = normalize(dir);
+pub fn vec_roll_to_mat3(dir: Vector3<f64>, roll: f64) -> M3 {
+    let dir = normalize(dir);
+    let [x, y, z] = dir.into();
     let theta = 1.0 + y;
     let theta_alt = x * x + z * z;
-    // Column-major in Blender; here b[row][col].
-    let b: M3 = if theta > 1e-5 || theta_alt > 1e-9 {
+    // Column-major in Blender; `M3::new` takes rows.
+    let b = if theta > 1e-5 || theta_alt > 1e-9 {
         let theta = if theta <= 1e-5 {
             theta_alt * 0.5 + theta_alt * theta_alt * 0.125
         } else {
             theta
         };
-        [
-            [1.0 - x * x / theta, x, -x * z / theta],
-            [-x, y, -z],
-            [-x * z / theta, z, 1.0 - z * z / theta],
-        ]
+        M3::new(
+            1.0 - x * x / theta,
+            x,
+            -x * z / theta,
+            -x,
+            y,
+            -z,
+            -x * z / theta,
+            z,
+            1.0 - z * z / theta,
+        )
     } else {
         // dir is (anti-)parallel to −Y: Blender flips X and Y.
-        [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
+        M3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0))
     };
-    mul(&axis_angle([x, y, z], roll), &b)
+    axis_angle(dir, roll) * b
 }
 
 /// A rigid transform `p ↦ r·p + t`.
@@ -102,35 +88,29 @@ pub struct Rigid {
     /// Rotation.
     pub r: M3,
     /// Translation.
-    pub t: V3,
+    pub t: Vector3<f64>,
 }
 
 impl Rigid {
-    /// The identity transform.
-    pub const IDENTITY: Rigid = Rigid {
-        r: IDENTITY,
-        t: [0.0; 3],
-    };
-
     /// Applies the transform to a point.
     pub fn apply(&self, p: V3) -> V3 {
-        add(mul_v(&self.r, p), self.t)
+        (self.r * Vector3::from(p) + self.t).into()
     }
 
     /// `self ∘ other` (apply `other` first).
     pub fn compose(&self, other: &Rigid) -> Rigid {
         Rigid {
-            r: mul(&self.r, &other.r),
-            t: self.apply(other.t),
+            r: self.r * other.r,
+            t: self.r * other.t + self.t,
         }
     }
 
     /// The inverse transform (rotations are orthonormal).
     pub fn inverse(&self) -> Rigid {
-        let rt = transpose(&self.r);
+        let rt = self.r.transpose();
         Rigid {
             r: rt,
-            t: scale(mul_v(&rt, self.t), -1.0),
+            t: -(rt * self.t),
         }
     }
 }
@@ -151,7 +131,7 @@ mod tests {
     use super::*;
 
     fn close(a: &M3, b: &M3) -> bool {
-        (0..3).all(|r| (0..3).all(|c| (a[r][c] - b[r][c]).abs() < 1e-12))
+        (a - b).amax() < 1e-12
     }
 
     #[test]
@@ -162,14 +142,13 @@ mod tests {
             [0.0, -1.0, 0.0],
             [1.0, 0.0, 0.0],
         ] {
+            let dir = Vector3::from(dir);
             let m = vec_roll_to_mat3(dir, 0.7);
-            let y = [m[0][1], m[1][1], m[2][1]];
-            let d = normalize(dir);
-            assert!(dist(y, d) < 1e-12, "{dir:?}");
-            assert!(close(&mul(&m, &transpose(&m)), &IDENTITY));
+            assert!((m.column(1) - normalize(dir)).norm() < 1e-12, "{dir:?}");
+            assert!(close(&(m * m.transpose()), &M3::identity()));
         }
         // Roll 0 along +Y is the identity.
-        assert!(close(&vec_roll_to_mat3([0.0, 1.0, 0.0], 0.0), &IDENTITY));
+        assert!(close(&vec_roll_to_mat3(Vector3::y(), 0.0), &M3::identity()));
     }
 
     #[test]
@@ -180,9 +159,9 @@ mod tests {
             0.0,
             std::f64::consts::FRAC_PI_2,
         ]);
-        assert!(dist(mul_v(&m, [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]) < 1e-12);
+        assert!((m * Vector3::y() - Vector3::z()).norm() < 1e-12);
         // +X: about X unchanged, about Z → +Y.
-        assert!(dist(mul_v(&m, [1.0, 0.0, 0.0]), [0.0, 1.0, 0.0]) < 1e-12);
+        assert!((m * Vector3::x() - Vector3::y()).norm() < 1e-12);
     }
 
     #[test]

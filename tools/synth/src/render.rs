@@ -27,7 +27,9 @@ use rand_core::SeedableRng;
 use symcorr_kinect::Intrinsics;
 use symcorr_mesh::TriMesh;
 
-use crate::math::{cross, dot, normalize, sub, Rigid, V3};
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
+
+use crate::math::{normalize, Rigid, V3};
 use crate::noise::standard_normal;
 use crate::poses::unit_f64;
 
@@ -61,21 +63,18 @@ impl Camera {
     /// World → Kinect camera space: +z along the viewing direction, +y as close to world up (+y)
     /// as possible, +x = y × z (the sensor's left).
     pub fn world_to_camera(&self) -> Rigid {
-        let z = normalize(sub(self.look_at, self.position));
-        let up = if cross([0.0, 1.0, 0.0], z).iter().all(|c| c.abs() < 1e-9) {
-            [0.0, 0.0, 1.0]
+        let position = Vector3::from(self.position);
+        let z = normalize(Vector3::from(self.look_at) - position);
+        let up = if Vector3::y().cross(&z).iter().all(|c| c.abs() < 1e-9) {
+            Vector3::z()
         } else {
-            [0.0, 1.0, 0.0]
+            Vector3::y()
         };
-        let x = normalize(cross(up, z));
-        let y = cross(z, x);
+        let x = normalize(up.cross(&z));
+        let y = z.cross(&x);
         // Rows are the camera axes in world coordinates.
-        let r = [x, y, z];
-        let t = [
-            -dot(x, self.position),
-            -dot(y, self.position),
-            -dot(z, self.position),
-        ];
+        let r = Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()]);
+        let t = Vector3::new(-x.dot(&position), -y.dot(&position), -z.dot(&position));
         Rigid { r, t }
     }
 }
@@ -157,8 +156,10 @@ impl Rendering {
     }
 }
 
+/// Twice the signed area of the image-plane triangle `a, b, p`.
 fn edge(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
-    (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+    let a = Point2::from(a);
+    (Point2::from(b) - a).perp(&(Point2::from(p) - a))
 }
 
 /// Renders `mesh` (world frame) with `camera`. `stream` separates the noise of different frames
@@ -209,7 +210,8 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
         }
         let umax = (umax as usize).min(w - 1);
         let vmax = (vmax as usize).min(h - 1);
-        let n = normalize(cross(sub(p[1], p[0]), sub(p[2], p[0])));
+        let [p0, p1, p2] = p.map(Point3::from);
+        let n = normalize((p1 - p0).cross(&(p2 - p0)));
         for v in vmin..=vmax {
             for u in umin..=umax {
                 let q = [u as f64, v as f64];
@@ -221,60 +223,61 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
                 if b.iter().any(|&x| x < 0.0) {
                     continue;
                 }
-                let inv_z = b[0] / p[0][2] + b[1] / p[1][2] + b[2] / p[2][2];
+                let inv_z = Vector3::from(b)
+                    .component_div(&Vector3::new(p0.z, p1.z, p2.z))
+                    .sum();
                 let z = 1.0 / inv_z;
                 let i = v * w + u;
                 if z < zbuf[i] {
                     zbuf[i] = z;
-                    let x: [f64; 3] = k.unproject(q[0], q[1], z).into();
+                    let x = k.unproject(q[0], q[1], z);
                     let mut best = (0, f64::INFINITY);
-                    for (c, pc) in p.iter().enumerate() {
-                        let d = sub(x, *pc);
-                        let d = dot(d, d);
+                    for (c, pc) in [p0, p1, p2].iter().enumerate() {
+                        let d = (x - pc).norm_squared();
                         if d < best.1 {
                             best = (c, d);
                         }
                     }
                     vid[i] = t[best.0];
-                    cos_view[i] = dot(n, normalize(x)).abs();
+                    cos_view[i] = n.dot(&normalize(x.coords)).abs();
                 }
             }
         }
     }
     // Background planes (world frame), intersected with each pixel's ray.
-    let rt = crate::math::transpose(&to_cam.r);
-    let mut planes: Vec<(V3, f64)> = Vec::new(); // (unit normal n, offset c): n·x = c
+    let rt = to_cam.r.transpose();
+    let mut planes: Vec<(Vector3<f64>, f64)> = Vec::new(); // (unit normal n, offset c): n·x = c
     if realism.floor {
         let floor_y = mesh
             .positions
             .iter()
             .map(|p| p[1])
             .fold(f64::INFINITY, f64::min);
-        planes.push(([0.0, 1.0, 0.0], floor_y));
+        planes.push((Vector3::y(), floor_y));
     }
     if realism.wall {
-        let mut f = sub(camera.look_at, camera.position);
-        f[1] = 0.0;
+        let mut f = Vector3::from(camera.look_at) - Vector3::from(camera.position);
+        f.y = 0.0;
         let f = normalize(f);
-        let c = dot(f, camera.look_at) + 1.0;
+        let c = f.dot(&Vector3::from(camera.look_at)) + 1.0;
         planes.push((f, c));
     }
     if !planes.is_empty() {
         for v in 0..h {
             for u in 0..w {
-                let dc: [f64; 3] = k.unproject(u as f64, v as f64, 1.0).into(); // z = 1
-                let dw = crate::math::mul_v(&rt, dc);
+                let dc = k.unproject(u as f64, v as f64, 1.0).coords; // z = 1
+                let dw = rt * dc;
                 for &(n, c) in &planes {
-                    let denom = dot(n, dw);
+                    let denom = n.dot(&dw);
                     if denom.abs() < 1e-12 {
                         continue;
                     }
-                    let t = (c - dot(n, camera.position)) / denom;
+                    let t = (c - n.dot(&Vector3::from(camera.position))) / denom;
                     let i = v * w + u;
                     if t > near && t < zbuf[i] {
                         zbuf[i] = t;
                         vid[i] = NO_VERTEX;
-                        cos_view[i] = (denom / crate::math::norm(dw)).abs();
+                        cos_view[i] = (denom / dw.norm()).abs();
                     }
                 }
             }

@@ -1,5 +1,6 @@
 //! Ground-truth invariants of the generator. Reads only the project's fixtures/.
 
+use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -45,7 +46,7 @@ fn test_poses() -> Vec<(String, Pose)> {
 }
 
 fn d(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    nalgebra::distance(&Point3::from(a), &Point3::from(b))
 }
 
 #[test]
@@ -206,34 +207,30 @@ fn reference_labels_respect_the_mirror_map() {
 
 fn point_triangle_distance(p: [f64; 3], [a, b, c]: [[f64; 3]; 3]) -> f64 {
     // Minimise over a fine barycentric grid plus the exact plane projection when inside.
-    let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
-    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
-    let (e0, e1, w) = (sub(b, a), sub(c, a), sub(p, a));
+    let [p, a, b, c] = [p, a, b, c].map(Point3::from);
+    let (e0, e1, w) = (b - a, c - a, p - a);
     let (d00, d01, d11, d20, d21) = (
-        dot(e0, e0),
-        dot(e0, e1),
-        dot(e1, e1),
-        dot(w, e0),
-        dot(w, e1),
+        e0.dot(&e0),
+        e0.dot(&e1),
+        e1.dot(&e1),
+        w.dot(&e0),
+        w.dot(&e1),
     );
     let den = d00 * d11 - d01 * d01;
     let v = (d11 * d20 - d01 * d21) / den;
     let u = (d00 * d21 - d01 * d20) / den;
-    let q = |s: f64, t: f64| {
-        [
-            a[0] + s * e0[0] + t * e1[0],
-            a[1] + s * e0[1] + t * e1[1],
-            a[2] + s * e0[2] + t * e1[2],
-        ]
-    };
+    let q = |s: f64, t: f64| a + e0 * s + e1 * t;
     if v >= 0.0 && u >= 0.0 && u + v <= 1.0 {
-        return d(p, q(v, u));
+        return nalgebra::distance(&p, &q(v, u));
     }
     let mut best = f64::INFINITY;
     let n = 64;
     for i in 0..=n {
         for j in 0..=(n - i) {
-            best = best.min(d(p, q(i as f64 / n as f64, j as f64 / n as f64)));
+            best = best.min(nalgebra::distance(
+                &p,
+                &q(i as f64 / n as f64, j as f64 / n as f64),
+            ));
         }
     }
     best

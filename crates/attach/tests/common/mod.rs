@@ -2,6 +2,7 @@
 //! unambiguous region, a seeded random generator.
 #![allow(dead_code)]
 
+use nalgebra::Point3;
 use symcorr_attach::testbody::RADII;
 use symcorr_attach::{Segment, Skeleton, BONES};
 use symcorr_mesh::TriMesh;
@@ -26,14 +27,10 @@ pub fn agreement(m: &TriMesh, got: &[Segment], want: &[Segment], mask: &[bool]) 
 }
 
 fn seg_dist(x: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
-    let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let ax = [x[0] - a[0], x[1] - a[1], x[2] - a[2]];
-    let l2 = ab.iter().map(|v| v * v).sum::<f64>();
-    let t = ((ax[0] * ab[0] + ax[1] * ab[1] + ax[2] * ab[2]) / l2).clamp(0.0, 1.0);
-    (0..3)
-        .map(|k| (ax[k] - t * ab[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
+    let [x, a, b] = [x, a, b].map(Point3::from);
+    let (ab, ax) = (b - a, x - a);
+    let t = (ax.dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+    (ax - ab * t).norm()
 }
 
 /// Vertices at least `margin` away from every capsule but the nearest one, whose nearest bone is

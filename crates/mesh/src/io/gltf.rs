@@ -25,42 +25,25 @@ use base64::Engine as _;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::Semantic;
+use nalgebra::{Matrix4, Vector3};
 use serde_json::json;
 
 use super::{LoadedMesh, Source};
 use crate::{MeshError, TriMesh};
 
-type Mat4 = [[f64; 4]; 4]; // column-major, m[column][row], as glTF stores it
+/// A node transform; glTF stores it column-major, which is also nalgebra's layout.
+type Mat4 = Matrix4<f64>;
 
-const IDENTITY: Mat4 = [
-    [1.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 1.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
-
-fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
-    let mut m = [[0.0; 4]; 4];
-    for (c, col) in m.iter_mut().enumerate() {
-        for (r, x) in col.iter_mut().enumerate() {
-            *x = (0..4).map(|k| a[k][r] * b[c][k]).sum();
-        }
-    }
-    m
-}
-
+/// The affine part of `m` applied to `p` (a glTF node matrix's last row is `0 0 0 1`; it is
+/// not used, so a malformed one cannot divide the point).
 fn apply(m: &Mat4, p: [f64; 3]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (r, o) in out.iter_mut().enumerate() {
-        *o = m[0][r] * p[0] + m[1][r] * p[1] + m[2][r] * p[2] + m[3][r];
-    }
-    out
+    let p = m.fixed_view::<3, 3>(0, 0) * Vector3::from(p) + m.fixed_view::<3, 1>(0, 3);
+    p.into()
 }
 
+/// Determinant of the linear part: negative for a mirroring transform.
 fn det3(m: &Mat4) -> f64 {
-    m[0][0] * (m[1][1] * m[2][2] - m[2][1] * m[1][2])
-        - m[1][0] * (m[0][1] * m[2][2] - m[2][1] * m[0][2])
-        + m[2][0] * (m[0][1] * m[1][2] - m[1][1] * m[0][2])
+    m.fixed_view::<3, 3>(0, 0).determinant()
 }
 
 pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<LoadedMesh, MeshError> {
@@ -117,7 +100,7 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
         }
         None => {
             for mesh in doc.meshes() {
-                add_mesh(&mesh, &IDENTITY, &buffers, src, &mut out)?;
+                add_mesh(&mesh, &Mat4::identity(), &buffers, src, &mut out)?;
             }
         }
     }
@@ -252,7 +235,7 @@ fn visit(
     src: &Source,
     out: &mut Output,
 ) -> Result<(), MeshError> {
-    let mut stack = vec![(root, IDENTITY)];
+    let mut stack = vec![(root, Mat4::identity())];
     while let Some((node, parent)) = stack.pop() {
         // glTF node hierarchies are disjoint strict trees: a node reached twice means a cycle
         // or a node with two parents, both invalid (and a cycle would never end).
@@ -265,8 +248,8 @@ fn visit(
         }
         seen[i] = true;
         let local = node.transform().matrix();
-        let local: Mat4 = local.map(|c| c.map(|x| x as f64));
-        let world = mul(&parent, &local);
+        let local = Mat4::from(local.map(|c| c.map(f64::from)));
+        let world = parent * local;
         if let Some(mesh) = node.mesh() {
             add_mesh(&mesh, &world, buffers, src, out)?;
         }

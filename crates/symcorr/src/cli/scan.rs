@@ -275,6 +275,7 @@ fn openni_frames(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Point3;
     use symcorr_kinect::joints::JointLog;
     use symcorr_skeleton::Skeleton;
 
@@ -284,11 +285,7 @@ mod tests {
         for v in 0..k.height {
             for u in 0..k.width {
                 let d = k.unproject(f64::from(u), f64::from(v), 1.0);
-                let (a, b, c) = (
-                    d[0] * d[0] + d[1] * d[1] + 1.0,
-                    -2.0 * 2.5,
-                    2.5 * 2.5 - 0.09,
-                );
+                let (a, b, c) = (d.coords.norm_squared(), -2.0 * 2.5, 2.5 * 2.5 - 0.09);
                 let disc = b * b - 4.0 * a * c;
                 let t = if disc >= 0.0 {
                     (-b - disc.sqrt()) / (2.0 * a)
@@ -350,7 +347,7 @@ mod tests {
         let mesh = symcorr_mesh::io::read(&out).unwrap().mesh;
         assert!(mesh.num_vertices() > 100);
         for q in &mesh.positions {
-            let r = (q[0] * q[0] + q[1] * q[1] + (q[2] - 2.5) * (q[2] - 2.5)).sqrt();
+            let r = nalgebra::distance(&Point3::from(*q), &Point3::new(0.0, 0.0, 2.5));
             assert!((r - 0.3).abs() < 0.01, "{q:?}");
         }
         let m: serde_json::Value =
