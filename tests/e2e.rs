@@ -489,7 +489,10 @@ fn outputs_are_checked_first_and_committed_together() {
     // --ply into a missing directory: exit 1, and the labels file is not left behind either.
     let labels = dir.path().join("labels.json");
     let missing = dir.path().join("no/such/dir/seg.ply");
-    let o = label(&labels, &[std::ffi::OsStr::new("--ply"), missing.as_os_str()]);
+    let o = label(
+        &labels,
+        &[std::ffi::OsStr::new("--ply"), missing.as_os_str()],
+    );
     assert_eq!(o.status.code(), Some(1));
     assert!(!labels.exists());
     let leftovers: Vec<_> = std::fs::read_dir(dir.path())

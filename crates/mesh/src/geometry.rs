@@ -4,33 +4,6 @@ use nalgebra::{Point3, Vector3};
 
 use crate::TriMesh;
 
-// `sub`, `dot`, `norm` and `dist` stay public only for `symcorr::pipeline`, their last caller,
-// until it moves to nalgebra; new code uses `Point3`/`Vector3` directly.
-
-/// `a - b`.
-#[inline]
-pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    (Point3::from(a) - Point3::from(b)).into()
-}
-
-/// Dot product.
-#[inline]
-pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    Vector3::from(a).dot(&Vector3::from(b))
-}
-
-/// Euclidean norm.
-#[inline]
-pub fn norm(a: [f64; 3]) -> f64 {
-    Vector3::from(a).norm()
-}
-
-/// Euclidean distance `|a − b|`.
-#[inline]
-pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    nalgebra::distance(&Point3::from(a), &Point3::from(b))
-}
-
 /// Closest point to `p` on the segment `a–b`, and its distance.
 ///
 /// ```

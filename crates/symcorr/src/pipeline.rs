@@ -711,14 +711,11 @@ mod tests {
         let p = &mesh.positions;
         (0..p.len())
             .map(|v| {
-                let q = [-p[v][0], p[v][1], p[v][2]];
+                let q = Point3::from(p[v]);
+                let q = Point3::new(-q.x, q.y, q.z);
                 (0..p.len())
                     .min_by(|&a, &b| {
-                        let d = |i: usize| {
-                            (p[i][0] - q[0]).powi(2)
-                                + (p[i][1] - q[1]).powi(2)
-                                + (p[i][2] - q[2]).powi(2)
-                        };
+                        let d = |i: usize| nalgebra::distance_squared(&Point3::from(p[i]), &q);
                         d(a).total_cmp(&d(b))
                     })
                     .unwrap() as u32

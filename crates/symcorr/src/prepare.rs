@@ -6,6 +6,7 @@
 use crate::midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 use crate::pipeline::Method;
 use crate::{OptionError, PipelineError};
+use nalgebra::Point3;
 use std::time::Instant;
 use symcorr_attach::{attach, AttachOptions, Attachment};
 use symcorr_correspond::{
@@ -30,9 +31,9 @@ fn boundary_length(mesh: &TriMesh) -> f64 {
         .map(|l| {
             (0..l.len())
                 .map(|i| {
-                    symcorr_mesh::geometry::dist(
-                        mesh.positions[l[i] as usize],
-                        mesh.positions[l[(i + 1) % l.len()] as usize],
+                    nalgebra::distance(
+                        &Point3::from(mesh.positions[l[i] as usize]),
+                        &Point3::from(mesh.positions[l[(i + 1) % l.len()] as usize]),
                     )
                 })
                 .sum::<f64>()
@@ -362,10 +363,10 @@ impl RefineData {
         let edge = edges
             .iter()
             .map(|[a, b]| {
-                symcorr_mesh::geometry::norm(symcorr_mesh::geometry::sub(
-                    mesh.positions[*a as usize],
-                    mesh.positions[*b as usize],
-                ))
+                nalgebra::distance(
+                    &Point3::from(mesh.positions[*a as usize]),
+                    &Point3::from(mesh.positions[*b as usize]),
+                )
             })
             .sum::<f64>()
             / edges.len().max(1) as f64;
