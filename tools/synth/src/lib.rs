@@ -47,7 +47,8 @@
 //!   output is bit-for-bit reproducible and independent of generation order (a test checks the
 //!   committed fixtures).
 //!
-//! Measured with these bodies: `docs/decisions/` (attachment and correspondence records).
+//! Measured with these bodies: `docs/decisions/` (attachment and correspondence records); the
+//! label-agreement figures of symcorr-attach are scored by [`label_score`].
 
 pub mod assets;
 pub mod body;
@@ -57,6 +58,7 @@ mod error;
 pub mod fixtures;
 pub mod geom;
 pub mod kinect;
+pub mod label_score;
 pub mod mapping;
 pub mod math;
 pub mod noise;
