@@ -542,3 +542,44 @@ fn outputs_are_checked_first_and_committed_together() {
     assert!(!corr.exists());
     assert_eq!(std::fs::read(&input).unwrap(), before);
 }
+
+/// Inconsistently oriented faces (the right half of the body turned inside out) are turned back
+/// before labelling: the labels are those of the intact mesh.
+#[test]
+fn turned_faces_are_oriented_before_labelling() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "s1_walk-60";
+    let mut m = symcorr_mesh::io::read(mesh(name)).unwrap().mesh;
+    let p = m.positions.clone();
+    let mut turned = 0;
+    for t in &mut m.triangles {
+        if t.iter().map(|&v| p[v as usize][0]).sum::<f64>() < 0.0 {
+            t.swap(1, 2);
+            turned += 1;
+        }
+    }
+    assert!(turned > 1000);
+    let bad = dir.path().join("turned.ply");
+    symcorr_mesh::io::write(&bad, &m, None).unwrap();
+    let labels = |input: &Path, out: &Path| {
+        let o = run(bin()
+            .arg("label")
+            .arg(input)
+            .arg("--joints")
+            .arg(joints(name))
+            .arg("--out")
+            .arg(out));
+        assert!(o.status.success());
+        read_json(out)["labels"].as_array().unwrap().clone()
+    };
+    let good = labels(&mesh(name), &dir.path().join("good.json"));
+    let fixed = labels(&bad, &dir.path().join("fixed.json"));
+    let same = good.iter().zip(&fixed).filter(|(a, b)| a == b).count();
+    assert_eq!(
+        same,
+        good.len(),
+        "{} of {} labels differ",
+        good.len() - same,
+        good.len()
+    );
+}

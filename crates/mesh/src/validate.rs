@@ -495,6 +495,11 @@ pub struct RepairOptions {
     pub min_component_triangles: usize,
     /// Remove vertices used by no triangle (also those of removed triangles/components).
     pub remove_unreferenced: bool,
+    /// Turn triangles so that every component is consistently oriented: across each edge shared
+    /// by two triangles the two run in opposite directions. A closed component ends up facing
+    /// outward (positive signed volume); an open one keeps the orientation of the majority of
+    /// its triangles.
+    pub orient_consistently: bool,
 }
 
 impl Default for RepairOptions {
@@ -508,6 +513,7 @@ impl Default for RepairOptions {
             keep_largest_component: false,
             min_component_triangles: 0,
             remove_unreferenced: true,
+            orient_consistently: true,
         }
     }
 }
@@ -533,6 +539,8 @@ pub struct RepairReport {
     pub added_split_vertices: usize,
     /// Vertices removed as unreferenced.
     pub removed_vertices: usize,
+    /// Triangles turned (their vertex order reversed) to orient their component consistently.
+    pub turned_triangles: usize,
     /// Validation of the result.
     pub after: ValidationReport,
 }
@@ -547,6 +555,7 @@ impl RepairReport {
             + self.removed_component_triangles
             + self.added_split_vertices
             + self.removed_vertices
+            + self.turned_triangles
             == 0
     }
 }
@@ -585,6 +594,10 @@ impl fmt::Display for RepairReport {
                     "vertex copies added at non-manifold vertices",
                 ),
                 (self.removed_vertices, "unreferenced vertices removed"),
+                (
+                    self.turned_triangles,
+                    "triangles turned to orient their component consistently",
+                ),
             ];
             for (n, what) in items.iter().filter(|(n, _)| *n > 0) {
                 write!(f, "\n  {n} {what}")?;
@@ -778,6 +791,9 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
         }
     }
 
+    if options.orient_consistently {
+        report.turned_triangles = orient_consistently(&positions, &mut triangles);
+    }
     let repaired = TriMesh::new(positions, triangles)?;
     report.before = before;
     report.after = validate_with(&repaired, options.zero_area_rel);
@@ -787,6 +803,98 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
         vertex_map,
         triangle_map,
     })
+}
+
+/// Turns triangles so that each edge-connected component is consistently oriented (see
+/// [`RepairOptions::orient_consistently`]) and returns how many were turned. Orientation spreads
+/// from each component's first triangle across edges shared by exactly two triangles; a
+/// non-orientable component (a Möbius band) keeps the first orientation each triangle got.
+fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> usize {
+    use std::collections::HashMap;
+    let proper = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+    // Undirected edge → the triangles using it, with the direction each runs it in.
+    let mut edges: HashMap<(u32, u32), Vec<(u32, bool)>> = HashMap::new();
+    for (t, tri) in triangles.iter().enumerate() {
+        if !proper(tri) {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            edges
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push((t as u32, a < b));
+        }
+    }
+    let n = triangles.len();
+    // flip[t]: None = not reached yet.
+    let mut flip: Vec<Option<bool>> = vec![None; n];
+    let mut turned = 0;
+    for start in 0..n {
+        if flip[start].is_some() || !proper(&triangles[start]) {
+            continue;
+        }
+        flip[start] = Some(false);
+        let mut component = vec![start];
+        let mut closed = true;
+        let mut queue = std::collections::VecDeque::from([start]);
+        while let Some(t) = queue.pop_front() {
+            let tri = triangles[t];
+            let ft = flip[t] == Some(true);
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                let Some(users) = edges.get(&(a.min(b), a.max(b))) else {
+                    continue;
+                };
+                if users.len() == 1 {
+                    closed = false;
+                }
+                if users.len() != 2 {
+                    continue; // a boundary or non-manifold edge carries no orientation
+                }
+                let forward = (a < b) != ft; // t's direction along the edge after its flip
+                for &(u, dir) in users {
+                    let u = u as usize;
+                    if u == t || flip[u].is_some() {
+                        continue;
+                    }
+                    // Consistent: the neighbour runs the edge the other way.
+                    flip[u] = Some(dir == forward);
+                    component.push(u);
+                    queue.push_back(u);
+                }
+            }
+        }
+        let flipped = component.iter().filter(|&&t| flip[t] == Some(true)).count();
+        let invert = if closed {
+            // Signed volume with the chosen orientation: negative means facing inward.
+            let volume: f64 = component
+                .iter()
+                .map(|&t| {
+                    let [a, b, c] =
+                        triangles[t].map(|v| nalgebra::Vector3::from(positions[v as usize]));
+                    let v = a.dot(&b.cross(&c));
+                    if flip[t] == Some(true) {
+                        -v
+                    } else {
+                        v
+                    }
+                })
+                .sum();
+            volume < 0.0
+        } else {
+            // Open: keep the orientation most triangles already had.
+            2 * flipped > component.len()
+        };
+        for &t in &component {
+            let f = flip[t] == Some(true);
+            if f != invert {
+                triangles[t].swap(1, 2);
+                turned += 1;
+            }
+        }
+    }
+    turned
 }
 
 impl TriMesh {

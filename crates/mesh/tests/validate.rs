@@ -257,10 +257,18 @@ proptest! {
                 for (v, &orig) in fixed.vertex_map.iter().enumerate() {
                     prop_assert_eq!(fixed.mesh.positions[v], m.positions[orig as usize]);
                 }
+                // Each triangle is the input's, renamed, or the input's turned (the orientation
+                // repair reverses its order), and the report counts the turned ones.
+                let mut turned = 0;
                 for (t, &orig) in fixed.triangle_map.iter().enumerate() {
                     let renamed = fixed.mesh.triangles[t].map(|v| fixed.vertex_map[v as usize]);
-                    prop_assert_eq!(renamed, m.triangles[orig as usize]);
+                    let [a, b, c] = m.triangles[orig as usize];
+                    if renamed != [a, b, c] {
+                        prop_assert_eq!(renamed, [a, c, b]);
+                        turned += 1;
+                    }
                 }
+                prop_assert_eq!(turned, fixed.report.turned_triangles);
                 let kept = fixed.mesh.num_vertices() - fixed.report.added_split_vertices;
                 prop_assert!(fixed.vertex_map[..kept].windows(2).all(|w| w[0] < w[1]));
                 let after = &fixed.report.after;
@@ -281,5 +289,79 @@ proptest! {
             }
             Err(e) => prop_assert!(false, "unexpected error {e}"),
         }
+    }
+}
+
+/// Signed volume of a closed mesh (positive when its triangles face outward).
+fn signed_volume(m: &TriMesh) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| nalgebra::Vector3::from(m.positions[v as usize]));
+            a.dot(&b.cross(&c)) / 6.0
+        })
+        .sum()
+}
+
+/// The default repair orients every component consistently: a closed one outward, an open one
+/// as most of its triangles were, and it counts the triangles it turned.
+#[test]
+fn repair_orients_components_consistently_and_outward() {
+    let tet = symcorr_mesh::testmesh::tetrahedron();
+    assert!(signed_volume(&tet) > 0.0);
+    // One face turned: the repair turns it back.
+    let mut one = tet.clone();
+    one.triangles[2].swap(1, 2);
+    assert_eq!(validate(&one).inconsistently_oriented_edges, 3);
+    let r = repair(&one, &RepairOptions::default()).unwrap();
+    assert_eq!(r.report.turned_triangles, 1);
+    assert_eq!(r.mesh.triangles, tet.triangles);
+    assert!(!r.report.unchanged());
+    // Every face inward: consistent, but a closed surface must face outward.
+    let mut inward = tet.clone();
+    for t in &mut inward.triangles {
+        t.swap(1, 2);
+    }
+    let r = repair(&inward, &RepairOptions::default()).unwrap();
+    assert_eq!(r.report.turned_triangles, 4);
+    assert!(signed_volume(&r.mesh) > 0.0);
+    assert_eq!(r.report.after.inconsistently_oriented_edges, 0);
+    // An open strip of three triangles with the middle one turned: the majority wins.
+    let strip = TriMesh::new(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 2.0, 0.0],
+        ],
+        vec![[0, 1, 2], [1, 2, 3], [2, 3, 4]],
+    )
+    .unwrap();
+    let r = repair(&strip, &RepairOptions::default()).unwrap();
+    assert_eq!(r.report.turned_triangles, 1);
+    assert_eq!(r.mesh.triangles[1], [1, 3, 2]);
+    assert_eq!(r.report.after.inconsistently_oriented_edges, 0);
+    // A consistent mesh is left alone, and the option can be switched off.
+    let r = repair(&tet, &RepairOptions::default()).unwrap();
+    assert!(r.report.unchanged());
+    let off = RepairOptions {
+        orient_consistently: false,
+        ..RepairOptions::default()
+    };
+    assert_eq!(repair(&one, &off).unwrap().report.turned_triangles, 0);
+}
+
+/// The bundled bodies are consistent and face outward: the repair leaves them unchanged.
+#[test]
+fn bundled_bodies_need_no_turning() {
+    let dir =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies/meshes");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let m = symcorr_mesh::io::read(&path).unwrap().mesh;
+        let r = repair(&m, &RepairOptions::default()).unwrap();
+        assert_eq!(r.report.turned_triangles, 0, "{}", path.display());
+        assert!(signed_volume(&m) > 0.0, "{}", path.display());
     }
 }

@@ -202,6 +202,7 @@ pub fn repair_json(r: &symcorr_mesh::RepairReport, mesh: &symcorr_mesh::TriMesh)
         "removed_components": r.removed_components,
         "removed_vertices": r.removed_vertices,
         "added_split_vertices": r.added_split_vertices,
+        "turned_triangles": r.turned_triangles,
         "components": r.after.components(),
         "boundary_loops": r.after.boundary_loops.len(),
         "non_manifold_edges": r.after.non_manifold_edges.len(),

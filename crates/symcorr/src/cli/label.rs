@@ -82,6 +82,23 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
             .then(symcorr_attach::BoundaryConvention::makehuman),
         ..AttachOptions::default()
     };
+    // Bone heat and the handedness check read the surface's orientation: turn inconsistently
+    // oriented triangles first (nothing else is repaired, so vertex ids stay the input's).
+    let only_orientation = symcorr_mesh::RepairOptions {
+        remove_degenerate: false,
+        remove_duplicates: false,
+        remove_non_manifold_edge_triangles: false,
+        split_non_manifold_vertices: false,
+        keep_largest_component: false,
+        min_component_triangles: 0,
+        remove_unreferenced: false,
+        orient_consistently: true,
+        ..symcorr_mesh::RepairOptions::default()
+    };
+    let oriented = symcorr_mesh::repair(&mesh, &only_orientation)
+        .map_err(|e| CliError::with(a.mesh.display(), e))?;
+    let turned = oriented.report.turned_triangles;
+    let mesh = oriented.mesh;
     let att = attach(&mesh, &skeleton, &options).map_err(|e| {
         CliError(format!(
             "{} with {}: {e}",
@@ -112,8 +129,9 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
     }
     batch.commit().map_err(cli)?;
     eprintln!(
-        "labelled {} vertices ({} joints moved, alignment scale {}, mirrored fixed: {}, {} component(s), {} fallback)",
+        "labelled {} vertices ({} triangles turned to a consistent orientation, {} joints moved, alignment scale {}, mirrored fixed: {}, {} component(s), {} fallback)",
         mesh.num_vertices(),
+        turned,
         d.joint_moves.len(),
         al.scale,
         d.mirror.swapped,
