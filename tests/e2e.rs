@@ -371,6 +371,61 @@ fn bad_inputs_give_one_line_errors_and_no_output() {
     assert!(e.contains("cut.ply"), "{e}");
 }
 
+/// Exit status 1, exactly one line on stderr (`symcorr: …`, no panic), nothing on stdout.
+fn assert_one_line_error(o: &Output) -> String {
+    let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "stderr: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    assert!(stderr.starts_with("symcorr: "), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    stderr
+}
+
+#[test]
+fn too_many_eigenpairs_is_a_user_error() {
+    // `spectrum --k N`, N at and above the 13,380 vertices of the body, and N − 1 (refused by
+    // the solver's memory limit; it used to abort on a failed allocation).
+    let body = mesh("s0_rest");
+    for k in ["13381", "13380", "13379"] {
+        let o = bin()
+            .arg("spectrum")
+            .arg(&body)
+            .args(["--k", k, "--json"])
+            .output()
+            .unwrap();
+        let e = assert_one_line_error(&o);
+        assert!(
+            e.contains(&format!("k = {k} eigenpairs of a 13380-vertex mesh")),
+            "{e}"
+        );
+    }
+    // `match --method paper --eigenpairs` too large: the same error, no output file.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("corr.json");
+    let o = bin()
+        .arg("match")
+        .arg(&body)
+        .arg(mesh("s0_walk-10"))
+        .arg("--template-joints")
+        .arg(joints("s0_rest"))
+        .arg("--target-joints")
+        .arg(joints("s0_walk-10"))
+        .arg("--out")
+        .arg(&out)
+        .args(["--method", "paper", "--eigenpairs", "13000"])
+        .output()
+        .unwrap();
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("k = 13000 eigenpairs"), "{e}");
+    assert!(!out.exists());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
 #[test]
 fn usage_errors_exit_2_and_help_has_examples() {
     let o = bin().args(["match", "only-one.off"]).output().unwrap();

@@ -151,11 +151,21 @@ pub fn si_hks(e: &Eigenpairs, params: &SiHksParams) -> Result<Mat<f64>, Spectral
     {
         return bad("need tau_step > 0, alpha > 1 and tau_end > tau_start");
     }
-    let samples = ((p.tau_end - p.tau_start) / p.tau_step + 1e-9).floor() as usize + 1;
+    let samples_f = ((p.tau_end - p.tau_start) / p.tau_step + 1e-9).floor() + 1.0;
+    // The heat kernel is sampled into an n × samples matrix: refuse a window too long for
+    // memory before the count is converted (a saturating cast plus one would overflow).
+    let cols = if samples_f >= usize::MAX as f64 {
+        usize::MAX
+    } else {
+        samples_f as usize
+    };
+    crate::check_dense("si-HKS heat kernel samples", e.num_vertices(), cols)?;
+    let samples = cols;
     let len = samples - 1; // length of the derivative sequence
     if len < 1 || p.frequencies == 0 || p.frequencies > len / 2 + 1 {
         return bad("frequencies must be in 1..=samples/2");
     }
+    crate::check_dense("si-HKS DFT basis", p.frequencies, len)?;
     let times: Vec<f64> = (0..samples)
         .map(|j| p.alpha.powf(p.tau_start + p.tau_step * j as f64))
         .collect();

@@ -25,8 +25,9 @@
 //!    then every 2), so the iteration stops as soon as all wanted pairs are there rather than
 //!    only when the basis is full.
 //! 5. Thick restart (Wu & Simon 2000) when the basis reaches its size limit: keep the best Ritz
-//!    vectors, continue from the residual block. The basis is `n × (m+b)`, so memory is bounded
-//!    by [`EigenOptions::memory_budget_bytes`] whatever k is.
+//!    vectors, continue from the residual block. The basis is `n × (m+b)`; m is shrunk towards
+//!    [`EigenOptions::memory_budget_bytes`] but never below `r + 3b`, so a k whose whole dense
+//!    working set would exceed [`EigenOptions::dense_limit_bytes`] is refused up front.
 //! 6. Finish: `φ = M^-½ y` for the converged Ritz vectors; the values returned are the Rayleigh
 //!    quotients `φᵀLφ / φᵀMφ` with the exact `L` (second-order accurate in the Ritz vector
 //!    error, so they agree with scipy to ~1e-13). A dense Rayleigh–Ritz rotation with `L` gave
@@ -74,7 +75,18 @@ pub struct EigenOptions {
     /// have exactly repeated eigenvalues (an icosphere up to 5-fold); with `block_size` below
     /// the multiplicity, restarted Lanczos can miss copies.
     pub block_size: usize,
+    /// Largest dense working set [`eigenpairs`] may allocate, in bytes (basis, result vectors,
+    /// restart and Ritz-vector copies, projected matrix and its eigendecomposition). A `k` whose working set is larger is refused with
+    /// [`SpectralError::TooManyEigenpairs`] before anything is allocated, instead of aborting
+    /// on a failed allocation. Default 8 GiB: a third of a 24 GiB machine, so the two meshes
+    /// of a `match` fit side by side with room to spare. Unlike `memory_budget_bytes` (a
+    /// target the basis size is shrunk to meet) this is a hard limit; it never changes the
+    /// result of a solve that is allowed.
+    pub dense_limit_bytes: usize,
 }
+
+/// Default of [`EigenOptions::dense_limit_bytes`]: 8 GiB.
+pub const DEFAULT_DENSE_LIMIT_BYTES: usize = 8 << 30;
 
 impl Default for EigenOptions {
     fn default() -> Self {
@@ -86,6 +98,7 @@ impl Default for EigenOptions {
             max_restarts: 200,
             seed: 0x5eed,
             block_size: 8,
+            dense_limit_bytes: DEFAULT_DENSE_LIMIT_BYTES,
         }
     }
 }
@@ -246,8 +259,11 @@ fn random_orthogonal(basis: MatRef<'_, f64>, w: &mut Mat<f64>, rng: &mut SplitMi
 
 /// Computes the `k` smallest eigenpairs of `L φ = λ M φ` (see the module docs for the method).
 ///
-/// Errors: `k == 0` or `k > n` ([`SpectralError::InvalidArgument`]), factorisation failure, or
-/// no convergence within `max_restarts` ([`SpectralError::NotConverged`]).
+/// Errors: `k == 0` ([`SpectralError::InvalidArgument`]); `k > n`, or a k whose dense working
+/// set (basis, result, restart and Ritz copies, projected matrix) would exceed
+/// [`EigenOptions::dense_limit_bytes`] ([`SpectralError::TooManyEigenpairs`], checked before
+/// anything is allocated); factorisation failure; or no convergence within `max_restarts`
+/// ([`SpectralError::NotConverged`]).
 ///
 /// ```
 /// use symcorr_mesh::TriMesh;
@@ -269,12 +285,48 @@ pub fn eigenpairs(
     options: &EigenOptions,
 ) -> Result<Eigenpairs, SpectralError> {
     let n = laplacian.len();
-    if k == 0 || k > n {
+    if k == 0 {
         return Err(SpectralError::InvalidArgument(format!(
-            "asked for {k} eigenpairs of a mesh with {n} vertices (need 1 ≤ k ≤ n)"
+            "asked for 0 eigenpairs of a mesh with {n} vertices (need k ≥ 1)"
         )));
     }
+    // k ≤ n: there are only n eigenpairs. k = n itself is supported (the whole spectrum of
+    // a small mesh: plain Lanczos spans the deflated space, see the `r > dim` check below);
+    // for large n it is refused by the memory limit below, since it implies an n × n basis.
+    if k > n {
+        return Err(SpectralError::TooManyEigenpairs {
+            k,
+            vertices: n,
+            max: n,
+            reason: "a mesh has as many eigenpairs as vertices".into(),
+        });
+    }
     let (component, nc) = laplacian.components();
+    // The dense working set k implies (basis size and block size as the solver will choose
+    // them) must fit in `dense_limit_bytes`; refused here, before any n × k allocation.
+    let limit = options.dense_limit_bytes as u128;
+    if plan_bytes(n, nc, k, options) > limit {
+        // Smallest refused k (the estimate is non-decreasing in k: the basis grows with k).
+        let (mut lo, mut hi) = (1usize, k);
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if plan_bytes(n, nc, mid, options) > limit {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        return Err(SpectralError::TooManyEigenpairs {
+            k,
+            vertices: n,
+            max: lo - 1,
+            reason: format!(
+                "the eigensolver's dense storage would be {:.1} GiB, over its limit of {:.1} GiB",
+                plan_bytes(n, nc, k, options) as f64 / GIB,
+                limit as f64 / GIB
+            ),
+        });
+    }
     let mut area_c = vec![0.0; nc];
     for (m, &c) in laplacian.mass.iter().zip(component) {
         area_c[c as usize] += m;
@@ -333,25 +385,7 @@ pub fn eigenpairs(
             "asked for {k} eigenpairs but only {dim} exist beyond the {nc} constant ones"
         )));
     }
-    let m0 = options.max_basis.unwrap_or((2 * r + 20).max(r + 40));
-    let budget_cols = options.memory_budget_bytes / (8 * n);
-    let mut b = options.block_size.max(1);
-    let mut m;
-    if m0.min(budget_cols) >= dim {
-        // The whole deflated space fits: plain Lanczos spans it exactly.
-        b = 1;
-        m = dim;
-    } else {
-        m = m0.min(budget_cols.saturating_sub(b)).max(r + 3 * b);
-        m = m.div_ceil(b) * b;
-        if m > dim {
-            b = 1;
-            m = m0.min(dim).max(r);
-        }
-    }
-    if b == 1 && m < dim {
-        m = m.max(r + 2).min(dim);
-    }
+    let (b, m) = basis_plan(n, dim, r, options);
 
     let mut rng = SplitMix(options.seed);
     let mut q = Mat::<f64>::zeros(n, m + b);
@@ -501,6 +535,57 @@ pub fn eigenpairs(
         }
         start = l;
     }
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Block size b and basis size m (columns `0..m`, plus one block for the residual vectors) for
+/// r wanted non-constant pairs in a deflated space of dimension `dim` (`n` rows).
+fn basis_plan(n: usize, dim: usize, r: usize, options: &EigenOptions) -> (usize, usize) {
+    let m0 = options.max_basis.unwrap_or((2 * r + 20).max(r + 40));
+    let budget_cols = options.memory_budget_bytes / (8 * n.max(1));
+    let mut b = options.block_size.max(1);
+    let mut m;
+    if m0.min(budget_cols) >= dim {
+        // The whole deflated space fits: plain Lanczos spans it exactly.
+        b = 1;
+        m = dim;
+    } else {
+        m = m0.min(budget_cols.saturating_sub(b)).max(r + 3 * b);
+        m = m.div_ceil(b) * b;
+        if m > dim {
+            b = 1;
+            m = m0.min(dim).max(r);
+        }
+    }
+    if b == 1 && m < dim {
+        m = m.max(r + 2).min(dim);
+    }
+    (b, m)
+}
+
+/// Bytes of the dense matrices [`eigenpairs`] holds at its peak for k pairs of an n-vertex
+/// Laplacian with nc components (an upper estimate, in `u128` so that it cannot overflow).
+fn plan_bytes(n: usize, nc: usize, k: usize, options: &EigenOptions) -> u128 {
+    let n_const = nc.min(k);
+    let r = k - n_const;
+    if r == 0 {
+        return 8 * n as u128 * k as u128;
+    }
+    let dim = n.saturating_sub(nc);
+    let (b, m) = basis_plan(n, dim, r.min(dim), options);
+    dense_bytes(n, k, r, b, m)
+}
+
+/// Peak dense storage of [`eigenpairs`], in bytes, for n rows, k pairs (r of them
+/// non-constant), block size b and basis size m: the result `n × k`, the basis `n × (m+b)`
+/// with the block `n × b`, the thick-restart copy (`n × l`, `l < m`), the copy of the basis
+/// made when a block has to be restarted from a random direction (`n × (m+b)`), the Ritz
+/// vectors and their `L`-products at the finish (`2 · n × r`), and the projected matrix with
+/// its eigendecomposition (about four `m × m`).
+fn dense_bytes(n: usize, k: usize, r: usize, b: usize, m: usize) -> u128 {
+    let (n, k, r, b, m) = (n as u128, k as u128, r as u128, b as u128, m as u128);
+    8 * (n * (k + 3 * (m + b) + b + 2 * r) + 4 * m * m)
 }
 
 /// Ritz pairs of a projected matrix, largest θ first, and how many of the wanted ones have
@@ -681,4 +766,29 @@ fn finish(
         factorization_s: 0.0,
         lanczos_s: 0.0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The working-set estimate refuses the sizes that aborted on allocation (the 13k body
+    /// near k = n, k = 3000 at 200k vertices) and accepts the pipeline's sizes.
+    #[test]
+    fn dense_estimate_refuses_oversize_and_accepts_usual_sizes() {
+        let o = EigenOptions::default();
+        let limit = o.dense_limit_bytes as u128;
+        assert!(plan_bytes(13_380, 1, 13_379, &o) > limit);
+        assert!(plan_bytes(13_380, 1, 13_000, &o) > limit);
+        assert!(plan_bytes(200_000, 1, 3_000, &o) > limit);
+        assert!(plan_bytes(13_380, 1, 60, &o) < limit / 100);
+        assert!(plan_bytes(100_000, 1, 300, &o) < limit / 2);
+        // Non-decreasing in k (the binary search for the largest allowed k relies on it).
+        let mut last = 0;
+        for k in (1..13_380).step_by(97) {
+            let b = plan_bytes(13_380, 1, k, &o);
+            assert!(b >= last, "k = {k}");
+            last = b;
+        }
+    }
 }

@@ -36,7 +36,10 @@
 //!   < 1e-12·longest edge²) are ignored; a vertex left with zero mass is an error
 //!   ([`SpectralError::ZeroMass`]) — repair the mesh first. Bad indices are errors, not panics.
 //! * Default shift `ε = 1e-8·n/area` (scale-invariant), tolerance 1e-10 on the shift-inverted
-//!   residual, block size 8, basis `max(2k+20, k+40)` columns capped by a 1 GiB budget.
+//!   residual, block size 8, basis `max(2k+20, k+40)` columns capped by a 1 GiB budget (but at least `k + 3b`); a k
+//!   whose dense working set would exceed 8 GiB is refused
+//!   ([`SpectralError::TooManyEigenpairs`]), and so are descriptor matrices over
+//!   [`DENSE_LIMIT_BYTES`] ([`SpectralError::TooLarge`]).
 //! * Curvature at boundary vertices uses `π − Σα`. Heat method: `t = h²` (mean edge length),
 //!   Neumann boundary conditions, one pinned vertex per component; other components are
 //!   infinitely far. Base-set radius in `√(total area)` units, its geodesics Dijkstra.
@@ -57,12 +60,35 @@ pub mod testmesh;
 
 pub use curvature::gaussian_curvature;
 pub use descriptors::{hks, hks_times, si_hks, SiHksParams};
-pub use eigen::{eigenpairs, EigenOptions, Eigenpairs};
+pub use eigen::{eigenpairs, EigenOptions, Eigenpairs, DEFAULT_DENSE_LIMIT_BYTES};
 pub use geodesic::{dijkstra, dijkstra_many, DijkstraScratch, EdgeGraph, HeatGeodesics};
 pub use laplacian::{Laplacian, SystemFactor, COT_CLAMP, DEGENERATE_REL};
 pub use sampling::base_vertex_set;
 
 use thiserror::Error;
+
+/// Largest dense matrix the descriptor functions ([`hks`], [`si_hks`]) allocate, in bytes:
+/// 8 GiB (a third of a 24 GiB machine). Larger requests are [`SpectralError::TooLarge`].
+pub const DENSE_LIMIT_BYTES: usize = 8 << 30;
+
+/// `Err(TooLarge)` when a `rows × cols` f64 matrix is over [`DENSE_LIMIT_BYTES`].
+pub(crate) fn check_dense(
+    what: &'static str,
+    rows: usize,
+    cols: usize,
+) -> Result<(), SpectralError> {
+    let bytes = 8 * rows as u128 * cols as u128;
+    if bytes > DENSE_LIMIT_BYTES as u128 {
+        return Err(SpectralError::TooLarge {
+            what,
+            rows,
+            cols,
+            gib: bytes as f64 / (1u64 << 30) as f64,
+            limit_gib: (DENSE_LIMIT_BYTES >> 30) as f64,
+        });
+    }
+    Ok(())
+}
 
 /// Everything that can go wrong in spectral computations.
 #[derive(Debug, Error)]
@@ -80,6 +106,35 @@ pub enum SpectralError {
     /// An argument is out of range (message says which).
     #[error("invalid argument: {0}")]
     InvalidArgument(String),
+    /// More eigenpairs were asked for than the solver can compute for this mesh: k must be at
+    /// most the number of vertices, and the dense storage the Lanczos basis for k needs must
+    /// fit in [`EigenOptions::dense_limit_bytes`]. Nothing was allocated.
+    #[error("k = {k} eigenpairs of a {vertices}-vertex mesh: k must be at most {max} ({reason})")]
+    TooManyEigenpairs {
+        /// Eigenpairs asked for.
+        k: usize,
+        /// Vertices of the mesh.
+        vertices: usize,
+        /// Largest k allowed for this mesh and these options.
+        max: usize,
+        /// Why (which requirement k breaks).
+        reason: String,
+    },
+    /// A dense matrix sized by the input would exceed the documented size limit
+    /// ([`DENSE_LIMIT_BYTES`]); refused before allocating.
+    #[error("{what} would be a {rows} × {cols} dense matrix ({gib:.1} GiB), over the limit of {limit_gib:.0} GiB")]
+    TooLarge {
+        /// What the matrix is.
+        what: &'static str,
+        /// Rows.
+        rows: usize,
+        /// Columns.
+        cols: usize,
+        /// Its size in GiB.
+        gib: f64,
+        /// The limit in GiB.
+        limit_gib: f64,
+    },
     /// The eigensolver did not converge within its iteration budget.
     #[error("eigensolver did not converge: {converged} of {wanted} eigenpairs after {iterations} Lanczos steps (largest relative residual {residual:.2e})")]
     NotConverged {

@@ -4,7 +4,9 @@
 mod common;
 
 use common::*;
-use symcorr_spectral::{eigenpairs, EigenOptions, Eigenpairs, Laplacian};
+use symcorr_spectral::{
+    eigenpairs, si_hks, EigenOptions, Eigenpairs, Laplacian, SiHksParams, SpectralError,
+};
 
 fn m_orthonormality_defect(lap: &Laplacian, e: &Eigenpairs) -> f64 {
     let k = e.len();
@@ -140,7 +142,14 @@ fn bad_k_and_non_convergence_are_errors() {
     let mesh = icosphere(1);
     let lap = Laplacian::new(&mesh).unwrap();
     assert!(eigenpairs(&lap, 0, &EigenOptions::default()).is_err());
-    assert!(eigenpairs(&lap, mesh.num_vertices() + 1, &EigenOptions::default()).is_err());
+    let err = eigenpairs(&lap, mesh.num_vertices() + 1, &EigenOptions::default()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            symcorr_spectral::SpectralError::TooManyEigenpairs { .. }
+        ),
+        "{err}"
+    );
     let mesh = icosphere(3);
     let lap = Laplacian::new(&mesh).unwrap();
     let opts = EigenOptions {
@@ -170,4 +179,87 @@ fn all_eigenpairs_of_a_small_mesh() {
         assert!((x - y).abs() < 1e-9 * y.abs().max(1.0), "{x} vs {y}");
     }
     assert!(m_orthonormality_defect(&lap, &e) < 1e-10);
+}
+
+#[test]
+fn k_above_vertex_count_is_a_typed_error() {
+    // The 12-vertex icosahedron: k = 12 is the whole spectrum, k = 13 does not exist.
+    let mesh = icosphere(0);
+    let n = mesh.num_vertices();
+    assert_eq!(n, 12);
+    let lap = Laplacian::new(&mesh).unwrap();
+    assert_eq!(
+        eigenpairs(&lap, n, &EigenOptions::default()).unwrap().len(),
+        n
+    );
+    let err = eigenpairs(&lap, n + 1, &EigenOptions::default()).unwrap_err();
+    match &err {
+        SpectralError::TooManyEigenpairs {
+            k, vertices, max, ..
+        } => assert_eq!((*k, *vertices, *max), (13, 12, 12)),
+        other => panic!("{other}"),
+    }
+    let text = err.to_string();
+    assert!(
+        text.starts_with("k = 13 eigenpairs of a 12-vertex mesh: k must be at most 12"),
+        "{text}"
+    );
+    assert!(!text.contains('\n'));
+}
+
+#[test]
+fn oversize_dense_working_set_is_refused_before_allocating() {
+    // With the default 8 GiB limit: k = n − 1 on the 13k-vertex body implies a ~13k-column
+    // basis and a dense projected matrix of the same order (over 8 GiB in all). Refused at
+    // once; before the check this allocated gigabytes and aborted on faer's AllocError.
+    let big = body();
+    let n = big.num_vertices();
+    let lap = Laplacian::new(&big).unwrap();
+    let err = eigenpairs(&lap, n - 1, &EigenOptions::default()).unwrap_err();
+    assert!(err_mentions_limit(&err), "{err}");
+    assert!(
+        matches!(err, SpectralError::TooManyEigenpairs { .. }),
+        "{err}"
+    );
+    // A tight limit on a small mesh: refused with the largest allowed k.
+    let mesh = icosphere(1);
+    let lap = Laplacian::new(&mesh).unwrap();
+    let tight = EigenOptions {
+        dense_limit_bytes: 40_000,
+        ..Default::default()
+    };
+    let err = eigenpairs(&lap, 30, &tight).unwrap_err();
+    let SpectralError::TooManyEigenpairs { k, max, .. } = err else {
+        panic!("{err}");
+    };
+    assert_eq!(k, 30);
+    assert!(max < 30);
+    // The largest allowed k is computed, not guessed: max + 1 is refused.
+    assert!(matches!(
+        eigenpairs(&lap, max + 1, &tight),
+        Err(SpectralError::TooManyEigenpairs { .. })
+    ));
+    assert!(err_mentions_limit(
+        &eigenpairs(&lap, 30, &tight).unwrap_err()
+    ));
+}
+
+fn err_mentions_limit(e: &SpectralError) -> bool {
+    let t = e.to_string();
+    t.contains("GiB") && t.contains("limit")
+}
+
+#[test]
+fn oversize_si_hks_window_is_refused() {
+    let mesh = icosphere(1);
+    let lap = Laplacian::new(&mesh).unwrap();
+    let e = eigenpairs(&lap, 6, &EigenOptions::default()).unwrap();
+    // 1e12 time samples per vertex: an n × 1e12 matrix, refused instead of aborting.
+    let params = SiHksParams {
+        tau_step: 1e-12,
+        ..SiHksParams::default()
+    };
+    let err = si_hks(&e, &params).unwrap_err();
+    assert!(matches!(err, SpectralError::TooLarge { .. }), "{err}");
+    assert!(err.to_string().contains("si-HKS"), "{err}");
 }

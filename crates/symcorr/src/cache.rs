@@ -153,6 +153,8 @@ impl CacheKey {
             max_restarts,
             seed,
             block_size,
+            // A hard limit on what may be computed; it never changes a result.
+            dense_limit_bytes: _,
         } = options;
         h.update(tol.to_bits().to_le_bytes());
         h.update(opt_u64(shift.map(f64::to_bits)));
