@@ -379,7 +379,7 @@ fn frame_from_json(
         }
         conf[idx] = c;
     }
-    let mut flagged = [false; 20];
+    let mut flagged = [false; Joint::COUNT];
     for name in frame.interpolated.unwrap_or_default() {
         let j = Joint::from_name(&normalise_name(&name))
             .ok_or_else(|| format!("interpolated: {name:?} is not a kinect_v1 joint name"))?;

@@ -96,8 +96,8 @@ impl SkeletonKind {
 }
 
 /// Kinect v1's 20 joints in SDK order: the canonical [`Joint`] names (one owner of the spelling).
-const KINECT_V1_NAMES: [&str; 20] = {
-    let mut names = [""; 20];
+const KINECT_V1_NAMES: [&str; Joint::COUNT] = {
+    let mut names = [""; Joint::COUNT];
     let mut i = 0;
     while i < 20 {
         names[i] = Joint::ALL[i].name();
@@ -234,14 +234,14 @@ pub(crate) fn normalise_name(name: &str) -> String {
 /// A partially known canonical skeleton: what an importer measured.
 #[derive(Debug, Clone)]
 pub(crate) struct Partial {
-    pub positions: [Option<Point3<f64>>; 20],
-    pub confidence: [f64; 20],
+    pub positions: [Option<Point3<f64>>; Joint::COUNT],
+    pub confidence: [f64; Joint::COUNT],
 }
 
 impl Partial {
     pub fn new() -> Self {
         Partial {
-            positions: [None; 20],
+            positions: [None; Joint::COUNT],
             confidence: [0.0; 20],
         }
     }

@@ -17,7 +17,7 @@
 use crate::error::KinectError;
 use crate::joints::JointLog;
 use nalgebra::{distance, Point3};
-use symcorr_skeleton::{Bone, Skeleton, BONES};
+use symcorr_skeleton::{Bone, Joint, Skeleton, BONES};
 
 /// Which skeleton of a log to use.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -180,8 +180,8 @@ impl JointLog {
             )));
         }
         // Per-coordinate medians: not a point any frame had, but robust per axis.
-        let med = |frames: &[&Skeleton]| -> [Point3<f64>; 20] {
-            let mut m = [Point3::origin(); 20];
+        let med = |frames: &[&Skeleton]| -> [Point3<f64>; Joint::COUNT] {
+            let mut m = [Point3::origin(); Joint::COUNT];
             for (j, mj) in m.iter_mut().enumerate() {
                 for (k, c) in mj.iter_mut().enumerate() {
                     let mut v: Vec<f64> = frames.iter().map(|s| s.positions[j][k]).collect();
