@@ -339,6 +339,12 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     for out in outputs {
         check_output(out, &inputs).map_err(|e| CliError(e.to_string()))?;
     }
+    if let Some(dir) = args.ply_out.as_ref().filter(|d| d.exists() && !d.is_dir()) {
+        return Err(CliError(format!(
+            "--ply-out {}: exists and is not a directory",
+            dir.display()
+        )));
+    }
     // Figures that need the paper's data are refused before any work.
     let paper = args.method.method == MethodArg::Paper;
     if args.base_set_out.is_some() && !paper {
