@@ -6,10 +6,11 @@
 //! in the mesh, the best of the 24 axis rotations about the bounding-box centres. Refused when
 //! nothing fits ([`FIT_LIMIT`], [`COVER_LIMIT`]).
 
-use crate::geom::{closest_on_segment, Joints};
+use crate::geom::Joints;
 use crate::repair::{extent, skeleton_height};
 use crate::{AttachError, FrameAlignment};
 use nalgebra::{distance, Matrix3, Point3, Rotation3, Vector3};
+use symcorr_mesh::geometry::closest_on_segment;
 use symcorr_mesh::TriMesh;
 
 /// Largest accepted median joint-to-surface distance, in skeleton heights. Joints inside a

@@ -16,11 +16,12 @@
 //! bone's label.
 
 use crate::bvh::TriangleBvh;
-use crate::geom::{closest_on_segment, Joints};
+use crate::geom::Joints;
 use crate::{AttachError, BoneWeights, ComponentReport, BONES};
 use faer::Mat;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
+use symcorr_mesh::geometry::closest_on_segment;
 use symcorr_mesh::TriMesh;
 use symcorr_spectral::{Laplacian, DEGENERATE_REL};
 

@@ -25,9 +25,10 @@
 //! `docs/decisions/2026-12-02-attach-refinement-off-circle.md`,
 //! `docs/decisions/2026-12-02-attach-noisy-joint-limit.md`.
 
-use crate::geom::{closest_on_segment, unit, Joints};
+use crate::geom::{unit, Joints};
 use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
 use nalgebra::{distance, Matrix3, Point3, Vector3};
+use symcorr_mesh::geometry::closest_on_segment;
 use symcorr_mesh::TriMesh;
 
 /// A swap needs the combined facing evidence ([`crate::MirrorCheck::evidence`]) below

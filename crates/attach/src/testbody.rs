@@ -2,10 +2,10 @@
 //! with reference labels (the segment whose capsule surface is nearest). Used by the tests,
 //! benches and documentation examples; not part of the stable API.
 
-use crate::geom::closest_on_segment;
 use crate::{bone_segment, Joint, Segment, Skeleton, BONES};
 use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
+use symcorr_mesh::geometry::closest_on_segment;
 use symcorr_mesh::TriMesh;
 
 /// Capsule radius per bone of [`BONES`] (metres at scale 1).
