@@ -39,6 +39,19 @@ pub enum AttachError {
         /// Median vertex-to-bone distance in skeleton heights.
         coverage: f64,
     },
+    /// The skeleton fails a fit check (`FitQuality`) in every placement the rotation search
+    /// tried, and the options say to refuse.
+    #[error("the skeleton does not fit the mesh: {check} is {value:.3} (at most {limit} accepted): {meaning}; are the joints from another frame, pose or subject? (--accept-poor-fit uses them anyway)")]
+    PoorFit {
+        /// The worst failed check's name.
+        check: &'static str,
+        /// Its measured value.
+        value: f64,
+        /// Its limit.
+        limit: f64,
+        /// What its failure usually means.
+        meaning: &'static str,
+    },
     /// The skeleton's left and right are exchanged relative to the mesh and the options say
     /// to refuse rather than fix.
     #[error("the skeleton's left and right are swapped relative to the mesh (the feet point backwards in the skeleton's torso frame: evidence {evidence:.2}); swap the joint names or allow the fix")]

@@ -55,6 +55,7 @@ mod bvh;
 mod convention;
 mod convention_makehuman;
 mod error;
+mod fit;
 mod geom;
 mod handedness;
 mod heat;
@@ -68,6 +69,7 @@ pub use convention::{
     SIDE_MARGIN,
 };
 pub use error::AttachError;
+pub use fit::{FitCheck, FitCheckKind, FitQuality, FIT_THRESHOLD, REACH};
 pub use handedness::{handedness_verdict, Handedness, HandednessReport};
 pub use symcorr_skeleton::{
     BodySide, Bone, Joint, Plane, SagittalPlanes, Segment, Skeleton, BONES,
@@ -87,6 +89,16 @@ pub enum MirrorPolicy {
     Ignore,
 }
 
+/// What to do when the skeleton fails a fit check ([`FitQuality`]) even after the rotation
+/// search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PoorFitPolicy {
+    /// Return [`AttachError::PoorFit`] naming the worst check (default).
+    Refuse,
+    /// Attach anyway; [`FitQuality::accepted_poor_fit`] says so.
+    Accept,
+}
+
 /// Options of [`attach`]. `AttachOptions::default()` is what [`label`] uses.
 #[derive(Debug, Clone)]
 pub struct AttachOptions {
@@ -96,6 +108,8 @@ pub struct AttachOptions {
     pub refine_joints: bool,
     /// Handling of a left/right-swapped skeleton.
     pub mirror: MirrorPolicy,
+    /// Handling of a skeleton that fails a fit check ([`FitQuality`]).
+    pub poor_fit: PoorFitPolicy,
     /// Baran–Popović heat constant `c` in `H_ii = c/d²` (mass-weighted system).
     pub heat_constant: f64,
     /// Weights below this (after clipping, before normalisation) are dropped.
@@ -135,6 +149,7 @@ impl Default for AttachOptions {
             align: true,
             refine_joints: true,
             mirror: MirrorPolicy::Fix,
+            poor_fit: PoorFitPolicy::Refuse,
             heat_constant: 1.0,
             min_weight: 0.01,
             max_joint_move: 0.08,
@@ -316,6 +331,8 @@ pub struct Diagnostics {
     pub alignment: FrameAlignment,
     /// The handedness check.
     pub mirror: MirrorCheck,
+    /// How well the skeleton fits the mesh after alignment and the handedness fix.
+    pub fit: FitQuality,
     /// Joints moved by refinement (in order of application).
     pub joint_moves: Vec<JointMove>,
     /// Joint moves that refinement proposed but refused (too far, or no cross-section).
@@ -459,32 +476,62 @@ pub(crate) fn attach_with_usable(
     let rep = repair::repair(skeleton)?;
     let mut positions = rep.positions;
     // 2. Frame alignment.
-    let alignment = if options.align {
+    let mut alignment = if options.align {
         align::align(mesh, &mut positions, &rep.usable)?
     } else {
         FrameAlignment::identity()
     };
     let height = repair::skeleton_height(&positions, &rep.usable);
     lap("align", &mut clock);
-    // 3. Mirror check.
-    let mut usable = rep.usable;
-    let mut mirror = MirrorCheck::default();
-    if options.mirror != MirrorPolicy::Ignore {
-        mirror = refine::mirror_check(mesh, &positions, &usable, height);
-        let evidence = mirror.evidence();
-        if evidence < -MIRROR_MARGIN {
-            if options.mirror == MirrorPolicy::Refuse {
-                return Err(AttachError::MirroredSkeleton { evidence });
+    // 3. Mirror check, then the fit checks; a skeleton that fails one is searched for a
+    //    better placement (turned about its up axis, upside down).
+    let (mut positions, mut usable, mut mirror) =
+        mirror_step(mesh, positions, rep.usable, height, options.mirror)?;
+    let fit_mesh = fit::FitMesh::new(mesh);
+    let mut fit = fit::measure(&fit_mesh, &positions, &usable, height, &mirror);
+    if !fit.passed() && options.align {
+        let unmirrored = if mirror.swapped {
+            swap_sides(&positions, &usable)
+        } else {
+            (positions, usable)
+        };
+        let centroid = mesh_centroid(mesh);
+        let mut best = None;
+        for (r, t) in fit::search(&fit_mesh, &unmirrored.0, &unmirrored.1, height, &centroid) {
+            let q: geom::Joints = std::array::from_fn(|j| r * unmirrored.0[j] + t);
+            let Ok((q, qu, m)) = mirror_step(mesh, q, unmirrored.1, height, options.mirror) else {
+                continue;
+            };
+            let f = fit::measure(&fit_mesh, &q, &qu, height, &m);
+            if f.passed()
+                && best
+                .as_ref()
+                .is_none_or(|b: &(fit::FitQuality, _, _, _, _, _)| f.score > b.0.score)
+            {
+                best = Some((f, q, qu, m, r, t));
             }
-            let mut swapped = positions;
-            let mut swapped_usable = usable;
-            for j in Joint::ALL {
-                swapped[j.index()] = positions[j.mirror().index()];
-                swapped_usable[j.index()] = usable[j.mirror().index()];
+        }
+        if let Some((f, q, qu, m, r, t)) = best {
+            alignment.rotation = r * alignment.rotation;
+            alignment.translation = r * alignment.translation + t;
+            alignment.fit_after = f
+                .check(FitCheckKind::SurfaceDistance)
+                .map_or(f64::NAN, |c| c.value);
+            alignment.coverage = f.check(FitCheckKind::Coverage).map_or(f64::NAN, |c| c.value);
+            (fit, positions, usable, mirror) = (f, q, qu, m);
+        }
+    }
+    if let Some(worst) = fit.worst().copied() {
+        match options.poor_fit {
+            PoorFitPolicy::Refuse => {
+                return Err(AttachError::PoorFit {
+                    check: worst.kind.name(),
+                    value: worst.value,
+                    limit: worst.limit,
+                    meaning: worst.kind.meaning(),
+                })
             }
-            positions = swapped;
-            usable = swapped_usable;
-            mirror.swapped = true;
+            PoorFitPolicy::Accept => fit.accepted_poor_fit = true,
         }
     }
     lap("mirror", &mut clock);
@@ -573,6 +620,7 @@ pub(crate) fn attach_with_usable(
             dropped_bones,
             alignment,
             mirror,
+            fit,
             joint_moves,
             refinement_skipped,
             components: heat.components,
@@ -584,6 +632,54 @@ pub(crate) fn attach_with_usable(
         },
     };
     Ok((attachment, usable))
+}
+
+/// The handedness check on aligned joints and, on clear evidence, the side swap
+/// ([`MirrorPolicy`]).
+fn mirror_step(
+    mesh: &TriMesh,
+    positions: geom::Joints,
+    usable: [bool; 20],
+    height: f64,
+    policy: MirrorPolicy,
+) -> Result<(geom::Joints, [bool; 20], MirrorCheck), AttachError> {
+    if policy == MirrorPolicy::Ignore {
+        return Ok((positions, usable, MirrorCheck::default()));
+    }
+    let mut mirror = refine::mirror_check(mesh, &positions, &usable, height);
+    let evidence = mirror.evidence();
+    if evidence < -MIRROR_MARGIN {
+        if policy == MirrorPolicy::Refuse {
+            return Err(AttachError::MirroredSkeleton { evidence });
+        }
+        let (p, u) = swap_sides(&positions, &usable);
+        mirror.swapped = true;
+        return Ok((p, u, mirror));
+    }
+    Ok((positions, usable, mirror))
+}
+
+/// The joints with left and right exchanged.
+fn swap_sides(positions: &geom::Joints, usable: &[bool; 20]) -> (geom::Joints, [bool; 20]) {
+    let mut p = *positions;
+    let mut u = *usable;
+    for j in Joint::ALL {
+        p[j.index()] = positions[j.mirror().index()];
+        u[j.index()] = usable[j.mirror().index()];
+    }
+    (p, u)
+}
+
+/// The mean of the mesh's vertices.
+fn mesh_centroid(mesh: &TriMesh) -> Point3<f64> {
+    let n = mesh.num_vertices().max(1) as f64;
+    Point3::from(
+        mesh.positions
+            .iter()
+            .map(|&x| Vector3::from(x))
+            .sum::<Vector3<f64>>()
+            / n,
+    )
 }
 
 /// The segment with the largest weight, except that the side is decided first: if the best

@@ -161,6 +161,33 @@ impl TriMesh {
         vt
     }
 
+    /// The mesh restricted to the vertices with `keep[v]` (and the triangles whose corners are
+    /// all kept), with `map[new] = old`. `keep` must have one entry per vertex.
+    ///
+    /// ```
+    /// let m = symcorr_mesh::testmesh::tetrahedron();
+    /// let (sub, map) = m.submesh(&[true, true, true, false]).unwrap();
+    /// assert_eq!((sub.num_vertices(), sub.num_triangles()), (3, 1));
+    /// assert_eq!(map, vec![0, 1, 2]);
+    /// ```
+    pub fn submesh(&self, keep: &[bool]) -> Result<(TriMesh, Vec<u32>), crate::MeshError> {
+        let n = self.num_vertices();
+        let mut new_id = vec![u32::MAX; n];
+        let mut map = Vec::new();
+        for v in (0..n).filter(|&v| keep.get(v).copied().unwrap_or(false)) {
+            new_id[v] = map.len() as u32;
+            map.push(v as u32);
+        }
+        let triangles = self
+            .triangles
+            .iter()
+            .filter(|t| t.iter().all(|&v| new_id[v as usize] != u32::MAX))
+            .map(|t| t.map(|v| new_id[v as usize]))
+            .collect();
+        let positions = map.iter().map(|&v| self.positions[v as usize]).collect();
+        Ok((TriMesh::new(positions, triangles)?, map))
+    }
+
     /// Connected components over triangles: `(component id per vertex, number of components)`.
     /// Isolated vertices (in no triangle) each form their own component.
     pub fn connected_components(&self) -> (Vec<u32>, usize) {

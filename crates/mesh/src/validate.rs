@@ -906,6 +906,24 @@ impl TriMesh {
         Topology::new(self, &proper).boundary_loops(self.num_vertices())
     }
 
+    /// Total length of the boundary edges (0 for a closed surface): a single-view scan has a
+    /// long one.
+    pub fn boundary_length(&self) -> f64 {
+        self.boundary_loops()
+            .iter()
+            .map(|l| {
+                (0..l.len())
+                    .map(|i| {
+                        let a = self.positions[l[i] as usize];
+                        let b = self.positions[l[(i + 1) % l.len()] as usize];
+                        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+                            .sqrt()
+                    })
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
     /// For every vertex, whether it lies on the boundary (on an edge used by exactly one
     /// triangle). Triangles with a repeated vertex are ignored.
     pub fn boundary_vertices(&self) -> Vec<bool> {

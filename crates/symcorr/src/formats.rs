@@ -77,6 +77,10 @@ pub struct ExplainedSelection {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CorrespondenceFile {
     /// [`CORRESPONDENCE_FORMAT`].
+    /// How well each skeleton fits its mesh (absent in files written before fit checks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<MeshPair<FitEntry>>,
+    /// [`CORRESPONDENCE_FORMAT`].
     pub format: String,
     /// For a partial target (a single-view scan): the template points it does not show, by
     /// template id (absent for a whole target).
@@ -84,7 +88,8 @@ pub struct CorrespondenceFile {
     pub no_counterpart: Option<Vec<u32>>,
     /// `[template vertex, target vertex, confidence]` per match (confidence rounded to 1e-6).
     pub pairs: Vec<(u32, u32, f64)>,
-    /// Segment label index per input vertex of each mesh (`null`: removed by the repair).
+    /// Segment label index per input vertex of each mesh (`null`: removed by the repair, or in
+    /// a component no bone reaches).
     pub segments: MeshPair<Vec<Option<usize>>>,
     /// What the paper's skeleton filter did (all zero for the other methods).
     pub skeleton_filter: FilterCounts,
@@ -141,8 +146,9 @@ pub struct LabelsFile {
     pub format: String,
     /// Refined joint positions (mesh units) of the tracked or interpolated joints, by name.
     pub joints: BTreeMap<String, [f64; 3]>,
-    /// Segment index per vertex (into `segments`).
-    pub labels: Vec<usize>,
+    /// Segment index per vertex (into `segments`); `null` for a vertex in a component no bone
+    /// reaches.
+    pub labels: Vec<Option<usize>>,
     /// The mesh file.
     pub mesh: MeshRef,
     /// The 17 segment names, in index order.
@@ -163,6 +169,9 @@ pub struct LabelDiagnostics {
     pub components: Vec<Component>,
     /// Vertices the boundary convention moved to another segment (`null` without one).
     pub convention_changes: Option<usize>,
+    /// How well the skeleton fits the mesh (absent in files written before fit checks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<FitEntry>,
     /// Left/right asymmetry of the joints, mesh units (`null` when not measurable).
     pub joint_asymmetry: Option<f64>,
     /// Joints moved by the refinement.
@@ -173,6 +182,30 @@ pub struct LabelDiagnostics {
     pub nearest_bone_vertices: usize,
     /// Joints repaired before the attachment.
     pub repaired_joints: Vec<RepairedJoint>,
+}
+
+/// How well a skeleton fits its mesh (symcorr-attach's `FitQuality`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitEntry {
+    /// True when a check failed and the fit was used anyway (`--accept-poor-fit`).
+    pub accepted_poor_fit: bool,
+    /// The checks that applied, by name.
+    pub checks: BTreeMap<String, FitCheckEntry>,
+    /// The smallest check quality in [0, 1]; at least 0.5 when every check passed.
+    pub score: f64,
+    /// Vertices in components no bone reaches (labelled `null`, never matched).
+    pub unreached_vertices: usize,
+}
+
+/// One fit check of a [`FitEntry`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FitCheckEntry {
+    /// Its limit.
+    pub limit: f64,
+    /// `value <= limit`.
+    pub passed: bool,
+    /// The measured value (rounded to 1e-6; `null` when not finite).
+    pub value: Option<f64>,
 }
 
 /// The skeleton-to-mesh alignment (symcorr-attach's `FrameAlignment`).

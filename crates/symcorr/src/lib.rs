@@ -68,7 +68,7 @@ pub use pipeline::{
 };
 pub use prepare::{
     PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS,
-    DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO,
+    DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO, metres_per_unit,
 };
 
 /// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.

@@ -5,6 +5,7 @@
 //! rename), so a failure never leaves a half-written output.
 
 use crate::formats::{
+    FitCheckEntry, FitEntry,
     Alignment, Component, CorrespondenceFile, ExplainFile, ExplainedCandidate, ExplainedSelection,
     FilterCounts, JointMoveEntry, LabelDiagnostics, LabelsFile, MeshPair, MeshRef, RepairedJoint,
     EXPLAIN_FORMAT, LABELS_FORMAT,
@@ -82,6 +83,10 @@ pub fn correspondence_json(
     };
     let f = corr.filter_stats();
     CorrespondenceFile {
+        fit: Some(MeshPair {
+            target: fit_entry(&target.attachment.diagnostics.fit, target.unreached),
+            template: fit_entry(&template.attachment.diagnostics.fit, template.unreached),
+        }),
         format: CORRESPONDENCE_FORMAT.to_string(),
         no_counterpart: corr.has_counterpart().map(|_| no_counterpart),
         pairs,
@@ -102,6 +107,30 @@ pub fn correspondence_json(
             .iter()
             .map(|(n, s)| (n.clone(), round6(*s)))
             .collect(),
+    }
+}
+
+/// The `fit` block of the output files; `unreached` counts the vertices left out because no bone
+/// reaches their component.
+pub fn fit_entry(fit: &symcorr_attach::FitQuality, unreached: usize) -> FitEntry {
+    FitEntry {
+        accepted_poor_fit: fit.accepted_poor_fit,
+        checks: fit
+            .checks
+            .iter()
+            .map(|c| {
+                (
+                    c.kind.name().to_string(),
+                    FitCheckEntry {
+                        limit: c.limit,
+                        passed: c.passed,
+                        value: c.value.is_finite().then(|| round6(c.value)),
+                    },
+                )
+            })
+            .collect(),
+        score: round6(fit.score),
+        unreached_vertices: unreached.max(fit.unreached.len()),
     }
 }
 
@@ -158,6 +187,7 @@ pub fn labels_file(
                 })
                 .collect(),
             convention_changes: d.convention_changes,
+            fit: Some(fit_entry(&d.fit, 0)),
             joint_asymmetry: d.joint_asymmetry,
             joint_moves: d
                 .joint_moves
@@ -181,7 +211,13 @@ pub fn labels_file(
         },
         format: LABELS_FORMAT.to_string(),
         joints,
-        labels: att.labels.iter().map(|s| s.index()).collect(),
+        labels: {
+            let mut l: Vec<Option<usize>> = att.labels.iter().map(|s| Some(s.index())).collect();
+            for &v in &d.fit.unreached {
+                l[v as usize] = None;
+            }
+            l
+        },
         mesh: MeshRef {
             path: mesh_path.to_string(),
             vertices,

@@ -226,6 +226,22 @@ fn articulated(
     let (tn, qn) = (normals(template), normals(target));
     let boundary = target.mesh.boundary_vertices();
     let neighbors = template.mesh.vertex_neighbors();
+    // Each mesh's unit comes from its own skeleton: a template in metres matched onto a scan
+    // in millimetres works in the target's unit.
+    let ratio = template.metres_per_unit() / target.metres_per_unit();
+    let scaled = (ratio != 1.0).then(|| {
+        let positions: Vec<[f64; 3]> = template
+            .mesh
+            .positions
+            .iter()
+            .map(|p| p.map(|x| x * ratio))
+            .collect();
+        let mut joints = template.attachment.joints.clone();
+        for p in joints.positions.iter_mut() {
+            *p *= ratio;
+        }
+        (positions, joints)
+    });
     fn side<'a>(
         m: &'a PreparedMesh,
         normals: &'a [[f64; 3]],
@@ -242,8 +258,14 @@ fn articulated(
             area: m.area,
         }
     }
+    let mut template_side = side(template, &tn, None, Some(&neighbors));
+    if let Some((positions, joints)) = &scaled {
+        template_side.positions = positions;
+        template_side.joints = joints;
+        template_side.area = template.area * ratio * ratio;
+    }
     Ok(articulated_match(
-        &side(template, &tn, None, Some(&neighbors)),
+        &template_side,
         &template.attachment.weights,
         &side(target, &qn, Some(&boundary), None),
         &graph,

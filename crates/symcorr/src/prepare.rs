@@ -25,20 +25,12 @@ use symcorr_spectral::{
 /// stays far below 5.
 pub const PARTIAL_BOUNDARY_RATIO: f64 = 5.0;
 
-fn boundary_length(mesh: &TriMesh) -> f64 {
-    mesh.boundary_loops()
-        .iter()
-        .map(|l| {
-            (0..l.len())
-                .map(|i| {
-                    nalgebra::distance(
-                        &Point3::from(mesh.positions[l[i] as usize]),
-                        &Point3::from(mesh.positions[l[(i + 1) % l.len()] as usize]),
-                    )
-                })
-                .sum::<f64>()
-        })
-        .sum()
+/// Metres per unit for a skeleton `height` units tall ([`PreparedMesh::metres_per_unit`]).
+pub fn metres_per_unit(height: f64) -> f64 {
+    if !(height.is_finite() && height > 0.0) {
+        return 1.0;
+    }
+    10f64.powi(-((height / 0.3).log10().floor() as i32))
 }
 
 /// Per-mesh options: what [`PreparedMesh::new`] computes.
@@ -103,8 +95,12 @@ pub struct PreparedMesh {
     pub repair: RepairReport,
     /// `vertex_map[v]` = the input id of vertex `v` of [`PreparedMesh::mesh`].
     pub vertex_map: Vec<u32>,
-    /// The input mesh, kept only when the repair changed it (outputs are written in its ids).
+    /// The input mesh, kept only when the repair changed it or components were left out
+    /// (outputs are written in its ids).
     pub input: Option<TriMesh>,
+    /// Vertices of the repaired input left out because no bone reaches their component
+    /// ([`symcorr_attach::FitQuality::unreached`]): they have no label and no match.
+    pub unreached: usize,
     /// Total surface area.
     pub area: f64,
     /// Skeleton attachment: segment labels, weights, refined joints.
@@ -163,6 +159,27 @@ impl PreparedMesh {
         );
         let (sp, mut timings) = spectral?;
         let (attachment, t_attach) = attached?;
+        let unreached = &attachment.diagnostics.fit.unreached;
+        if !unreached.is_empty() && unreached.len() < mesh.num_vertices() {
+            // Components no bone reaches (a stray object beside the body) get no label and are
+            // never matched: prepare the rest, and map its ids back through this mesh's.
+            let mut keep = vec![true; mesh.num_vertices()];
+            for &v in unreached {
+                keep[v as usize] = false;
+            }
+            let (sub, sub_map) = mesh.submesh(&keep)?;
+            let mut p = PreparedMesh::new(sub, skeleton, methods, options)?;
+            let composed: Vec<u32> = p
+                .vertex_map
+                .iter()
+                .map(|&v| vertex_map[sub_map[v as usize] as usize])
+                .collect();
+            p.vertex_map = composed;
+            p.repair = report;
+            p.unreached = unreached.len();
+            p.input = Some(input.unwrap_or(mesh));
+            return Ok(p);
+        }
         timings.push(("attachment".into(), t_attach));
         let area = mesh.total_area();
         let paper = match sp.paper {
@@ -185,8 +202,9 @@ impl PreparedMesh {
             Some(r) => Some(RefineData::new(&mesh, &attachment, r, &mut timings)?),
             None => None,
         };
-        let boundary_length = boundary_length(&mesh);
+        let boundary_length = mesh.boundary_length();
         Ok(PreparedMesh {
+            unreached: 0,
             boundary_length,
             paper,
             refine,
@@ -206,6 +224,20 @@ impl PreparedMesh {
     /// is several body heights long.
     pub fn is_partial(&self) -> bool {
         self.boundary_length > PARTIAL_BOUNDARY_RATIO * self.area.sqrt()
+    }
+
+    /// Metres per unit of this mesh, from its own skeleton: the power of ten that puts the
+    /// skeleton's height (in the mesh's units, after alignment) in [0.3, 3) m. Template and
+    /// target may come in different units (a bundled body in metres, a scan in millimetres);
+    /// the articulated method brings the template into the target's.
+    ///
+    /// ```
+    /// assert_eq!(symcorr::metres_per_unit(1.7), 1.0);
+    /// assert_eq!(symcorr::metres_per_unit(1700.0), 1e-3);
+    /// assert_eq!(symcorr::metres_per_unit(170.0), 1e-2);
+    /// ```
+    pub fn metres_per_unit(&self) -> f64 {
+        metres_per_unit(self.attachment.diagnostics.skeleton_height)
     }
 
     /// Segment label per vertex.

@@ -42,6 +42,10 @@ pub struct LabelArgs {
     /// Refuse (exit 1) instead of fixing a skeleton whose left and right are swapped.
     #[arg(long)]
     pub refuse_mirrored: bool,
+    /// Use a skeleton that fails a fit check instead of refusing it (the file's `fit` block
+    /// then says `accepted_poor_fit`).
+    #[arg(long)]
+    pub accept_poor_fit: bool,
     /// Where neighbouring segments end: `joint-planes` (the plane through the shared joint
     /// bisecting the two bones, what `match` uses) or `makehuman` (planes learned from the
     /// MakeHuman rig's skinning: small clavicles, buttocks in the hips, armpits in the torso).
@@ -73,6 +77,11 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
     let skeleton =
         read_skeleton_as(&a.joints, a.frame, format).map_err(|e| CliError(e.to_string()))?;
     let options = AttachOptions {
+        poor_fit: if a.accept_poor_fit {
+            symcorr_attach::PoorFitPolicy::Accept
+        } else {
+            symcorr_attach::PoorFitPolicy::Refuse
+        },
         mirror: if a.refuse_mirrored {
             symcorr_attach::MirrorPolicy::Refuse
         } else {
@@ -99,13 +108,8 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::with(a.mesh.display(), e))?;
     let turned = oriented.report.turned_triangles;
     let mesh = oriented.mesh;
-    let att = attach(&mesh, &skeleton, &options).map_err(|e| {
-        CliError(format!(
-            "{} with {}: {e}",
-            a.mesh.display(),
-            a.joints.display()
-        ))
-    })?;
+    let att = attach(&mesh, &skeleton, &options)
+        .map_err(|e| super::match_cmd::blame(&a.mesh, &a.joints, e.into()))?;
     let boundaries = match a.boundaries {
         Boundaries::JointPlanes => "joint-planes",
         Boundaries::Makehuman => "makehuman",
@@ -129,14 +133,21 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
     }
     batch.commit().map_err(cli)?;
     eprintln!(
-        "labelled {} vertices ({} triangles turned to a consistent orientation, {} joints moved, alignment scale {}, mirrored fixed: {}, {} component(s), {} fallback)",
+        "labelled {} vertices ({} triangles turned to a consistent orientation, {} joints moved, alignment scale {}, mirrored fixed: {}, fit score {:.2}{}, {} component(s), {} fallback, {} unreached vertices)",
         mesh.num_vertices(),
         turned,
         d.joint_moves.len(),
         al.scale,
         d.mirror.swapped,
+        d.fit.score,
+        if d.fit.accepted_poor_fit {
+            " (poor fit accepted)"
+        } else {
+            ""
+        },
         d.components.len(),
-        d.components.iter().filter(|c| c.fallback).count()
+        d.components.iter().filter(|c| c.fallback).count(),
+        d.fit.unreached.len()
     );
     Ok(())
 }
@@ -175,6 +186,7 @@ mod tests {
             glb: Some(glb.clone()),
             weights: true,
             refuse_mirrored: false,
+            accept_poor_fit: false,
             boundaries: Boundaries::JointPlanes,
         })
         .unwrap();
@@ -203,6 +215,7 @@ mod tests {
             glb: None,
             weights: false,
             refuse_mirrored: false,
+            accept_poor_fit: false,
             boundaries: Boundaries::Makehuman,
         })
         .unwrap();
@@ -231,6 +244,7 @@ mod tests {
             glb: None,
             weights: false,
             refuse_mirrored: false,
+            accept_poor_fit: false,
             boundaries: Boundaries::JointPlanes,
         })
         .err()
@@ -250,6 +264,7 @@ mod tests {
                 glb: None,
                 weights: false,
                 refuse_mirrored: false,
+                accept_poor_fit: false,
                 boundaries: Boundaries::JointPlanes,
             })
             .err()
@@ -291,6 +306,7 @@ mod tests {
                 glb: None,
                 weights,
                 refuse_mirrored: false,
+                accept_poor_fit: false,
                 boundaries,
             })
             .unwrap();

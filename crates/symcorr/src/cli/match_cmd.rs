@@ -41,9 +41,19 @@ pub struct MatchArgs {
     pub dense: bool,
     #[command(flatten)]
     pub method: MethodArgs,
-    /// Frame of the joint logs to use (default: the first).
-    #[arg(long)]
+    /// Frame of both joint logs to use (default: the first).
+    #[arg(long, conflicts_with_all = ["template_frame", "target_frame"])]
     pub frame: Option<usize>,
+    /// Frame of the template's joint log (default: the first).
+    #[arg(long, value_name = "N")]
+    pub template_frame: Option<usize>,
+    /// Frame of the target's joint log (default: the first).
+    #[arg(long, value_name = "N")]
+    pub target_frame: Option<usize>,
+    /// Use a skeleton that fails a fit check instead of refusing it (the outputs' `fit` block
+    /// then says `accepted_poor_fit`).
+    #[arg(long)]
+    pub accept_poor_fit: bool,
     /// Force the joint files' format instead of detecting it from content:
     /// json, kinect-text or ntu.
     #[arg(long, value_name = "FORMAT")]
@@ -282,7 +292,25 @@ pub fn load_prepared(
     let sk = read_skeleton_as(joints, frame, format).map_err(|e| CliError(e.to_string()))?;
     pipeline
         .prepare(m, &sk)
-        .map_err(|e| CliError::with(mesh.display(), e))
+        .map_err(|e| blame(mesh, joints, e))
+}
+
+/// Names the file an error of preparing `mesh` with `joints` concerns: the joints for a
+/// skeleton that is unusable on its own, both for a skeleton that does not fit the mesh, the
+/// mesh otherwise.
+pub fn blame(mesh: &Path, joints: &Path, e: symcorr::PipelineError) -> CliError {
+    use symcorr::PipelineError::Attach;
+    use symcorr_attach::AttachError as A;
+    match &e {
+        Attach(A::EmptySkeleton { .. }) => CliError::with(joints.display(), e),
+        Attach(
+            A::PoorFit { .. }
+            | A::AlignmentFailed { .. }
+            | A::ScaleMismatch { .. }
+            | A::MirroredSkeleton { .. },
+        ) => CliError(format!("{} with {}: {e}", mesh.display(), joints.display())),
+        _ => CliError::with(mesh.display(), e),
+    }
 }
 
 /// Stages the four coloured meshes, as PLY and GLB, into `dir` (created if needed) in `batch`.
@@ -317,7 +345,10 @@ pub fn write_coloured(
 }
 
 pub fn run(args: MatchArgs) -> Result<(), CliError> {
-    let pipeline = args.method.pipeline(args.dense)?;
+    let mut pipeline = args.method.pipeline(args.dense)?;
+    if args.accept_poor_fit {
+        pipeline.options.prepare.attach.poor_fit = symcorr_attach::PoorFitPolicy::Accept;
+    }
     let format = super::joints_format(args.joints_format.as_deref())?;
     // Every output is checked before any work: its directory exists, it is not a directory,
     // and it is none of the inputs.
@@ -373,11 +404,19 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
                 &pa,
                 &args.template,
                 &args.template_joints,
-                args.frame,
+                args.frame.or(args.template_frame),
                 format,
             )
         },
-        || load_prepared(&pb, &args.target, &args.target_joints, args.frame, format),
+        || {
+            load_prepared(
+                &pb,
+                &args.target,
+                &args.target_joints,
+                args.frame.or(args.target_frame),
+                format,
+            )
+        },
     );
     let (a, b) = (a?, b?);
     progress.set("matching");
@@ -427,6 +466,10 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
             "no_counterpart": unseen,
             "template_points": points,
             "fallbacks": corr.filter_stats().fallbacks,
+            "fit": {
+                "template": symcorr::output::fit_entry(&a.attachment.diagnostics.fit, a.unreached),
+                "target": symcorr::output::fit_entry(&b.attachment.diagnostics.fit, b.unreached),
+            },
             "seconds": seconds,
             "timings_s": timings.iter().map(|(n, s)| (n.clone(), serde_json::json!(s))).collect::<serde_json::Map<_, _>>(),
             "repair": {
@@ -441,6 +484,21 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
     for (side, p) in [("template", &a), ("target", &b)] {
         if !p.repair.unchanged() {
             println!("{side}: {}", p.repair.to_string().replace('\n', "; "));
+        }
+        let fit = &p.attachment.diagnostics.fit;
+        if let Some(c) = fit.worst().filter(|_| fit.accepted_poor_fit) {
+            println!(
+                "{side}: poor skeleton fit accepted: {} is {:.3} (at most {})",
+                c.kind.name(),
+                c.value,
+                c.limit
+            );
+        }
+        if p.unreached > 0 {
+            println!(
+                "{side}: {} vertices in components no bone reaches: not labelled, not matched",
+                p.unreached
+            );
         }
     }
     match unseen {

@@ -1,0 +1,520 @@
+//! Fit quality: how well the aligned skeleton sits in its mesh ([`FitQuality`]).
+//!
+//! A skeleton that overlaps the body can still be wrong: turned about the vertical axis, upside
+//! down, from another pose or another body. Every check below is a deviation measured against
+//! the mesh, with an upper limit; the skeleton fits when every check is within its limit.
+//!
+//! * `surface_distance` — median joint-to-nearest-vertex distance (skeleton heights).
+//! * `coverage` — median distance from a mesh vertex to its nearest bone (skeleton heights):
+//!   the bones must run through the whole mesh.
+//! * `outside` — fraction of points along the bones (each joint and three points per bone)
+//!   that lie outside the surface, by the outward normal of their nearest vertex. Closed
+//!   surfaces only (a single-view scan has no inside); skipped otherwise.
+//! * `facing_conflict` — the skeleton's own facing cues (ankle → foot joints, knee bend) against
+//!   the mesh's (the surface around the ankles reaches forward, to the toes): a rigidly turned
+//!   skeleton keeps its own cues but contradicts the mesh's. `min(|skeleton|, |mesh|)` when the
+//!   two disagree in sign, else 0. Skipped without feet in the mesh.
+//! * `proportions` — `|ln(r / 1.15)|`, `r` = the mesh's extent along the skeleton's up axis
+//!   over the skeleton's height (1.1–1.25 for a standing body; the joints of another body or a
+//!   skeleton lying across the mesh are far off).
+//! * `unreached` — fraction of the mesh's vertices in connected components no bone comes within
+//!   [`REACH`] skeleton heights of (a stray object beside the body); such components are listed
+//!   in [`FitQuality::unreached`] and are never labelled by the pipeline.
+//!
+//! The score is `min` over the checks of `1 − value / (2·limit)` clamped to `[0, 1]`: 1 is a
+//! perfect fit, [`FIT_THRESHOLD`] (0.5) is a check exactly at its limit. The limits were
+//! measured on generated bodies with exact and noisy (σ = 3 cm) joints against turned, flipped,
+//! other-pose and other-body joints: `docs/decisions/2026-12-02-attach-fit-quality.md`.
+
+use crate::geom::Joints;
+use crate::refine::torso_frame;
+use crate::{MirrorCheck, BONES};
+use nalgebra::{Point3, Rotation3, Unit, Vector3};
+use symcorr_mesh::geometry::closest_on_segment;
+use symcorr_mesh::TriMesh;
+
+/// The score at which a fit is accepted: every check within its limit.
+pub const FIT_THRESHOLD: f64 = 0.5;
+
+/// A component whose nearest vertex is farther than this from every bone (skeleton heights)
+/// is not reached by the skeleton.
+pub const REACH: f64 = 0.25;
+
+/// How far beyond the surface a point along the bones must lie to count as outside (skeleton
+/// heights, ~2.5 cm on an adult): tracker noise puts wrists and ankles just outside their limb.
+pub const OUTSIDE_MARGIN: f64 = 0.015;
+
+/// The mesh's facing cue (in [-1, 1]) that counts as full agreement with a clear skeleton cue;
+/// `facing_conflict` is the shortfall from it.
+pub const FACING_AGREEMENT: f64 = 0.3;
+
+/// One measured aspect of the fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FitCheckKind {
+    /// Median joint-to-surface distance (skeleton heights).
+    SurfaceDistance,
+    /// Median vertex-to-bone distance (skeleton heights).
+    Coverage,
+    /// Fraction of points along the bones outside a closed surface.
+    Outside,
+    /// Disagreement between the skeleton's and the mesh's facing cues.
+    FacingConflict,
+    /// Log-ratio of the mesh's height to the skeleton's, against a standing body's.
+    Proportions,
+    /// Fraction of vertices in components no bone reaches.
+    Unreached,
+}
+
+impl FitCheckKind {
+    /// Every check, in report order.
+    pub const ALL: [FitCheckKind; 6] = [
+        FitCheckKind::SurfaceDistance,
+        FitCheckKind::Coverage,
+        FitCheckKind::Outside,
+        FitCheckKind::FacingConflict,
+        FitCheckKind::Proportions,
+        FitCheckKind::Unreached,
+    ];
+
+    /// The check's name in outputs (`surface_distance`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            FitCheckKind::SurfaceDistance => "surface_distance",
+            FitCheckKind::Coverage => "coverage",
+            FitCheckKind::Outside => "outside",
+            FitCheckKind::FacingConflict => "facing_conflict",
+            FitCheckKind::Proportions => "proportions",
+            FitCheckKind::Unreached => "unreached",
+        }
+    }
+
+    /// The check's limit (module docs).
+    pub fn limit(self) -> f64 {
+        match self {
+            FitCheckKind::SurfaceDistance => 0.08,
+            FitCheckKind::Coverage => 0.2,
+            FitCheckKind::Outside => 0.3,
+            FitCheckKind::FacingConflict => 0.25,
+            FitCheckKind::Proportions => 0.35,
+            FitCheckKind::Unreached => 0.1,
+        }
+    }
+
+    /// What a failure of this check usually means, for error messages.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            FitCheckKind::SurfaceDistance => "the joints lie away from the surface",
+            FitCheckKind::Coverage => "the bones do not run through the whole mesh",
+            FitCheckKind::Outside => "the bones stick out of the body",
+            FitCheckKind::FacingConflict => {
+                "the skeleton faces another way than the body (its feet point backwards)"
+            }
+            FitCheckKind::Proportions => "the skeleton is not the mesh's size or lies across it",
+            FitCheckKind::Unreached => "much of the mesh is far from every bone",
+        }
+    }
+}
+
+/// One check's measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitCheck {
+    /// Which check.
+    pub kind: FitCheckKind,
+    /// The measured deviation (module docs); lower is better.
+    pub value: f64,
+    /// [`FitCheckKind::limit`].
+    pub limit: f64,
+    /// `value <= limit`.
+    pub passed: bool,
+}
+
+impl FitCheck {
+    fn new(kind: FitCheckKind, value: f64) -> FitCheck {
+        let limit = kind.limit();
+        FitCheck {
+            kind,
+            value,
+            limit,
+            // NaN fails.
+            passed: value <= limit,
+        }
+    }
+
+    /// `1 − value / (2·limit)` clamped to `[0, 1]` (0 for NaN).
+    pub fn quality(&self) -> f64 {
+        let q = 1.0 - self.value / (2.0 * self.limit);
+        if q.is_nan() {
+            0.0
+        } else {
+            q.clamp(0.0, 1.0)
+        }
+    }
+}
+
+/// How well the skeleton fits its mesh, measured after alignment and the handedness fix
+/// (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitQuality {
+    /// `min` over the checks of [`FitCheck::quality`]; at least [`FIT_THRESHOLD`] when every
+    /// check passed.
+    pub score: f64,
+    /// The checks that applied (a check without its inputs — `outside` on an open surface,
+    /// `facing_conflict` without feet — is left out).
+    pub checks: Vec<FitCheck>,
+    /// Vertices of the components no bone reaches (sorted).
+    pub unreached: Vec<u32>,
+    /// True when the fit failed a check and was used anyway ([`crate::PoorFitPolicy::Accept`]).
+    pub accepted_poor_fit: bool,
+}
+
+impl FitQuality {
+    /// True when every check passed.
+    pub fn passed(&self) -> bool {
+        self.checks.iter().all(|c| c.passed)
+    }
+
+    /// The failed check farthest beyond its limit.
+    pub fn worst(&self) -> Option<&FitCheck> {
+        self.checks
+            .iter()
+            .filter(|c| !c.passed)
+            .min_by(|a, b| a.quality().total_cmp(&b.quality()))
+    }
+
+    /// The check of the given kind, if it applied.
+    pub fn check(&self, kind: FitCheckKind) -> Option<&FitCheck> {
+        self.checks.iter().find(|c| c.kind == kind)
+    }
+}
+
+/// What the checks share about the mesh: positions and outward normals as nalgebra types,
+/// whether the surface is closed, and the connected components.
+pub(crate) struct FitMesh {
+    positions: Vec<Point3<f64>>,
+    normals: Vec<Vector3<f64>>,
+    /// Outward sign of the normals for a closed surface (`None`: open, no inside).
+    outward: Option<f64>,
+    components: (Vec<u32>, usize),
+}
+
+impl FitMesh {
+    pub(crate) fn new(mesh: &TriMesh) -> FitMesh {
+        let positions: Vec<Point3<f64>> = mesh.positions.iter().map(|&p| Point3::from(p)).collect();
+        let normals = mesh
+            .vertex_normals()
+            .into_iter()
+            .map(Vector3::from)
+            .collect();
+        // A surface with boundary edges longer than a few √area is a partial view; a closed
+        // body (or one with small holes at the eyes or soles) has an inside. Its normals point
+        // out when its signed volume is positive.
+        let area = mesh.total_area();
+        let closed = mesh.boundary_length() < 0.5 * area.sqrt();
+        let outward = closed.then(|| {
+            if signed_volume(mesh) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            }
+        });
+        FitMesh {
+            positions,
+            normals,
+            outward,
+            components: mesh.connected_components(),
+        }
+    }
+
+    /// How far `x` lies outside the surface along its nearest vertex's outward normal (negative
+    /// inside); `sign` is [`FitMesh::outward`].
+    fn outside_depth(&self, x: &Point3<f64>, sign: f64) -> f64 {
+        match self.nearest(x) {
+            Some((v, _)) => sign * (x - self.positions[v]).dot(&self.normals[v]),
+            None => f64::INFINITY,
+        }
+    }
+
+    fn nearest(&self, x: &Point3<f64>) -> Option<(usize, f64)> {
+        self.positions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, (p - x).norm_squared()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, d)| (i, d.sqrt()))
+    }
+}
+
+fn signed_volume(mesh: &TriMesh) -> f64 {
+    (0..mesh.num_triangles())
+        .map(|t| {
+            let [a, b, c] = mesh.corners(t).map(Vector3::from);
+            a.dot(&b.cross(&c)) / 6.0
+        })
+        .sum()
+}
+
+/// Each usable joint and three points along each bone between usable joints.
+fn bone_samples(p: &Joints, usable: &[bool; 20]) -> Vec<Point3<f64>> {
+    let mut samples: Vec<Point3<f64>> = (0..20).filter(|&j| usable[j]).map(|j| p[j]).collect();
+    for b in active_bones(usable) {
+        let (a, c) = (p[BONES[b].parent.index()], p[BONES[b].child.index()]);
+        for t in [0.25, 0.5, 0.75] {
+            samples.push(a + (c - a) * t);
+        }
+    }
+    samples
+}
+
+fn active_bones(usable: &[bool; 20]) -> impl Iterator<Item = usize> + '_ {
+    (0..BONES.len())
+        .filter(move |&b| usable[BONES[b].parent.index()] && usable[BONES[b].child.index()])
+}
+
+/// Measures the fit of the (aligned, handedness-fixed) joints `p` in `mesh` (module docs).
+/// `accepted_poor_fit` is false; the caller sets it.
+pub(crate) fn measure(
+    fm: &FitMesh,
+    p: &Joints,
+    usable: &[bool; 20],
+    height: f64,
+    mirror: &MirrorCheck,
+) -> FitQuality {
+    let h = height.max(f64::MIN_POSITIVE);
+    let bones: Vec<(Point3<f64>, Point3<f64>)> = active_bones(usable)
+        .map(|b| (p[BONES[b].parent.index()], p[BONES[b].child.index()]))
+        .collect();
+    let bone_distance = |x: &Point3<f64>| {
+        bones
+            .iter()
+            .map(|(a, b)| closest_on_segment(x, a, b).1)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let median = |mut d: Vec<f64>| {
+        d.sort_by(f64::total_cmp);
+        d.get(d.len() / 2).copied().unwrap_or(f64::INFINITY)
+    };
+    let mut checks = Vec::with_capacity(6);
+    // Joints to the surface.
+    let joint_d: Vec<f64> = (0..20)
+        .filter(|&j| usable[j])
+        .filter_map(|j| fm.nearest(&p[j]).map(|(_, d)| d / h))
+        .collect();
+    checks.push(FitCheck::new(FitCheckKind::SurfaceDistance, median(joint_d)));
+    // Vertices to the bones (an even stride of at most 2000).
+    let stride = (fm.positions.len() / 2000).max(1);
+    let mut cover: Vec<f64> = fm
+        .positions
+        .iter()
+        .step_by(stride)
+        .map(|x| bone_distance(x) / h)
+        .collect();
+    cover.sort_by(f64::total_cmp);
+    let p90 = cover
+        .get(cover.len() * 9 / 10)
+        .copied()
+        .unwrap_or(f64::INFINITY);
+    checks.push(FitCheck::new(FitCheckKind::Coverage, p90));
+    // Points along the bones outside a closed surface.
+    if let Some(sign) = fm.outward {
+        let samples = bone_samples(p, usable);
+        let outside = samples
+            .iter()
+            .filter(|x| fm.outside_depth(x, sign) > OUTSIDE_MARGIN * h)
+            .count();
+        checks.push(FitCheck::new(
+            FitCheckKind::Outside,
+            outside as f64 / samples.len().max(1) as f64,
+        ));
+    }
+    // The skeleton's facing cues against the mesh's: where the skeleton's own cue is clear,
+    // the mesh's must agree with it.
+    if let Some(m) = mirror.mesh_evidence {
+        let s = 0.5 * mirror.skeleton_evidence.unwrap_or(0.0) + mirror.knee_evidence.unwrap_or(0.0);
+        if s.abs() >= 0.25 {
+            checks.push(FitCheck::new(
+                FitCheckKind::FacingConflict,
+                (FACING_AGREEMENT - m * s.signum()).max(0.0),
+            ));
+        }
+    }
+    // The mesh's extent along the skeleton's up axis against the skeleton's height.
+    if let Some([up, _, _]) = torso_frame(p, usable) {
+        let (lo, hi) = fm
+            .positions
+            .iter()
+            .map(|x| x.coords.dot(&up))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
+                (lo.min(t), hi.max(t))
+            });
+        checks.push(FitCheck::new(
+            FitCheckKind::Proportions,
+            ((hi - lo) / h / 1.15).ln().abs(),
+        ));
+    }
+    // Components no bone reaches.
+    let (comp, count) = &fm.components;
+    let mut nearest = vec![f64::INFINITY; *count];
+    for (v, x) in fm.positions.iter().enumerate() {
+        let c = comp[v] as usize;
+        // A component already reached needs no more distances.
+        if nearest[c] > REACH * h {
+            nearest[c] = nearest[c].min(bone_distance(x));
+        }
+    }
+    let unreached: Vec<u32> = (0..fm.positions.len() as u32)
+        .filter(|&v| nearest[comp[v as usize] as usize] > REACH * h)
+        .collect();
+    checks.push(FitCheck::new(
+        FitCheckKind::Unreached,
+        unreached.len() as f64 / fm.positions.len().max(1) as f64,
+    ));
+    let score = checks
+        .iter()
+        .map(FitCheck::quality)
+        .fold(1.0f64, f64::min);
+    FitQuality {
+        score,
+        checks,
+        unreached,
+        accepted_poor_fit: false,
+    }
+}
+
+/// A rigid placement `x ↦ r·x + t` of the joints.
+pub(crate) type Placement = (Rotation3<f64>, Vector3<f64>);
+
+/// The search's objective: mean depth of the bone samples beyond the surface (0 inside; on an
+/// open surface the joints' distance to it) plus a tenth of the median vertex-to-bone distance,
+/// in skeleton heights. Zero-ish for a skeleton inside its body.
+fn objective(fm: &FitMesh, p: &Joints, usable: &[bool; 20], h: f64) -> f64 {
+    let samples = bone_samples(p, usable);
+    let n = samples.len().max(1) as f64;
+    let depth: f64 = match fm.outward {
+        Some(sign) => samples.iter().map(|x| fm.outside_depth(x, sign).max(0.0)).sum(),
+        None => samples
+            .iter()
+            .map(|x| fm.nearest(x).map_or(f64::INFINITY, |(_, d)| d))
+            .sum(),
+    };
+    let bones: Vec<(Point3<f64>, Point3<f64>)> = active_bones(usable)
+        .map(|b| (p[BONES[b].parent.index()], p[BONES[b].child.index()]))
+        .collect();
+    let stride = (fm.positions.len() / 500).max(1);
+    let mut cover: Vec<f64> = fm
+        .positions
+        .iter()
+        .step_by(stride)
+        .map(|x| {
+            bones
+                .iter()
+                .map(|(a, b)| closest_on_segment(x, a, b).1)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    cover.sort_by(f64::total_cmp);
+    let median = cover.get(cover.len() / 2).copied().unwrap_or(f64::INFINITY);
+    (depth / n + 0.1 * median) / h.max(f64::MIN_POSITIVE)
+}
+
+fn place(p: &Joints, (r, t): &Placement) -> Joints {
+    std::array::from_fn(|j| r * p[j] + t)
+}
+
+/// The placements the rotation search tries after the given one fails a check: the coarse
+/// [`candidates`] ranked by [`objective`], the best few refined by a greedy local search over
+/// small turns about the torso's axes through the joints' centroid and small shifts (steps
+/// halving from 8° and 0.04 heights). Best first.
+pub(crate) fn search(
+    fm: &FitMesh,
+    p: &Joints,
+    usable: &[bool; 20],
+    height: f64,
+    mesh_centroid: &Point3<f64>,
+) -> Vec<Placement> {
+    let Some([up, left, facing]) = torso_frame(p, usable) else {
+        return Vec::new();
+    };
+    let mut ranked: Vec<(f64, Placement)> = candidates(p, usable, mesh_centroid)
+        .into_iter()
+        .map(|c| (objective(fm, &place(p, &c), usable, height), c))
+        .collect();
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
+    ranked.truncate(4);
+    let mut out: Vec<(f64, Placement)> = ranked
+        .into_iter()
+        .map(|(mut best, (mut r, mut t))| {
+            let (mut angle, mut shift) = (8f64.to_radians(), 0.04 * height);
+            for _ in 0..4 {
+                let mut improved = true;
+                while improved {
+                    improved = false;
+                    let q = place(p, &(r, t));
+                    let n = usable.iter().filter(|&&u| u).count().max(1) as f64;
+                    let c = (0..20)
+                        .filter(|&j| usable[j])
+                        .map(|j| q[j].coords)
+                        .sum::<Vector3<f64>>()
+                        / n;
+                    let mut moves: Vec<Placement> = Vec::with_capacity(12);
+                    for axis in [up, left, facing] {
+                        for s in [-1.0, 1.0] {
+                            let d = Rotation3::from_axis_angle(&Unit::new_unchecked(axis), s * angle);
+                            // Turn about the centroid: x ↦ d(x − c) + c.
+                            moves.push((d * r, d * t + c - d * c));
+                            moves.push((r, t + axis * (s * shift)));
+                        }
+                    }
+                    for m in moves {
+                        let f = objective(fm, &place(p, &m), usable, height);
+                        if f < best - 1e-9 {
+                            (best, r, t) = (f, m.0, m.1);
+                            improved = true;
+                        }
+                    }
+                }
+                angle *= 0.5;
+                shift *= 0.5;
+            }
+            (best, (r, t))
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.total_cmp(&b.0));
+    out.into_iter().map(|(_, c)| c).collect()
+}
+
+/// The candidate placements of the rotation search: rotations about the skeleton's up axis
+/// through the joints' centroid by every 30°, upright and upside down (a half turn about the
+/// left axis), each kept in place and moved onto the mesh's centroid. The identity comes
+/// first.
+fn candidates(p: &Joints, usable: &[bool; 20], mesh_centroid: &Point3<f64>) -> Vec<Placement> {
+    let Some([up, left, _]) = torso_frame(p, usable) else {
+        return Vec::new();
+    };
+    let n = usable.iter().filter(|&&u| u).count().max(1) as f64;
+    let cj = Point3::from(
+        (0..20)
+            .filter(|&j| usable[j])
+            .map(|j| p[j].coords)
+            .sum::<Vector3<f64>>()
+            / n,
+    );
+    let mut out = Vec::with_capacity(48);
+    for flip in [false, true] {
+        let f = if flip {
+            Rotation3::from_axis_angle(&Unit::new_unchecked(left), std::f64::consts::PI)
+        } else {
+            Rotation3::identity()
+        };
+        for k in 0..12 {
+            let r = Rotation3::from_axis_angle(
+                &Unit::new_unchecked(up),
+                k as f64 * std::f64::consts::PI / 6.0,
+            ) * f;
+            // x ↦ r (x − cj) + cj (+ shift onto the mesh's centroid).
+            let t = cj.coords - r * cj.coords;
+            out.push((r, t));
+            out.push((r, t + (mesh_centroid - cj)));
+        }
+    }
+    out
+}
