@@ -168,6 +168,7 @@ fn scene_graph_transforms_and_primitives_from_data_uri_glb_and_external_bin() {
     std::fs::remove_file(dir.path().join("the data.bin")).unwrap();
     let e = io::read(dir.path().join("s.gltf")).unwrap_err();
     assert!(e.to_string().contains("the data.bin"), "{e}");
+    assert!(e.to_string().contains("s.gltf: buffer uri"), "{e}");
 }
 
 fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {

@@ -556,7 +556,7 @@ fn load_uri(
         message,
     };
     let io_err = |source| MeshError::Io {
-        file: format!("{} (buffer uri {uri:?})", path.display()),
+        file: format!("{}: buffer uri {uri:?} ({})", src.name, path.display()),
         source,
     };
     // Checked before opening too: opening a FIFO for reading would wait for a writer.
@@ -635,7 +635,7 @@ fn confined_path(dir: &Path, uri: &str, src: &Source) -> Result<PathBuf, MeshErr
     let path = dir.join(rel);
     let canon = |p: &Path| {
         std::fs::canonicalize(p).map_err(|source| MeshError::Io {
-            file: format!("{} (buffer uri {uri:?})", p.display()),
+            file: format!("{}: buffer uri {uri:?} ({})", src.name, p.display()),
             source,
         })
     };
