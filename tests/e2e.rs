@@ -638,3 +638,48 @@ fn turned_faces_are_oriented_before_labelling() {
         good.len()
     );
 }
+
+#[test]
+fn max_input_size_bounds_every_mesh_read() {
+    // A fixture body is a few hundred KiB: a 1 KiB limit refuses it, as a one-line error
+    // naming the file and the option; the option is global (before or after the subcommand).
+    let body = mesh("s0_rest");
+    let o = bin()
+        .args(["--max-input-size", "1K", "spectrum"])
+        .arg(&body)
+        .output()
+        .unwrap();
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("s0_rest.ply"), "{e}");
+    assert!(
+        e.contains("larger than the 1 KiB input limit; pass --max-input-size"),
+        "{e}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("corr.json");
+    let o = bin()
+        .arg("match")
+        .arg(&body)
+        .arg(mesh("s0_walk-10"))
+        .arg("--template-joints")
+        .arg(joints("s0_rest"))
+        .arg("--target-joints")
+        .arg(joints("s0_walk-10"))
+        .arg("--out")
+        .arg(&out)
+        .args(["--max-input-size", "2048"])
+        .output()
+        .unwrap();
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("2 KiB input limit"), "{e}");
+    assert!(!out.exists());
+    // A malformed size is a usage error.
+    for bad in ["2X", "0", "1.5G"] {
+        let o = bin()
+            .args(["--max-input-size", bad, "spectrum"])
+            .arg(&body)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+    }
+}

@@ -110,6 +110,28 @@ pub enum MeshError {
         /// Number of vertices.
         vertices: usize,
     },
+    /// An input file (or a glTF file with its external buffers) is larger than the input size
+    /// limit ([`crate::io::ReadOptions::max_input_bytes`], default
+    /// [`crate::io::DEFAULT_MAX_INPUT_BYTES`]). Nothing beyond the limit was read.
+    #[error("{file}: is larger than the {} input limit; pass --max-input-size to read it", crate::io::format_bytes(*.limit))]
+    InputTooLarge {
+        /// The file (for a glTF external buffer: the glTF file and the buffer's uri).
+        file: String,
+        /// The limit in bytes.
+        limit: u64,
+    },
+    /// A glTF buffer `uri` names a file that may not or cannot be read: outside the glTF file's
+    /// folder (absolute, `..`, a symlink leading out), not a regular file, or shorter than the
+    /// buffer's `byteLength`.
+    #[error("{file}: buffer uri {uri:?}: {message}")]
+    ExternalBuffer {
+        /// The glTF file.
+        file: String,
+        /// The buffer's uri as written in the file.
+        uri: String,
+        /// Why it is refused.
+        message: String,
+    },
     /// An output path is a directory.
     #[error("{file}: is a directory, not an output file")]
     OutputIsDirectory {

@@ -168,6 +168,7 @@ fn scene_graph_transforms_and_primitives_from_data_uri_glb_and_external_bin() {
     std::fs::remove_file(dir.path().join("the data.bin")).unwrap();
     let e = io::read(dir.path().join("s.gltf")).unwrap_err();
     assert!(e.to_string().contains("the data.bin"), "{e}");
+    assert!(e.to_string().contains("s.gltf: buffer uri"), "{e}");
 }
 
 fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
@@ -386,4 +387,29 @@ fn instancing_bomb_is_refused() {
         .unwrap()
         .mesh;
     assert_eq!(m.num_vertices(), 80_000);
+}
+
+/// A file with only point or line primitives says so, instead of "empty mesh".
+#[test]
+fn only_lines_and_points_is_named() {
+    let (_, bin) = scene(None);
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let (mut doc, _) = scene(Some(&uri));
+    doc["meshes"] = json!([
+        {"primitives": [{"attributes": {"POSITION": 0}, "mode": 1}]},
+        {"primitives": [
+            {"attributes": {"POSITION": 2}, "mode": 0},
+            {"attributes": {"POSITION": 2}, "mode": 1}
+        ]}
+    ]);
+    let e = io::read_from_bytes(doc.to_string().as_bytes(), Format::Gltf).unwrap_err();
+    assert!(matches!(e, MeshError::Malformed { .. }), "{e:?}");
+    assert_eq!(
+        e.to_string(),
+        "<memory>: meshes: no triangle primitives: the file has only LINES/POINTS primitives \
+         (mode LINES (1), POINTS (0))"
+    );
 }

@@ -217,3 +217,40 @@ fn face_element_before_vertex_element_and_float_colours() {
         .to_string()
         .contains("face 1"));
 }
+
+/// An ascii element is one line: a value too many or too few is blamed on that element and
+/// its line, not on the element that would have read the stray value next.
+#[test]
+fn ascii_value_count_is_checked_per_element_line() {
+    let parse = |body: &str| match ply(format!("{HEAD}{body}").as_bytes()).unwrap_err() {
+        MeshError::Parse { line, message, .. } => (line, message),
+        other => panic!("expected a Parse error, got {other:?}"),
+    };
+    // Extra value on vertex 1 (line 11; the header is 9 lines).
+    let (line, msg) = parse("0 0 0\n1 0 0 7\n0 1 0\n3 0 1 2\n");
+    assert_eq!(line, 11);
+    assert_eq!(
+        msg,
+        "vertex 1: has 4 values, the header declares 3 properties"
+    );
+    // Missing value on vertex 0 (line 10).
+    let (line, msg) = parse("0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    assert_eq!(line, 10);
+    assert_eq!(
+        msg,
+        "vertex 0: has 2 values, the header declares 3 properties"
+    );
+    // A face with more indices than its count says, or fewer.
+    let (line, msg) = parse("0 0 0\n1 0 0\n0 1 0\n3 0 1 2 2\n");
+    assert_eq!(line, 13);
+    assert!(msg.starts_with("face 0: has 5 values"), "{msg}");
+    let (line, msg) = parse("0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n");
+    assert_eq!(line, 13);
+    assert!(
+        msg.starts_with("face 0: the line ends after 4 values"),
+        "{msg}"
+    );
+    // Blank lines between elements and CRLF line ends are fine.
+    let ok = format!("{HEAD}0 0 0\r\n\n1 0 0\r\n0 1 0\n\n3 0 1 2");
+    assert_eq!(ply(ok.as_bytes()).unwrap().mesh.num_triangles(), 1);
+}

@@ -4,13 +4,72 @@
 
 use crate::PipelineError;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 use symcorr_kinect::JointFormat;
+use symcorr_mesh::io::{ReadOptions, DEFAULT_MAX_INPUT_BYTES};
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::Skeleton;
 
-/// Reads a mesh file (OFF, OBJ, PLY, glTF/GLB, by extension) in the file's vertex order.
+/// The input size limit of [`read_mesh`]: process-wide, because it is one command-line option
+/// (`--max-input-size`) that applies to every mesh every command reads.
+static MAX_INPUT_BYTES: AtomicU64 = AtomicU64::new(DEFAULT_MAX_INPUT_BYTES);
+
+/// Sets the most bytes [`read_mesh`] reads for one mesh (the file, plus a `.gltf`'s external
+/// buffers) from now on; the `symcorr` command sets it once from `--max-input-size`.
+pub fn set_max_input_bytes(bytes: u64) {
+    MAX_INPUT_BYTES.store(bytes, Ordering::Relaxed);
+}
+
+/// The current limit of [`read_mesh`] (default [`DEFAULT_MAX_INPUT_BYTES`], 1 GiB).
+pub fn max_input_bytes() -> u64 {
+    MAX_INPUT_BYTES.load(Ordering::Relaxed)
+}
+
+/// Parses a byte count: plain bytes (`1048576`) or a whole number with a binary suffix
+/// `K`, `M`, `G` or `T` (case-insensitive, optionally followed by `B` or `iB`: `2G`, `512MiB`).
+///
+/// ```
+/// use symcorr::io::parse_byte_size;
+/// assert_eq!(parse_byte_size("2G"), Ok(2 << 30));
+/// assert_eq!(parse_byte_size("512m"), Ok(512 << 20));
+/// assert_eq!(parse_byte_size("1000"), Ok(1000));
+/// assert!(parse_byte_size("1.5G").is_err());
+/// ```
+pub fn parse_byte_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let upper = t.to_ascii_uppercase();
+    let digits = upper.trim_end_matches(|c: char| c.is_ascii_alphabetic());
+    let suffix = &upper[digits.len()..];
+    let shift = match suffix {
+        "" | "B" => 0,
+        "K" | "KB" | "KIB" => 10,
+        "M" | "MB" | "MIB" => 20,
+        "G" | "GB" | "GIB" => 30,
+        "T" | "TB" | "TIB" => 40,
+        _ => {
+            return Err(format!(
+                "{text:?}: unknown size suffix {suffix:?}; use bytes or K, M, G, T (powers of 1024)"
+            ))
+        }
+    };
+    let n: u64 = digits
+        .parse()
+        .map_err(|_| format!("{text:?} is not a byte count (e.g. 1048576, 512M, 2G)"))?;
+    if n == 0 {
+        return Err(format!("{text:?}: the limit must be at least 1 byte"));
+    }
+    n.checked_mul(1u64 << shift)
+        .ok_or_else(|| format!("{text:?} does not fit 64 bits"))
+}
+
+/// Reads a mesh file (OFF, OBJ, PLY, glTF/GLB, by extension) in the file's vertex order,
+/// refusing inputs over [`max_input_bytes`] (`MeshError::InputTooLarge`).
 pub fn read_mesh(path: &Path) -> Result<TriMesh, PipelineError> {
-    Ok(symcorr_mesh::io::read(path)?.mesh)
+    let options = ReadOptions {
+        max_input_bytes: max_input_bytes(),
+        ..ReadOptions::default()
+    };
+    Ok(symcorr_mesh::io::read_with_options(path, &options)?.mesh)
 }
 
 /// Reads a joint file (any supported format, detected from the content) and picks a frame
@@ -43,4 +102,21 @@ pub fn read_skeleton_as(
             file: path.display().to_string(),
             message: format!("frame {i} requested, the file has {n} frame(s)"),
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_byte_size;
+
+    #[test]
+    fn byte_sizes_parse_with_binary_suffixes() {
+        assert_eq!(parse_byte_size("1"), Ok(1));
+        assert_eq!(parse_byte_size("4k"), Ok(4096));
+        assert_eq!(parse_byte_size("3MiB"), Ok(3 << 20));
+        assert_eq!(parse_byte_size(" 2GB "), Ok(2 << 30));
+        assert_eq!(parse_byte_size("1T"), Ok(1 << 40));
+        for bad in ["", "G", "0", "-1", "1.5G", "2X", "99999999999T"] {
+            assert!(parse_byte_size(bad).is_err(), "{bad:?}");
+        }
+    }
 }

@@ -11,6 +11,11 @@ mod cli;
 #[derive(Parser)]
 #[command(name = "symcorr", version, about, long_about = None)]
 struct Args {
+    /// Largest mesh input read, in bytes or with a K/M/G suffix (powers of 1024); a .gltf's
+    /// external buffers count with it.
+    #[arg(long, global = true, value_name = "BYTES", default_value = "1G",
+          value_parser = symcorr::io::parse_byte_size)]
+    max_input_size: u64,
     #[command(subcommand)]
     command: Command,
 }
@@ -34,6 +39,7 @@ enum Command {
 fn main() -> ExitCode {
     restore_sigpipe();
     let args = Args::parse();
+    symcorr::io::set_max_input_bytes(args.max_input_size);
     let result = match args.command {
         Command::Spectrum(a) => cli::spectrum::run(a),
         Command::Match(a) => cli::match_cmd::run(a),

@@ -20,6 +20,8 @@
 //! for coordinates representable in f32.
 
 use std::borrow::Cow;
+use std::io::Read as _;
+use std::path::{Component, Path, PathBuf};
 
 use base64::Engine as _;
 use gltf::accessor::{DataType, Dimensions};
@@ -62,6 +64,8 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
     let doc = &gltf::Document::from_json_without_validation(root);
     validate(doc, src)?;
 
+    // External buffers share the input size limit with the file itself.
+    let mut budget = src.max_input_bytes.saturating_sub(bytes.len() as u64);
     let mut buffers: Vec<Cow<[u8]>> = Vec::new();
     for b in doc.buffers() {
         let what = || format!("buffer {}", b.index());
@@ -74,7 +78,9 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
                     )
                 }
             },
-            gltf::buffer::Source::Uri(uri) => Cow::Owned(load_uri(uri, src, &what())?),
+            gltf::buffer::Source::Uri(uri) => {
+                Cow::Owned(load_uri(uri, b.length(), &mut budget, src, &what())?)
+            }
         };
         if data.len() < b.length() {
             return Err(src.malformed(
@@ -103,6 +109,15 @@ pub(crate) fn read(bytes: &[u8], src: &Source, expect_glb: bool) -> Result<Loade
                 add_mesh(&mesh, &Mat4::identity(), &buffers, src, &mut out)?;
             }
         }
+    }
+    if out.primitives == 0 && !out.skipped_modes.is_empty() {
+        return Err(src.malformed(
+            "meshes",
+            format!(
+                "no triangle primitives: the file has only LINES/POINTS primitives (mode {})",
+                out.skipped_modes.join(", ")
+            ),
+        ));
     }
     let colors = (out.all_colored && !out.colors.is_empty()).then_some(out.colors);
     src.finish(out.positions, out.triangles, colors)
@@ -214,6 +229,8 @@ struct Output {
     colors: Vec<[u8; 3]>,
     all_colored: bool,
     primitives: usize,
+    /// The non-triangle primitive modes skipped (`LINES (1)`, …), in first-seen order.
+    skipped_modes: Vec<String>,
     /// Most vertices (and triangles) the scene may instantiate, see [`instance_limit`].
     limit: usize,
 }
@@ -273,7 +290,12 @@ fn add_mesh(
             mode,
             Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
         ) {
-            continue; // points and lines carry no surface
+            // Points and lines carry no surface; remembered for the error if nothing else does.
+            let name = mode_name(mode);
+            if !out.skipped_modes.contains(&name) {
+                out.skipped_modes.push(name);
+            }
+            continue;
         }
         let what = format!("mesh {} primitive {}", mesh.index(), prim.index());
         let pos_acc = prim
@@ -379,6 +401,20 @@ fn add_mesh(
         }
     }
     Ok(())
+}
+
+/// A primitive mode as the spec names it, with its number (`LINE_STRIP (3)`).
+fn mode_name(mode: Mode) -> String {
+    let name = match mode {
+        Mode::Points => "POINTS",
+        Mode::Lines => "LINES",
+        Mode::LineLoop => "LINE_LOOP",
+        Mode::LineStrip => "LINE_STRIP",
+        Mode::Triangles => "TRIANGLES",
+        Mode::TriangleStrip => "TRIANGLE_STRIP",
+        Mode::TriangleFan => "TRIANGLE_FAN",
+    };
+    format!("{name} ({})", mode.as_gl_enum())
 }
 
 /// Reads every component of an accessor as f64 (normalized integers mapped to [0, 1] or
@@ -492,7 +528,13 @@ fn read_accessor(
     Ok((out, dims))
 }
 
-fn load_uri(uri: &str, src: &Source, what: &str) -> Result<Vec<u8>, MeshError> {
+fn load_uri(
+    uri: &str,
+    byte_length: usize,
+    budget: &mut u64,
+    src: &Source,
+    what: &str,
+) -> Result<Vec<u8>, MeshError> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
             .split_once(";base64,")
@@ -507,11 +549,109 @@ fn load_uri(uri: &str, src: &Source, what: &str) -> Result<Vec<u8>, MeshError> {
             format!("external buffer {uri:?} cannot be resolved when reading from memory"),
         )
     })?;
-    let path = dir.join(percent_decode(uri));
-    std::fs::read(&path).map_err(|source| MeshError::Io {
-        file: path.display().to_string(),
+    let path = confined_path(dir, uri, src)?;
+    let refuse = |message: String| MeshError::ExternalBuffer {
+        file: src.name.clone(),
+        uri: uri.to_string(),
+        message,
+    };
+    let io_err = |source| MeshError::Io {
+        file: format!("{}: buffer uri {uri:?} ({})", src.name, path.display()),
         source,
-    })
+    };
+    // Checked before opening too: opening a FIFO for reading would wait for a writer.
+    if !std::fs::metadata(&path).map_err(io_err)?.is_file() {
+        return Err(refuse("is not a regular file".to_string()));
+    }
+    let file = std::fs::File::open(&path).map_err(io_err)?;
+    let meta = file.metadata().map_err(io_err)?;
+    if !meta.is_file() {
+        return Err(refuse("is not a regular file".to_string()));
+    }
+    if meta.len() < byte_length as u64 {
+        return Err(refuse(format!(
+            "the file has {} bytes, but the buffer's byteLength is {byte_length}",
+            meta.len()
+        )));
+    }
+    if byte_length as u64 > *budget {
+        return Err(MeshError::InputTooLarge {
+            file: format!("{} with its buffer {uri:?}", src.name),
+            limit: src.max_input_bytes,
+        });
+    }
+    *budget -= byte_length as u64;
+    // Only byteLength bytes are read (a longer file's tail is not part of the buffer); the
+    // file holds at least that many (checked above) and they fit the input budget.
+    let mut data = Vec::with_capacity(byte_length);
+    file.take(byte_length as u64)
+        .read_to_end(&mut data)
+        .map_err(io_err)?;
+    if data.len() < byte_length {
+        return Err(refuse(format!(
+            "the file ended after {} bytes, but the buffer's byteLength is {byte_length}",
+            data.len()
+        )));
+    }
+    Ok(data)
+}
+
+/// Resolves a relative buffer uri inside `dir` (the glTF file's folder): refuses absolute
+/// paths, other URI schemes, `..` leading above the folder and (after canonicalizing both)
+/// a path that ends outside it, e.g. through a symlink.
+fn confined_path(dir: &Path, uri: &str, src: &Source) -> Result<PathBuf, MeshError> {
+    let refuse = |message: &str| MeshError::ExternalBuffer {
+        file: src.name.clone(),
+        uri: uri.to_string(),
+        message: message.to_string(),
+    };
+    let decoded = percent_decode(uri);
+    let scheme = decoded
+        .split_once(':')
+        .is_some_and(|(s, _)| !s.is_empty() && !s.contains('/'));
+    if scheme {
+        return Err(refuse(
+            "only data: URIs and paths relative to the glTF file are read",
+        ));
+    }
+    let rel = Path::new(&decoded);
+    let mut depth = 0usize;
+    for c in rel.components() {
+        match c {
+            Component::Prefix(_) | Component::RootDir => {
+                return Err(refuse(
+                    "is an absolute path; buffers are read only from the glTF file's folder",
+                ))
+            }
+            Component::ParentDir => {
+                depth = depth
+                    .checked_sub(1)
+                    .ok_or_else(|| refuse("leads out of the glTF file's folder (`..`)"))?;
+            }
+            Component::Normal(_) => depth += 1,
+            Component::CurDir => {}
+        }
+    }
+    let path = dir.join(rel);
+    let canon = |p: &Path| {
+        std::fs::canonicalize(p).map_err(|source| MeshError::Io {
+            file: format!("{}: buffer uri {uri:?} ({})", src.name, p.display()),
+            source,
+        })
+    };
+    let base = canon(if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    })?;
+    let target = canon(&path)?;
+    if !target.starts_with(&base) {
+        return Err(refuse(&format!(
+            "leads out of the glTF file's folder (to {})",
+            target.display()
+        )));
+    }
+    Ok(target)
 }
 
 /// Decodes `%XX` escapes of a relative URI (e.g. `%20` for a space).

@@ -8,8 +8,9 @@
 //! never leaves a half-written file.
 //!
 //! **Readers.** [`read`] picks the format by extension (case-insensitive: `.off`, `.obj`,
-//! `.ply`, `.gltf`, `.glb`); [`read_with_format`] overrides it; [`read_from_bytes`]
-//! parses memory (used by the fuzz targets in `fuzz/`). Every reader keeps file vertex order,
+//! `.ply`, `.gltf`, `.glb`); [`read_with_format`] overrides it; [`read_with_options`] also
+//! sets the input size limit ([`DEFAULT_MAX_INPUT_BYTES`], 1 GiB: no file, device or FIFO is
+//! read past it); [`read_from_bytes`] parses memory (used by the fuzz targets in `fuzz/`). Every reader keeps file vertex order,
 //! fan-triangulates polygons `(v0, vk, vk+1)`, rejects NaN/inf coordinates and out-of-range
 //! indices with an error naming the line (text) or element (binary), and never sizes an
 //! allocation from a header count without checking that the input could hold that many
@@ -23,7 +24,9 @@
 //!   `vertex_index`; other properties/elements skipped).
 //! - glTF/GLB: the `gltf` crate parses and validates the JSON document (its GLB container
 //!   parser is replaced by a checked one, and one validation panic is pre-empted — both fuzz
-//!   findings); buffers (GLB chunk, base64 `data:` URIs, files next to the `.gltf`) and
+//!   findings); buffers (GLB chunk, base64 `data:` URIs, files in the `.gltf`'s own folder —
+//!   no absolute paths, `..` or symlinks leading out, no devices; at most `byteLength` bytes
+//!   each, counted against the input size limit) and
 //!   accessor bytes are read here with checked offsets. All triangle primitives (incl. strips
 //!   and fans) of the default scene (else scene 0; with no scene, every mesh untransformed) are
 //!   concatenated in depth-first node order with world transforms applied; a mirroring
@@ -112,11 +115,82 @@ pub struct LoadedMesh {
     pub colors: Option<Vec<[u8; 3]>>,
 }
 
+/// The default for [`ReadOptions::max_input_bytes`]: 1 GiB.
+///
+/// A mesh file is read whole into memory and then parsed into vectors several times its
+/// size, so an unbounded read lets a mistaken path (`/dev/zero`, a FIFO, a multi-gigabyte
+/// archive) exhaust memory before any parse error can be reported. The largest meshes symcorr
+/// handles (scans of a few million triangles) are a few hundred MB even as ascii PLY; 1 GiB
+/// leaves room for those and stops a runaway read early. Raise it with
+/// [`ReadOptions::max_input_bytes`] (the CLI's `--max-input-size`).
+pub const DEFAULT_MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// Options for [`read_with_options`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// The format; `None` chooses by extension.
+    pub format: Option<Format>,
+    /// Most bytes read for one mesh: the file itself, plus for `.gltf` its external buffers.
+    /// A larger input is [`MeshError::InputTooLarge`], refused from its metadata when it is a
+    /// regular file, and after reading `max_input_bytes + 1` bytes otherwise (devices, FIFOs).
+    pub max_input_bytes: u64,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            format: None,
+            max_input_bytes: DEFAULT_MAX_INPUT_BYTES,
+        }
+    }
+}
+
+/// `bytes` for messages: whole GiB, MiB or KiB when exact (`1 GiB`), else `N bytes`.
+pub(crate) fn format_bytes(bytes: u64) -> String {
+    const UNITS: [(u64, &str); 3] = [(1 << 30, "GiB"), (1 << 20, "MiB"), (1 << 10, "KiB")];
+    for (size, unit) in UNITS {
+        if bytes >= size && bytes.is_multiple_of(size) {
+            return format!("{} {unit}", bytes / size);
+        }
+    }
+    if bytes == 1 {
+        "1 byte".to_string()
+    } else {
+        format!("{bytes} bytes")
+    }
+}
+
+/// Reads at most `limit` bytes of an opened file: a regular file longer than `limit` is
+/// refused from its metadata before reading; anything else (device, FIFO, a file growing
+/// while read) is read through `take(limit + 1)`, so the read stops one byte past the limit.
+/// `None` means the input is larger than `limit`; I/O errors are returned as they are.
+pub(crate) fn read_capped(file: std::fs::File, limit: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read as _;
+    let meta = file.metadata()?;
+    let mut buf = Vec::new();
+    if meta.is_file() {
+        if meta.len() > limit {
+            return Ok(None);
+        }
+        // +1: a file that grew since `metadata` ends the read without doubling the buffer.
+        buf.reserve(
+            usize::try_from(meta.len())
+                .unwrap_or(usize::MAX)
+                .saturating_add(1),
+        );
+    }
+    file.take(limit.saturating_add(1)).read_to_end(&mut buf)?;
+    Ok((buf.len() as u64 <= limit).then_some(buf))
+}
+
 /// Where the bytes being parsed came from: a name for error messages and, for glTF, the
-/// directory against which external buffer URIs resolve.
+/// directory against which external buffer URIs resolve and the byte budget they share with
+/// the file.
 pub(crate) struct Source {
     pub name: String,
     pub dir: Option<PathBuf>,
+    /// [`ReadOptions::max_input_bytes`]: the glTF file and its external buffers together.
+    pub max_input_bytes: u64,
 }
 
 impl Source {
@@ -186,20 +260,66 @@ pub fn read(path: impl AsRef<Path>) -> Result<LoadedMesh, MeshError> {
     read_with_format(path, Format::from_path_or_err(path)?)
 }
 
-/// Reads a mesh file in the given format, whatever its extension.
+/// Reads a mesh file in the given format, whatever its extension (with the default
+/// [`DEFAULT_MAX_INPUT_BYTES`] limit).
 pub fn read_with_format(path: impl AsRef<Path>, format: Format) -> Result<LoadedMesh, MeshError> {
+    read_with_options(
+        path,
+        &ReadOptions {
+            format: Some(format),
+            ..ReadOptions::default()
+        },
+    )
+}
+
+/// Reads a mesh file with explicit [`ReadOptions`] (format, input size limit).
+///
+/// Errors: as [`read`], and [`MeshError::InputTooLarge`] when the file (for `.gltf`: with its
+/// external buffers) has more than `options.max_input_bytes` bytes; at most that many bytes
+/// plus one are ever read, also from devices and FIFOs.
+///
+/// ```
+/// use symcorr_mesh::{io, MeshError, TriMesh};
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("tri.off");
+/// let mesh = TriMesh::new(
+///     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+///     vec![[0, 1, 2]],
+/// ).unwrap();
+/// io::write(&path, &mesh, None).unwrap();
+/// let small = io::ReadOptions { max_input_bytes: 10, ..Default::default() };
+/// let e = io::read_with_options(&path, &small).unwrap_err();
+/// assert!(matches!(e, MeshError::InputTooLarge { limit: 10, .. }));
+/// ```
+pub fn read_with_options(
+    path: impl AsRef<Path>,
+    options: &ReadOptions,
+) -> Result<LoadedMesh, MeshError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
-        file: path.display().to_string(),
+    let format = match options.format {
+        Some(f) => f,
+        None => Format::from_path_or_err(path)?,
+    };
+    let name = path.display().to_string();
+    let io_err = |source| MeshError::Io {
+        file: name.clone(),
         source,
-    })?;
+    };
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    let bytes = read_capped(file, options.max_input_bytes)
+        .map_err(io_err)?
+        .ok_or_else(|| MeshError::InputTooLarge {
+            file: name.clone(),
+            limit: options.max_input_bytes,
+        })?;
     let src = Source {
-        name: path.display().to_string(),
+        name: name.clone(),
         dir: Some(
             path.parent()
                 .map(Path::to_path_buf)
                 .unwrap_or_else(|| PathBuf::from(".")),
         ),
+        max_input_bytes: options.max_input_bytes,
     };
     parse(&bytes, format, &src)
 }
@@ -210,6 +330,7 @@ pub fn read_from_bytes(bytes: &[u8], format: Format) -> Result<LoadedMesh, MeshE
     let src = Source {
         name: "<memory>".to_string(),
         dir: None,
+        max_input_bytes: DEFAULT_MAX_INPUT_BYTES,
     };
     parse(bytes, format, &src)
 }

@@ -9,7 +9,10 @@
 //! extra properties and extra elements are skipped; the face list may be called
 //! `vertex_indices` or `vertex_index`, with any integer count and index type, and polygons of any
 //! size are fan-triangulated. Vertex colours `red green blue` (or `diffuse_red …`) are kept (uchar as is; float/double
-//! in [0, 1] scaled by 255; other integers must be in 0..=255).
+//! in [0, 1] scaled by 255; other integers must be in 0..=255). In ascii, every element is one
+//! line (blank lines between elements are skipped): a line with more or fewer values than the
+//! element's properties take is an error naming the element and the line, so a stray value is
+//! blamed on its own line rather than on whatever element would have read it next.
 
 use std::fmt::Write as _;
 
@@ -273,6 +276,13 @@ trait Body {
     /// Minimum encoded size of one value of this type (for capacity and list-length checks).
     fn min_size(&self, ty: Scalar) -> usize;
     fn err(&self, what: &str, msg: &str) -> MeshError;
+    /// Starts an element with `props` properties (`lists`: some are lists). Ascii: an element
+    /// is one line, so its values are read from the next non-blank line only.
+    fn begin_element(&mut self, _props: usize, _lists: bool) {}
+    /// Ends the element named `what`. Ascii: its line must hold no further values.
+    fn end_element(&mut self, _what: &str) -> Result<(), MeshError> {
+        Ok(())
+    }
 }
 
 struct Binary<'a, 's> {
@@ -341,12 +351,16 @@ struct Ascii<'a, 's> {
     pos: usize,
     line: usize,
     src: &'s Source,
+    /// The element being read: its property count, whether it has lists, values read so far.
+    element: Option<(usize, bool)>,
+    values: usize,
 }
 
 impl<'a> Ascii<'a, '_> {
-    fn token(&mut self, what: &dyn Fn() -> String) -> Result<&'a str, MeshError> {
+    /// Skips spaces and tabs (and `\r`), and newlines too when `newlines`.
+    fn skip_space(&mut self, newlines: bool) {
         while let Some(&b) = self.bytes.get(self.pos) {
-            if !b.is_ascii_whitespace() {
+            if !b.is_ascii_whitespace() || (b == b'\n' && !newlines) {
                 break;
             }
             if b == b'\n' {
@@ -354,6 +368,32 @@ impl<'a> Ascii<'a, '_> {
             }
             self.pos += 1;
         }
+    }
+
+    /// The message for an element line with `found` values where its properties take `read`.
+    fn count_message(&self, found: usize, read: usize) -> String {
+        match self.element {
+            Some((props, false)) => {
+                format!("has {found} values, the header declares {props} properties")
+            }
+            Some((props, true)) if found < read => format!(
+                "the line ends after {found} values, before its {props} properties (with their list items) are read"
+            ),
+            Some((props, true)) => format!(
+                "has {found} values, but its {props} properties with their list items take {read}"
+            ),
+            None => format!("has {found} values"),
+        }
+    }
+
+    fn token(&mut self, what: &dyn Fn() -> String) -> Result<&'a str, MeshError> {
+        let in_element = self.element.is_some();
+        self.skip_space(!in_element);
+        if in_element && self.bytes.get(self.pos).is_none_or(|&b| b == b'\n') {
+            let msg = self.count_message(self.values, self.values + 1);
+            return Err(self.err(&what(), &msg));
+        }
+        self.values += 1;
         let start = self.pos;
         while self
             .bytes
@@ -397,6 +437,37 @@ impl Body for Ascii<'_, '_> {
     fn err(&self, what: &str, msg: &str) -> MeshError {
         self.src.parse_err(self.line, format!("{what}: {msg}"))
     }
+
+    fn begin_element(&mut self, props: usize, lists: bool) {
+        self.skip_space(true);
+        self.element = Some((props, lists));
+        self.values = 0;
+    }
+
+    fn end_element(&mut self, what: &str) -> Result<(), MeshError> {
+        let read = self.values;
+        let mut extra = 0;
+        loop {
+            self.skip_space(false);
+            if self.bytes.get(self.pos).is_none_or(|&b| b == b'\n') {
+                break;
+            }
+            extra += 1;
+            while self
+                .bytes
+                .get(self.pos)
+                .is_some_and(|b| !b.is_ascii_whitespace())
+            {
+                self.pos += 1;
+            }
+        }
+        if extra > 0 {
+            let msg = self.count_message(read + extra, read);
+            return Err(self.err(what, &msg));
+        }
+        self.element = None;
+        Ok(())
+    }
 }
 
 pub(crate) fn read(bytes: &[u8], src: &Source) -> Result<LoadedMesh, MeshError> {
@@ -409,6 +480,8 @@ pub(crate) fn read(bytes: &[u8], src: &Source) -> Result<LoadedMesh, MeshError> 
                 pos: 0,
                 line: header.lines + 1,
                 src,
+                element: None,
+                values: 0,
             };
             read_body(&header, &mut body, src)
         }
@@ -490,8 +563,10 @@ fn read_body(header: &Header, body: &mut dyn Body, src: &Source) -> Result<Loade
                 colors.reserve(capped_capacity(el.count, body.left(), min_size));
             }
         }
+        let has_lists = el.props.iter().any(|p| matches!(p, Property::List { .. }));
         for i in 0..el.count {
             let what = || format!("{} {i}", el.name);
+            body.begin_element(el.props.len(), has_lists);
             let mut p = [0.0; 3];
             let mut c = [0u8; 3];
             let mut has_indices = false;
@@ -552,6 +627,7 @@ fn read_body(header: &Header, body: &mut dyn Body, src: &Source) -> Result<Loade
                     }
                 }
             }
+            body.end_element(&what())?;
             if is_vertex {
                 positions.push(p);
                 if has_color {

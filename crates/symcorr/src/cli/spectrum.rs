@@ -44,8 +44,7 @@ fn compute(args: &SpectrumArgs) -> Result<(Value, String), CliError> {
 
     let clock = Instant::now();
     // MeshError messages already name the file.
-    let loaded = symcorr_mesh::io::read(&args.mesh).map_err(|e| CliError(e.to_string()))?;
-    let input = loaded.mesh;
+    let input = symcorr::io::read_mesh(&args.mesh).map_err(|e| CliError(e.to_string()))?;
     // Default repair: drop degenerate/zero-area/duplicate triangles and unreferenced vertices
     // (the Laplacian needs every vertex to have positive mass).
     let repaired = symcorr_mesh::repair(&input, &symcorr_mesh::RepairOptions::default())
