@@ -14,9 +14,6 @@
 //!   the mesh's (the surface around the ankles reaches forward, to the toes): a rigidly turned
 //!   skeleton keeps its own cues but contradicts the mesh's. `min(|skeleton|, |mesh|)` when the
 //!   two disagree in sign, else 0. Skipped without feet in the mesh.
-//! * `proportions` — `|ln(r / 1.15)|`, `r` = the mesh's extent along the skeleton's up axis
-//!   over the skeleton's height (1.1–1.25 for a standing body; the joints of another body or a
-//!   skeleton lying across the mesh are far off).
 //! * `unreached` — fraction of the mesh's vertices in connected components no bone comes within
 //!   [`REACH`] skeleton heights of (a stray object beside the body); such components are listed
 //!   in [`FitQuality::unreached`] and are never labelled by the pipeline.
@@ -59,20 +56,17 @@ pub enum FitCheckKind {
     Outside,
     /// Disagreement between the skeleton's and the mesh's facing cues.
     FacingConflict,
-    /// Log-ratio of the mesh's height to the skeleton's, against a standing body's.
-    Proportions,
     /// Fraction of vertices in components no bone reaches.
     Unreached,
 }
 
 impl FitCheckKind {
     /// Every check, in report order.
-    pub const ALL: [FitCheckKind; 6] = [
+    pub const ALL: [FitCheckKind; 5] = [
         FitCheckKind::SurfaceDistance,
         FitCheckKind::Coverage,
         FitCheckKind::Outside,
         FitCheckKind::FacingConflict,
-        FitCheckKind::Proportions,
         FitCheckKind::Unreached,
     ];
 
@@ -83,7 +77,6 @@ impl FitCheckKind {
             FitCheckKind::Coverage => "coverage",
             FitCheckKind::Outside => "outside",
             FitCheckKind::FacingConflict => "facing_conflict",
-            FitCheckKind::Proportions => "proportions",
             FitCheckKind::Unreached => "unreached",
         }
     }
@@ -95,7 +88,6 @@ impl FitCheckKind {
             FitCheckKind::Coverage => 0.2,
             FitCheckKind::Outside => 0.3,
             FitCheckKind::FacingConflict => 0.25,
-            FitCheckKind::Proportions => 0.35,
             FitCheckKind::Unreached => 0.1,
         }
     }
@@ -109,7 +101,6 @@ impl FitCheckKind {
             FitCheckKind::FacingConflict => {
                 "the skeleton faces another way than the body (its feet point backwards)"
             }
-            FitCheckKind::Proportions => "the skeleton is not the mesh's size or lies across it",
             FitCheckKind::Unreached => "much of the mesh is far from every bone",
         }
     }
@@ -337,20 +328,6 @@ pub(crate) fn measure(
             ));
         }
     }
-    // The mesh's extent along the skeleton's up axis against the skeleton's height.
-    if let Some([up, _, _]) = torso_frame(p, usable) {
-        let (lo, hi) = fm
-            .positions
-            .iter()
-            .map(|x| x.coords.dot(&up))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
-                (lo.min(t), hi.max(t))
-            });
-        checks.push(FitCheck::new(
-            FitCheckKind::Proportions,
-            ((hi - lo) / h / 1.15).ln().abs(),
-        ));
-    }
     // Components no bone reaches.
     let (comp, count) = &fm.components;
     let mut nearest = vec![f64::INFINITY; *count];
@@ -517,4 +494,65 @@ fn candidates(p: &Joints, usable: &[bool; 20], mesh_centroid: &Point3<f64>) -> V
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{attach, AttachError, AttachOptions, FitCheckKind, PoorFitPolicy};
+    use symcorr_mesh::TriMesh;
+
+    #[test]
+    fn a_good_skeleton_passes_every_check() {
+        let (mesh, sk) = crate::doc_example();
+        let a = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+        let fit = &a.diagnostics.fit;
+        assert!(fit.passed() && fit.score >= super::FIT_THRESHOLD, "{fit:?}");
+        assert!(fit.unreached.is_empty());
+        assert!(fit.check(FitCheckKind::SurfaceDistance).is_some());
+    }
+
+    #[test]
+    fn a_component_no_bone_reaches_is_listed_and_the_rest_is_labelled() {
+        let (body, sk) = crate::doc_example();
+        let ico = symcorr_mesh::testmesh::icosahedron();
+        let n = body.num_vertices() as u32;
+        let mut positions = body.positions.clone();
+        positions.extend(ico.positions.iter().map(|p| [p[0] * 0.1 + 3.0, p[1] * 0.1, p[2] * 0.1]));
+        let mut triangles = body.triangles.clone();
+        triangles.extend(ico.triangles.iter().map(|t| t.map(|v| v + n)));
+        let mesh = TriMesh::new(positions, triangles).unwrap();
+        let a = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+        let want: Vec<u32> = (n..n + ico.num_vertices() as u32).collect();
+        assert_eq!(a.diagnostics.fit.unreached, want);
+    }
+
+    #[test]
+    fn a_skeleton_beside_the_body_is_refused_naming_the_check_or_accepted_when_asked() {
+        let (mesh, mut sk) = crate::doc_example();
+        // A hand's breadth to the side, with the alignment (and its search) off.
+        for p in sk.positions.iter_mut() {
+            p.x += 0.12;
+        }
+        let refuse = AttachOptions {
+            align: false,
+            ..AttachOptions::default()
+        };
+        match attach(&mesh, &sk, &refuse) {
+            Err(AttachError::PoorFit { check, value, limit, .. }) => {
+                assert!(value > limit, "{check} {value} {limit}");
+                assert!(!e_has_newline(check));
+            }
+            other => panic!("expected PoorFit, got {other:?}"),
+        }
+        let accept = AttachOptions {
+            poor_fit: PoorFitPolicy::Accept,
+            ..refuse
+        };
+        let a = attach(&mesh, &sk, &accept).unwrap();
+        assert!(a.diagnostics.fit.accepted_poor_fit && !a.diagnostics.fit.passed());
+    }
+
+    fn e_has_newline(s: &str) -> bool {
+        s.contains('\n')
+    }
 }
