@@ -34,6 +34,12 @@ use std::path::Path;
 /// The `format` tag of an intrinsics JSON file.
 pub const INTRINSICS_FORMAT: &str = "symcorr.intrinsics/1";
 
+/// Largest image width or height [`Intrinsics::validate`] accepts, pixels.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// Focal lengths [`Intrinsics::validate`] accepts, pixels (a Kinect v1 has 571 px at 640×480).
+pub const FOCAL_RANGE_PX: std::ops::RangeInclusive<f64> = 1.0..=100_000.0;
+
 /// Pinhole intrinsics of a depth camera, in pixels. JSON form:
 /// `{"format":"symcorr.intrinsics/1","width":640,"height":480,"fx":580.0,"fy":580.0,"cx":319.5,"cy":239.5}`.
 ///
@@ -130,26 +136,47 @@ impl Intrinsics {
         }
     }
 
-    /// Checks sizes (> 0) and that focal lengths are finite and positive and the principal point
-    /// finite.
+    /// Checks that the intrinsics describe a plausible depth camera: width and height in
+    /// `1..=`[`MAX_IMAGE_SIDE`], focal lengths finite and in [`FOCAL_RANGE_PX`], and the
+    /// principal point finite and inside the image or at most half its size outside it.
+    ///
+    /// Errors: [`KinectError::Intrinsics`], naming the value and what was expected.
+    ///
+    /// ```
+    /// use symcorr_kinect::Intrinsics;
+    /// assert!(Intrinsics::kinect_v1().validate().is_ok());
+    /// let bad = Intrinsics { fx: 1e308, ..Intrinsics::kinect_v1() };
+    /// assert_eq!(
+    ///     bad.validate().unwrap_err().to_string(),
+    ///     "invalid intrinsics: fx = 1e308: expected a focal length in 1..=100000 px"
+    /// );
+    /// ```
     pub fn validate(&self) -> Result<(), KinectError> {
-        if self.width == 0 || self.height == 0 {
-            return Err(KinectError::Intrinsics(format!(
-                "image size {}x{} is empty",
-                self.width, self.height
-            )));
+        for (name, side) in [("width", self.width), ("height", self.height)] {
+            if side == 0 || side > MAX_IMAGE_SIDE {
+                return Err(KinectError::Intrinsics(format!(
+                    "{name} = {side}: expected 1..={MAX_IMAGE_SIDE} px"
+                )));
+            }
         }
-        if !(self.fx.is_finite() && self.fx > 0.0 && self.fy.is_finite() && self.fy > 0.0) {
-            return Err(KinectError::Intrinsics(format!(
-                "focal lengths fx={} fy={} must be finite and positive",
-                self.fx, self.fy
-            )));
+        for (name, f) in [("fx", self.fx), ("fy", self.fy)] {
+            if !FOCAL_RANGE_PX.contains(&f) {
+                return Err(KinectError::Intrinsics(format!(
+                    "{name} = {f:?}: expected a focal length in {}..={} px",
+                    FOCAL_RANGE_PX.start(),
+                    FOCAL_RANGE_PX.end()
+                )));
+            }
         }
-        if !(self.cx.is_finite() && self.cy.is_finite()) {
-            return Err(KinectError::Intrinsics(format!(
-                "principal point ({}, {}) must be finite",
-                self.cx, self.cy
-            )));
+        for (name, c, side) in [("cx", self.cx, self.width), ("cy", self.cy, self.height)] {
+            let side = f64::from(side);
+            let (lo, hi) = (-0.5 * side, 1.5 * side);
+            if !(lo..=hi).contains(&c) {
+                return Err(KinectError::Intrinsics(format!(
+                    "{name} = {c:?}: expected a principal point in {lo}..={hi} px \
+                     (inside the image or at most half its size outside)"
+                )));
+            }
         }
         Ok(())
     }
@@ -169,14 +196,20 @@ impl Intrinsics {
         )
     }
 
-    /// Reads a `symcorr.intrinsics/1` JSON file.
+    /// Reads a `symcorr.intrinsics/1` JSON file and checks it ([`Intrinsics::validate`]).
+    ///
+    /// Errors: [`KinectError::Io`]; [`KinectError::Json`] naming the file, for malformed JSON, a
+    /// wrong `format` or implausible values.
     pub fn read(path: impl AsRef<Path>) -> Result<Intrinsics, KinectError> {
         let file = path.as_ref().display().to_string();
         let text = std::fs::read_to_string(path.as_ref()).map_err(|e| KinectError::io(&file, e))?;
-        serde_json::from_str(&text).map_err(|e| KinectError::Json {
-            file,
-            message: e.to_string(),
-        })
+        let json_err = |message: String| KinectError::Json {
+            file: file.clone(),
+            message,
+        };
+        let raw: IntrinsicsJson =
+            serde_json::from_str(&text).map_err(|e| json_err(e.to_string()))?;
+        Intrinsics::try_from(raw).map_err(json_err)
     }
 
     /// Writes a `symcorr.intrinsics/1` JSON file atomically.

@@ -97,6 +97,16 @@ pub enum KinectError {
     /// A replay request that the log cannot satisfy (frame out of range, empty window, ...).
     #[error("{0}")]
     Replay(String),
+    /// A scan option is out of range ([`crate::ScanOptions::validate`]).
+    #[error("scan option {option} = {value}: expected {expected}")]
+    ScanOption {
+        /// The option (the [`crate::ScanOptions`] field).
+        option: &'static str,
+        /// Its value.
+        value: String,
+        /// What is accepted.
+        expected: &'static str,
+    },
     /// Building the scan mesh failed (e.g. nothing left after background removal).
     #[error("scan: {0}")]
     Scan(String),

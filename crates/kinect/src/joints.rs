@@ -90,22 +90,84 @@ impl JointFormat {
 
     /// Recognises the format from the content: JSON starts with `{`; a Kinect text dump has 61
     /// numbers on its first data line; an NTU file starts with a single integer (frame count).
+    /// [`JointFormat::detect_with_reason`] also says why nothing matched.
     pub fn detect(text: &str) -> Option<JointFormat> {
+        JointFormat::detect_with_reason(text).ok()
+    }
+
+    /// [`JointFormat::detect`], or, when no format matches, one line saying what was tried and
+    /// why each failed (quoting at most [`QUOTE_CHARS`] characters of the first data line).
+    ///
+    /// ```
+    /// use symcorr_kinect::JointFormat;
+    /// assert_eq!(JointFormat::detect_with_reason("3\n"), Ok(JointFormat::NtuSkeleton));
+    /// let why = JointFormat::detect_with_reason("1 2.5 3\n").unwrap_err();
+    /// assert_eq!(
+    ///     why,
+    ///     "not JSON (starts with `1`, not `{`), not a Kinect SDK text log (first line \
+    ///      `1 2.5 3` has 3 fields, expected 61), not an NTU .skeleton file (first line has 3 \
+    ///      fields, expected the frame count alone)"
+    /// );
+    /// ```
+    pub fn detect_with_reason(text: &str) -> Result<JointFormat, String> {
         let trimmed = text.trim_start_matches('\u{feff}').trim_start();
-        if trimmed.starts_with('{') {
-            return Some(JointFormat::Json);
+        let Some(c) = trimmed.chars().next() else {
+            return Err("the file is empty (or only white space)".into());
+        };
+        if c == '{' {
+            return Ok(JointFormat::Json);
         }
-        let first = trimmed
+        let not_json = format!("not JSON (starts with `{}`, not `{{`)", c.escape_debug());
+        let Some(first) = trimmed
             .lines()
             .map(str::trim)
-            .find(|l| !l.is_empty() && !l.starts_with('#'))?;
+            .find(|l| !l.is_empty() && !l.starts_with('#'))
+        else {
+            return Err("the file has only blank lines and # comments".into());
+        };
         let n = crate::sdk_text::tokens(first).count();
         match n {
-            61 => Some(JointFormat::KinectText),
-            1 if first.parse::<u64>().is_ok() => Some(JointFormat::NtuSkeleton),
-            _ => None,
+            61 => return Ok(JointFormat::KinectText),
+            1 if first.parse::<u64>().is_ok() => return Ok(JointFormat::NtuSkeleton),
+            _ => {}
         }
+        let ntu = if n == 1 {
+            "the first line is not a frame count, a non-negative integer".to_string()
+        } else {
+            format!("first line has {n} fields, expected the frame count alone")
+        };
+        Err(format!(
+            "{not_json}, not a Kinect SDK text log (first line `{}` has {n} field{}, expected 61), \
+             not an NTU .skeleton file ({ntu})",
+            quote(first),
+            if n == 1 { "" } else { "s" }
+        ))
     }
+}
+
+/// Most characters of a line that [`JointFormat::detect_with_reason`] quotes (escapes included).
+pub const QUOTE_CHARS: usize = 40;
+
+/// The start of `line`, control characters escaped (`\t`, `\u{1d}`), at most [`QUOTE_CHARS`]
+/// characters in all, then `…` if cut.
+fn quote(line: &str) -> String {
+    let mut out = String::new();
+    let mut len = 0;
+    for c in line.chars() {
+        let piece: String = if c.is_control() {
+            c.escape_debug().collect()
+        } else {
+            c.to_string()
+        };
+        let n = piece.chars().count();
+        if len + n > QUOTE_CHARS {
+            out.push('…');
+            break;
+        }
+        out.push_str(&piece);
+        len += n;
+    }
+    out
 }
 
 /// Which body of a multi-body NTU file to keep.
@@ -144,13 +206,15 @@ pub fn read_ntu_skeleton(
 }
 
 /// Parses joint-file text whose format is recognised from the content; `file` names it in errors.
+///
+/// Errors: [`KinectError::UnknownFormat`] (one line: what was tried and why each failed, see
+/// [`JointFormat::detect_with_reason`]) or the error of the recognised format's parser.
 pub fn parse_joints(text: &str, file: &str) -> Result<(JointLog, JointFormat), KinectError> {
-    let format = JointFormat::detect(text).ok_or_else(|| KinectError::UnknownFormat {
-        file: file.to_string(),
-        message: "expected symcorr.joints/1 JSON, a Kinect SDK text dump (61 values per line) \
-                  or an NTU .skeleton file"
-            .to_string(),
-    })?;
+    let format =
+        JointFormat::detect_with_reason(text).map_err(|message| KinectError::UnknownFormat {
+            file: file.to_string(),
+            message,
+        })?;
     parse_joints_as(text, file, format, BodySelect::MostTracked).map(|log| (log, format))
 }
 

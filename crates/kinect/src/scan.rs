@@ -64,6 +64,74 @@ impl Default for ScanOptions {
     }
 }
 
+/// Largest [`ScanOptions::floor_iterations`] [`ScanOptions::validate`] accepts.
+pub const MAX_FLOOR_ITERATIONS: usize = 100_000;
+
+impl ScanOptions {
+    /// Checks every numeric option: depths finite with `0 ≤ min_depth_m < max_depth_m`,
+    /// `discontinuity_m` and `floor_threshold_m` finite and > 0, `background_margin_m` finite
+    /// and ≥ 0, `floor_iterations` at most [`MAX_FLOOR_ITERATIONS`].
+    ///
+    /// Errors: [`KinectError::ScanOption`], naming the option.
+    ///
+    /// ```
+    /// use symcorr_kinect::ScanOptions;
+    /// assert!(ScanOptions::default().validate().is_ok());
+    /// let bad = ScanOptions { discontinuity_m: f64::NAN, ..ScanOptions::default() };
+    /// assert_eq!(
+    ///     bad.validate().unwrap_err().to_string(),
+    ///     "scan option discontinuity_m = NaN: expected a finite length > 0 (metres)"
+    /// );
+    /// ```
+    pub fn validate(&self) -> Result<(), KinectError> {
+        let bad = |option: &'static str, value: String, expected: &'static str| {
+            Err(KinectError::ScanOption {
+                option,
+                value,
+                expected,
+            })
+        };
+        let o = self;
+        if !(o.min_depth_m.is_finite() && o.min_depth_m >= 0.0) {
+            return bad(
+                "min_depth_m",
+                format!("{:?}", o.min_depth_m),
+                "a finite depth >= 0 (metres)",
+            );
+        }
+        if !(o.max_depth_m.is_finite() && o.max_depth_m > o.min_depth_m) {
+            return bad(
+                "max_depth_m",
+                format!("{:?}", o.max_depth_m),
+                "a finite depth > min_depth_m (metres)",
+            );
+        }
+        for (option, v) in [
+            ("discontinuity_m", o.discontinuity_m),
+            ("floor_threshold_m", o.floor_threshold_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(option, format!("{v:?}"), "a finite length > 0 (metres)");
+            }
+        }
+        if !(o.background_margin_m.is_finite() && o.background_margin_m >= 0.0) {
+            return bad(
+                "background_margin_m",
+                format!("{:?}", o.background_margin_m),
+                "a finite length >= 0 (metres)",
+            );
+        }
+        if o.floor_iterations > MAX_FLOOR_ITERATIONS {
+            return bad(
+                "floor_iterations",
+                o.floor_iterations.to_string(),
+                "at most 100000",
+            );
+        }
+        Ok(())
+    }
+}
+
 /// A triangulated scan.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScanMesh {
@@ -219,7 +287,9 @@ fn ransac_floor(
 /// Builds the scan mesh of one depth frame (module docs). With a `skeleton` (same camera space),
 /// the background beyond its extent is removed and the floor is searched below its hips.
 ///
-/// Errors: [`KinectError::DepthSize`] if the frame does not match the intrinsics,
+/// Errors: [`KinectError::ScanOption`] for an invalid option ([`ScanOptions::validate`]),
+/// [`KinectError::Intrinsics`] for implausible intrinsics ([`Intrinsics::validate`]),
+/// [`KinectError::DepthSize`] if the frame does not match the intrinsics,
 /// [`KinectError::Scan`] if nothing is left to triangulate.
 pub fn scan_mesh(
     frame: &DepthFrame,
@@ -227,6 +297,7 @@ pub fn scan_mesh(
     skeleton: Option<&Skeleton>,
     opts: &ScanOptions,
 ) -> Result<ScanMesh, KinectError> {
+    opts.validate()?;
     let mut points = depth_to_points(frame, k, opts.min_depth_m, opts.max_depth_m)?;
     let mut report = ScanReport {
         valid_pixels: points.iter().filter(|p| p.is_some()).count(),

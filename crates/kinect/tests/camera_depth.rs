@@ -146,3 +146,92 @@ fn bad_depth_pngs_are_typed_errors() {
         Err(KinectError::Io { .. })
     ));
 }
+
+#[test]
+fn implausible_intrinsics_are_refused_naming_the_value() {
+    let ok = Intrinsics::kinect_v1();
+    let cases: [(Intrinsics, &str); 9] = [
+        (
+            Intrinsics { fx: 1e308, ..ok },
+            "fx = 1e308: expected a focal length in 1..=100000 px",
+        ),
+        (
+            Intrinsics { fy: f64::NAN, ..ok },
+            "fy = NaN: expected a focal length",
+        ),
+        (Intrinsics { fx: 0.5, ..ok }, "fx = 0.5: expected"),
+        (Intrinsics { fy: -580.0, ..ok }, "fy = -580.0: expected"),
+        (
+            Intrinsics { width: 0, ..ok },
+            "width = 0: expected 1..=16384 px",
+        ),
+        (
+            Intrinsics {
+                height: 100_000,
+                ..ok
+            },
+            "height = 100000: expected 1..=16384 px",
+        ),
+        (
+            Intrinsics { cx: 1e9, ..ok },
+            "cx = 1000000000.0: expected a principal point in -320..=960 px",
+        ),
+        (
+            Intrinsics {
+                cy: f64::INFINITY,
+                ..ok
+            },
+            "cy = inf: expected a principal point in -240..=720 px",
+        ),
+        (Intrinsics { cx: -321.0, ..ok }, "cx = -321.0: expected"),
+    ];
+    for (k, want) in cases {
+        let e = k.validate().unwrap_err();
+        assert!(matches!(e, KinectError::Intrinsics(_)), "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("invalid intrinsics: ") && msg.contains(want),
+            "{msg}"
+        );
+        assert!(!msg.contains('\n'), "{msg}");
+    }
+    // Near the limits but plausible.
+    for k in [
+        Intrinsics {
+            fx: 1.0,
+            fy: 100_000.0,
+            ..ok
+        },
+        Intrinsics {
+            cx: -320.0,
+            cy: 720.0,
+            ..ok
+        },
+        Intrinsics {
+            width: 16384,
+            height: 1,
+            cx: 0.0,
+            cy: 0.0,
+            ..ok
+        },
+    ] {
+        k.validate().unwrap();
+    }
+    // The file reader names the file and the value.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("k.json");
+    std::fs::write(
+        &p,
+        r#"{"format":"symcorr.intrinsics/1","width":640,"height":480,"fx":1e308,"fy":580.0,"cx":320.0,"cy":240.0}"#,
+    )
+    .unwrap();
+    let e = Intrinsics::read(&p).unwrap_err();
+    assert!(matches!(e, KinectError::Json { .. }), "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.ends_with(
+            "k.json: invalid intrinsics: fx = 1e308: expected a focal length in 1..=100000 px"
+        ),
+        "{msg}"
+    );
+}

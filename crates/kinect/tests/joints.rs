@@ -179,6 +179,7 @@ fn format_is_detected_from_content() {
         parse_joints("hello world\n", "x.txt"),
         Err(KinectError::UnknownFormat { .. })
     ));
+    assert_eq!(JointFormat::detect("  \u{feff}\n"), None);
     // Forcing the wrong format is a parse error, not a panic.
     let e =
         read_joints_with_format(fixture("standing_v1.txt"), JointFormat::NtuSkeleton).unwrap_err();
@@ -566,4 +567,70 @@ fn bundled_joint_files_parse_to_the_values_they_contain() {
         "{v1_files} kinect_v1 files of {}",
         files.len()
     );
+}
+
+#[test]
+fn an_unrecognised_joint_file_says_what_was_tried_and_why_each_failed() {
+    let msg = |text: &str| {
+        let e = parse_joints(text, "x.txt").unwrap_err();
+        assert!(matches!(e, KinectError::UnknownFormat { .. }), "{e}");
+        let m = e.to_string();
+        assert!(!m.contains('\n') && !m.contains('\r'), "{m:?}");
+        m
+    };
+    assert_eq!(
+        msg("# comment\n\n0.5 1 2\n"),
+        "x.txt: unrecognised joint file format: not JSON (starts with `#`, not `{`), not a \
+         Kinect SDK text log (first line `0.5 1 2` has 3 fields, expected 61), not an NTU \
+         .skeleton file (first line has 3 fields, expected the frame count alone)"
+    );
+    // A single field that is not a frame count.
+    assert_eq!(
+        msg("-3\n"),
+        "x.txt: unrecognised joint file format: not JSON (starts with `-`, not `{`), not a \
+         Kinect SDK text log (first line `-3` has 1 field, expected 61), not an NTU .skeleton \
+         file (the first line is not a frame count, a non-negative integer)"
+    );
+    // A long first line is quoted to 40 characters; control characters are escaped.
+    let long = format!("a\tb {}\n", "x ".repeat(100));
+    let m = msg(&long);
+    let quoted = format!("(first line `a\\tb {}x…` has 102 fields", "x ".repeat(17));
+    assert!(m.contains(&quoted), "{m}");
+    // Multi-byte characters are cut on a character boundary.
+    let m = msg(&"é".repeat(50));
+    assert!(m.contains(&format!("`{}…`", "é".repeat(40))), "{m}");
+    assert_eq!(
+        msg(""),
+        "x.txt: unrecognised joint file format: the file is empty (or only white space)"
+    );
+    assert_eq!(
+        msg("# only\n#comments\n"),
+        "x.txt: unrecognised joint file format: the file has only blank lines and # comments"
+    );
+    // What detect recognises, detect_with_reason recognises too.
+    assert_eq!(
+        JointFormat::detect_with_reason(" {\"a\": 1}"),
+        Ok(JointFormat::Json)
+    );
+}
+
+/// Found by the `joints_detect` fuzz target: a first line of control characters, each quoted as
+/// an 8-character escape, made the message hundreds of characters long.
+#[test]
+fn a_first_line_of_control_characters_is_quoted_briefly() {
+    let mut bytes = vec![255u8, 35, 9, 0];
+    bytes.extend([29u8; 92]);
+    bytes.extend([0, 27, 255, 32, 255, 255, 102, 116, 116, 219, 126]);
+    let text = String::from_utf8_lossy(&bytes);
+    let e = parse_joints(&text, "fuzz").unwrap_err();
+    assert!(matches!(e, KinectError::UnknownFormat { .. }), "{e}");
+    let m = e.to_string();
+    assert!(!m.contains('\n'), "{m:?}");
+    let quoted = m.split('`').nth(5).unwrap();
+    assert!(quoted.chars().count() <= 41, "{quoted:?}");
+    assert!(
+        quoted.starts_with("\u{fffd}#\\t\\0\\u{1d}") && quoted.ends_with('…'),
+        "{quoted:?}"
+    );
+    assert!(m.chars().count() < 300, "{m}");
 }

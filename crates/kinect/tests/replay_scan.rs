@@ -347,6 +347,76 @@ fn scan_errors_are_typed() {
 }
 
 #[test]
+fn invalid_scan_options_are_refused_naming_the_option() {
+    let ok = ScanOptions::default();
+    ok.validate().unwrap();
+    let cases = [
+        (
+            ScanOptions {
+                discontinuity_m: f64::NAN,
+                ..ok.clone()
+            },
+            "scan option discontinuity_m = NaN: expected a finite length > 0 (metres)",
+        ),
+        (
+            ScanOptions {
+                discontinuity_m: 0.0,
+                ..ok.clone()
+            },
+            "scan option discontinuity_m = 0.0: expected a finite length > 0 (metres)",
+        ),
+        (
+            ScanOptions {
+                floor_threshold_m: f64::INFINITY,
+                ..ok.clone()
+            },
+            "scan option floor_threshold_m = inf: expected a finite length > 0 (metres)",
+        ),
+        (
+            ScanOptions {
+                min_depth_m: -0.1,
+                ..ok.clone()
+            },
+            "scan option min_depth_m = -0.1: expected a finite depth >= 0 (metres)",
+        ),
+        (
+            ScanOptions {
+                max_depth_m: 0.3,
+                ..ok.clone()
+            },
+            "scan option max_depth_m = 0.3: expected a finite depth > min_depth_m (metres)",
+        ),
+        (
+            ScanOptions {
+                background_margin_m: f64::NEG_INFINITY,
+                ..ok.clone()
+            },
+            "scan option background_margin_m = -inf: expected a finite length >= 0 (metres)",
+        ),
+        (
+            ScanOptions {
+                floor_iterations: 100_001,
+                ..ok.clone()
+            },
+            "scan option floor_iterations = 100001: expected at most 100000",
+        ),
+    ];
+    let k = small_k();
+    let frame = render(&k);
+    for (opts, want) in cases {
+        let e = opts.validate().unwrap_err();
+        assert_eq!(e.to_string(), want);
+        // scan_mesh checks them before any work.
+        let e = scan_mesh(&frame, &k, None, &opts).unwrap_err();
+        assert!(matches!(e, KinectError::ScanOption { .. }), "{e}");
+    }
+    // Implausible intrinsics are refused by scan_mesh too.
+    let bad = Intrinsics { fx: 1e308, ..k };
+    let e = scan_mesh(&frame, &bad, None, &ok).unwrap_err();
+    assert!(matches!(e, KinectError::Intrinsics(_)), "{e}");
+}
+
+#[test]
 fn fusion_takes_the_per_pixel_median() {
     let k = small_k();
     let clean = render(&k);

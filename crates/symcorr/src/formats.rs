@@ -1,7 +1,8 @@
 //! The JSON files symcorr writes, as types (DESIGN.md, Data formats): `symcorr.correspondence/1`
 //! ([`CorrespondenceFile`], written by `match`, `bench --out-dir` and `demo`) and
 //! `symcorr.labels/1` ([`LabelsFile`], written by `label`). [`crate::output`] builds them; any
-//! reader parses them back with [`CorrespondenceFile::read`] / [`LabelsFile::read`] or serde.
+//! reader parses them back with [`CorrespondenceFile::read`] / [`LabelsFile::read`] (from text:
+//! [`CorrespondenceFile::from_json_str`] / [`LabelsFile::from_json_str`]) or serde.
 //!
 //! Fields are declared in alphabetical order, which is the order of the keys in the files
 //! (the files were first written through `serde_json::Value`, whose maps sort their keys);
@@ -254,33 +255,68 @@ pub struct RepairedJoint {
     pub repair: String,
 }
 
-fn read_json<T: serde::de::DeserializeOwned>(
-    path: &Path,
+fn parse_json<T: serde::de::DeserializeOwned>(
+    text: &str,
+    file: &str,
     format: &str,
     tag: impl Fn(&T) -> &str,
 ) -> Result<T, PipelineError> {
     let err = |message: String| PipelineError::File {
-        file: path.display().to_string(),
+        file: file.to_string(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
     let doc: T =
-        serde_json::from_str(&text).map_err(|e| err(format!("not a {format} file: {e}")))?;
+        serde_json::from_str(text).map_err(|e| err(format!("not a {format} file: {e}")))?;
     match tag(&doc) {
         t if t == format => Ok(doc),
         t => Err(err(format!("format {t:?}, expected {format:?}"))),
     }
 }
 
+fn read_text(path: &Path) -> Result<(String, String), PipelineError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| PipelineError::File {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    Ok((text, file))
+}
+
 impl CorrespondenceFile {
-    /// Reads a `symcorr.correspondence/1` file.
+    /// Reads a `symcorr.correspondence/1` file (see [`CorrespondenceFile::from_json_str`]).
     ///
     /// Errors ([`PipelineError::File`], naming the file): unreadable, not JSON of this shape,
     /// or another `format`.
     pub fn read(path: &Path) -> Result<CorrespondenceFile, PipelineError> {
-        read_json(path, CORRESPONDENCE_FORMAT, |d: &CorrespondenceFile| {
-            &d.format
-        })
+        let (text, file) = read_text(path)?;
+        CorrespondenceFile::from_json_str(&text, &file)
+    }
+
+    /// Parses the text of a `symcorr.correspondence/1` file; `file` names it in errors.
+    ///
+    /// Errors ([`PipelineError::File`], naming `file`): not JSON of this shape, or another
+    /// `format`.
+    ///
+    /// ```
+    /// use symcorr::formats::CorrespondenceFile;
+    /// let text = r#"{"format":"symcorr.correspondence/1","pairs":[[0,3,0.9]],
+    ///   "segments":{"target":[0,1,null,2],"template":[0]},
+    ///   "skeleton_filter":{"fallbacks":0,"kept":0,"points":0,"removed":0,"segment_missing":0},
+    ///   "target":{"path":"b.ply","vertices":4},"template":{"path":"a.ply","vertices":1},
+    ///   "timings_s":{"articulated":0.5}}"#;
+    /// let doc = CorrespondenceFile::from_json_str(text, "<memory>").unwrap();
+    /// assert_eq!(doc.pairs, vec![(0, 3, 0.9)]);
+    /// assert_eq!(CorrespondenceFile::from_json_str(&doc.to_json(), "<memory>").unwrap(), doc);
+    /// let e = CorrespondenceFile::from_json_str("{}", "c.json").unwrap_err();
+    /// assert!(e.to_string().starts_with("c.json: not a symcorr.correspondence/1 file"));
+    /// ```
+    pub fn from_json_str(text: &str, file: &str) -> Result<CorrespondenceFile, PipelineError> {
+        parse_json(
+            text,
+            file,
+            CORRESPONDENCE_FORMAT,
+            |d: &CorrespondenceFile| &d.format,
+        )
     }
 
     /// The file as compact JSON (what the commands write).
@@ -291,12 +327,37 @@ impl CorrespondenceFile {
 }
 
 impl LabelsFile {
-    /// Reads a `symcorr.labels/1` file.
+    /// Reads a `symcorr.labels/1` file (see [`LabelsFile::from_json_str`]).
     ///
     /// Errors ([`PipelineError::File`], naming the file): unreadable, not JSON of this shape,
     /// or another `format`.
     pub fn read(path: &Path) -> Result<LabelsFile, PipelineError> {
-        read_json(path, LABELS_FORMAT, |d: &LabelsFile| &d.format)
+        let (text, file) = read_text(path)?;
+        LabelsFile::from_json_str(&text, &file)
+    }
+
+    /// Parses the text of a `symcorr.labels/1` file; `file` names it in errors.
+    ///
+    /// Errors ([`PipelineError::File`], naming `file`): not JSON of this shape, or another
+    /// `format`.
+    ///
+    /// ```
+    /// use symcorr::formats::LabelsFile;
+    /// let text = r#"{"diagnostics":{"alignment":{"fit_after":0.01,"fit_before":0.02,
+    ///     "rotation":[[1,0,0],[0,1,0],[0,0,1]],"scale":1.0,"translation":[0,0,0]},
+    ///   "boundaries":"joint-planes","components":[{"fallback":false,"vertices":3,
+    ///     "visible_vertices":3}],"convention_changes":null,"joint_asymmetry":null,
+    ///   "joint_moves":[],"mirrored_fixed":false,"nearest_bone_vertices":0,"repaired_joints":[]},
+    ///   "format":"symcorr.labels/1","joints":{"head":[0,1.7,0]},"labels":[0,0,1],
+    ///   "mesh":{"path":"body.ply","vertices":3},"segments":["head","torso"]}"#;
+    /// let doc = LabelsFile::from_json_str(text, "<memory>").unwrap();
+    /// assert_eq!(doc.labels, vec![0, 0, 1]);
+    /// assert_eq!(LabelsFile::from_json_str(&doc.to_json(), "<memory>").unwrap(), doc);
+    /// let e = LabelsFile::from_json_str("[]", "l.json").unwrap_err();
+    /// assert!(e.to_string().starts_with("l.json: not a symcorr.labels/1 file"));
+    /// ```
+    pub fn from_json_str(text: &str, file: &str) -> Result<LabelsFile, PipelineError> {
+        parse_json(text, file, LABELS_FORMAT, |d: &LabelsFile| &d.format)
     }
 
     /// The file as compact JSON (what `symcorr label` writes).

@@ -52,13 +52,14 @@ pub struct ScanArgs {
     /// Depth frame of the recording/device stream to use (0-based count of delivered frames).
     #[arg(long, value_name = "N", conflicts_with = "time")]
     pub frame: Option<usize>,
-    /// Time in the recording (seconds from its first frame) of the depth frame to use.
+    /// Time in the recording (seconds from its first frame, finite, >= 0) of the depth frame to
+    /// use.
     #[arg(long, value_name = "S")]
     pub time: Option<f64>,
-    /// Fuse this many consecutive frames (per-pixel median) into one before meshing.
+    /// Fuse this many consecutive frames (per-pixel median) into one before meshing (1..=300).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub fuse: usize,
-    /// Largest depth jump along a triangle edge, metres.
+    /// Largest depth jump along a triangle edge, metres (finite, > 0).
     #[arg(long, default_value_t = 0.05)]
     pub discontinuity: f64,
     /// Keep the floor (no RANSAC floor removal).
@@ -69,11 +70,40 @@ pub struct ScanArgs {
     pub pixel_map: Option<PathBuf>,
 }
 
-/// Runs `symcorr scan`.
-pub fn run(a: ScanArgs) -> Result<(), CliError> {
-    if a.fuse == 0 {
-        return Err(CliError("--fuse must be at least 1".into()));
+/// Most frames `--fuse` takes (10 s of a 30 Hz stream).
+pub const MAX_FUSE: usize = 300;
+
+/// Checks every numeric option before any file is read: `--fuse` in `1..=`[`MAX_FUSE`],
+/// `--discontinuity` finite and > 0, `--time` finite and >= 0. The error names the option.
+fn check_numbers(a: &ScanArgs) -> Result<(), CliError> {
+    if !(1..=MAX_FUSE).contains(&a.fuse) {
+        return Err(CliError(format!(
+            "--fuse {}: expected 1..={MAX_FUSE} frames",
+            a.fuse
+        )));
     }
+    if !(a.discontinuity.is_finite() && a.discontinuity > 0.0) {
+        return Err(CliError(format!(
+            "--discontinuity {:?}: expected a finite length > 0 (metres)",
+            a.discontinuity
+        )));
+    }
+    if let Some(t) = a.time {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(CliError(format!(
+                "--time {t:?}: expected a finite time >= 0 (seconds)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Runs `symcorr scan`.
+///
+/// Errors: an invalid numeric option (named), an invalid intrinsics file (named, with the
+/// value at fault), and any error reading the inputs or building the mesh.
+pub fn run(a: ScanArgs) -> Result<(), CliError> {
+    check_numbers(&a)?;
     // Every output is checked before any work (not a directory, not an input, its directory
     // exists).
     let inputs: Vec<&std::path::Path> = [
@@ -356,6 +386,128 @@ mod tests {
             m["pixel_ids"].as_array().unwrap().len(),
             mesh.num_vertices()
         );
+    }
+
+    /// `scan --depth d.png --intrinsics k.json --joints j.json --out scan.ply` in `dir` (the
+    /// files need not exist).
+    fn png_args(dir: &std::path::Path) -> ScanArgs {
+        ScanArgs {
+            oni: None,
+            depth: Some(dir.join("d.png")),
+            device: false,
+            uri: None,
+            intrinsics: Some(dir.join("k.json")),
+            joints: dir.join("j.json"),
+            joints_format: None,
+            joints_frame: None,
+            out: dir.join("scan.ply"),
+            frame: None,
+            time: None,
+            fuse: 1,
+            discontinuity: 0.05,
+            keep_floor: false,
+            pixel_map: None,
+        }
+    }
+
+    #[test]
+    fn invalid_numeric_options_are_refused_naming_the_option() {
+        let dir = tempfile::tempdir().unwrap();
+        type Edit = fn(&mut ScanArgs);
+        let cases: [(Edit, &str); 8] = [
+            (
+                |a| a.discontinuity = f64::NAN,
+                "--discontinuity NaN: expected a finite length > 0 (metres)",
+            ),
+            (
+                |a| a.discontinuity = f64::INFINITY,
+                "--discontinuity inf: expected a finite length > 0 (metres)",
+            ),
+            (
+                |a| a.discontinuity = -0.05,
+                "--discontinuity -0.05: expected a finite length > 0 (metres)",
+            ),
+            (
+                |a| a.discontinuity = 0.0,
+                "--discontinuity 0.0: expected a finite length > 0 (metres)",
+            ),
+            (
+                |a| a.time = Some(f64::NAN),
+                "--time NaN: expected a finite time >= 0 (seconds)",
+            ),
+            (
+                |a| a.time = Some(-1.0),
+                "--time -1.0: expected a finite time >= 0 (seconds)",
+            ),
+            (|a| a.fuse = 0, "--fuse 0: expected 1..=300 frames"),
+            (|a| a.fuse = 301, "--fuse 301: expected 1..=300 frames"),
+        ];
+        for (set, want) in cases {
+            let mut a = png_args(dir.path());
+            set(&mut a);
+            // Refused before any file is read (none of them exists).
+            assert_eq!(run(a).unwrap_err().to_string(), want);
+        }
+        let mut a = png_args(dir.path());
+        a.time = Some(0.0);
+        a.fuse = MAX_FUSE;
+        check_numbers(&a).unwrap();
+    }
+
+    #[test]
+    fn implausible_intrinsics_files_are_refused_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let k = Intrinsics {
+            width: 160,
+            height: 120,
+            fx: 142.8,
+            fy: 142.8,
+            cx: 80.0,
+            cy: 60.0,
+        };
+        symcorr_kinect::write_depth_png16(dir.path().join("d.png"), &sphere_frame(&k)).unwrap();
+        let mut p = [[0.0; 3]; 20];
+        for (i, q) in p.iter_mut().enumerate() {
+            let t = i as f64 / 19.0;
+            *q = [0.2 * (2.0 * t - 1.0), 0.2 - 0.4 * t, 2.45 + 0.1 * t];
+        }
+        symcorr_kinect::write_joints_json(
+            dir.path().join("j.json"),
+            &JointLog::from_skeletons(vec![Skeleton::from_arrays(p)], 30.0),
+        )
+        .unwrap();
+        for (field, value, want) in [
+            (
+                "fx",
+                "1e308",
+                "fx = 1e308: expected a focal length in 1..=100000 px",
+            ),
+            (
+                "fy",
+                "0.0",
+                "fy = 0.0: expected a focal length in 1..=100000 px",
+            ),
+            (
+                "cx",
+                "5000.0",
+                "cx = 5000.0: expected a principal point in -80..=240 px",
+            ),
+        ] {
+            let text = serde_json::to_string(&k).unwrap().replace(
+                &format!(
+                    "\"{field}\":{}",
+                    if field == "cx" { "80.0" } else { "142.8" }
+                ),
+                &format!("\"{field}\":{value}"),
+            );
+            std::fs::write(dir.path().join("k.json"), text).unwrap();
+            let e = run(png_args(dir.path())).unwrap_err().to_string();
+            assert!(
+                e.contains("k.json: invalid intrinsics: ") && e.contains(want),
+                "{e}"
+            );
+            assert!(!dir.path().join("scan.ply").exists());
+        }
     }
 
     #[test]

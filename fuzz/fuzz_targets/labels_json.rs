@@ -1,0 +1,19 @@
+#![no_main]
+// The symcorr.labels/1 reader (symcorr::formats::LabelsFile::from_json_str) on arbitrary bytes
+// decoded as lossy UTF-8: it must return Ok or a typed error naming the file, never panic; and
+// whatever it accepts must write (to_json) and read back to the same value.
+
+use libfuzzer_sys::fuzz_target;
+use symcorr::formats::LabelsFile;
+
+fuzz_target!(|data: &[u8]| {
+    let text = String::from_utf8_lossy(data);
+    match LabelsFile::from_json_str(&text, "fuzz.json") {
+        Ok(doc) => {
+            let back = LabelsFile::from_json_str(&doc.to_json(), "fuzz.json")
+                .expect("the writer's output reads back");
+            assert_eq!(back, doc, "labels round trip changed the value");
+        }
+        Err(e) => assert!(e.to_string().starts_with("fuzz.json: "), "{e}"),
+    }
+});
