@@ -56,7 +56,11 @@ fn make_dataset(d: &Path, case_dir: &Path, spec: &Value) {
     let body = spec["body"].as_str().unwrap();
     std::fs::write(d.join("pairs.txt"), format!("s0_rest {body}\n")).unwrap();
     if let Some(j) = spec["joints"].as_str() {
-        std::fs::copy(case_dir.join(j), d.join("joints").join(format!("{body}.json"))).unwrap();
+        std::fs::copy(
+            case_dir.join(j),
+            d.join("joints").join(format!("{body}.json")),
+        )
+        .unwrap();
     }
     let mesh_path = d.join("meshes").join(format!("{body}.ply"));
     let mut mesh = symcorr_mesh::io::read(&mesh_path).unwrap().mesh;
@@ -86,7 +90,11 @@ fn every_bad_input_is_refused_cleanly_or_handled_correctly() {
         let name = c["name"].as_str().unwrap();
         let src = root().join("tests/bad_inputs/cases").join(name);
         let tmp = tempfile::tempdir().unwrap();
-        let (cd, od, dd) = (tmp.path().join("C"), tmp.path().join("O"), tmp.path().join("D"));
+        let (cd, od, dd) = (
+            tmp.path().join("C"),
+            tmp.path().join("O"),
+            tmp.path().join("D"),
+        );
         copy_dir(&src, &cd);
         std::fs::create_dir_all(&od).unwrap();
         if let Some(spec) = c.get("dataset") {
@@ -94,11 +102,14 @@ fn every_bad_input_is_refused_cleanly_or_handled_correctly() {
         }
         let before = listing(&cd);
         let fill = |a: &str| {
-            a.replace("{F}", &root().join("fixtures/synth/bodies").display().to_string())
-                .replace("{K}", &root().join("fixtures/kinect").display().to_string())
-                .replace("{C}", &cd.display().to_string())
-                .replace("{O}", &od.display().to_string())
-                .replace("{D}", &dd.display().to_string())
+            a.replace(
+                "{F}",
+                &root().join("fixtures/synth/bodies").display().to_string(),
+            )
+            .replace("{K}", &root().join("fixtures/kinect").display().to_string())
+            .replace("{C}", &cd.display().to_string())
+            .replace("{O}", &od.display().to_string())
+            .replace("{D}", &dd.display().to_string())
         };
         let args: Vec<String> = c["args"]
             .as_array()
@@ -143,8 +154,7 @@ fn every_bad_input_is_refused_cleanly_or_handled_correctly() {
             }
         } else if c.get("dataset").is_some() {
             let summary: Value =
-                serde_json::from_str(&std::fs::read_to_string(od.join("b.json")).unwrap())
-                    .unwrap();
+                serde_json::from_str(&std::fs::read_to_string(od.join("b.json")).unwrap()).unwrap();
             let flips = summary["flip_rate"].as_f64().unwrap_or(f64::NAN);
             if flips != 0.0 {
                 fail(format!("flip rate {flips}, expected 0"));

@@ -290,7 +290,10 @@ pub(crate) fn measure(
         .filter(|&j| usable[j])
         .filter_map(|j| fm.nearest(&p[j]).map(|(_, d)| d / h))
         .collect();
-    checks.push(FitCheck::new(FitCheckKind::SurfaceDistance, median(joint_d)));
+    checks.push(FitCheck::new(
+        FitCheckKind::SurfaceDistance,
+        median(joint_d),
+    ));
     // Vertices to the bones (an even stride of at most 2000).
     let stride = (fm.positions.len() / 2000).max(1);
     let mut cover: Vec<f64> = fm
@@ -345,10 +348,7 @@ pub(crate) fn measure(
         FitCheckKind::Unreached,
         unreached.len() as f64 / fm.positions.len().max(1) as f64,
     ));
-    let score = checks
-        .iter()
-        .map(FitCheck::quality)
-        .fold(1.0f64, f64::min);
+    let score = checks.iter().map(FitCheck::quality).fold(1.0f64, f64::min);
     FitQuality {
         score,
         checks,
@@ -367,7 +367,10 @@ fn objective(fm: &FitMesh, p: &Joints, usable: &[bool; 20], h: f64) -> f64 {
     let samples = bone_samples(p, usable);
     let n = samples.len().max(1) as f64;
     let depth: f64 = match fm.outward {
-        Some(sign) => samples.iter().map(|x| fm.outside_depth(x, sign).max(0.0)).sum(),
+        Some(sign) => samples
+            .iter()
+            .map(|x| fm.outside_depth(x, sign).max(0.0))
+            .sum(),
         None => samples
             .iter()
             .map(|x| fm.nearest(x).map_or(f64::INFINITY, |(_, d)| d))
@@ -435,7 +438,8 @@ pub(crate) fn search(
                     let mut moves: Vec<Placement> = Vec::with_capacity(12);
                     for axis in [up, left, facing] {
                         for s in [-1.0, 1.0] {
-                            let d = Rotation3::from_axis_angle(&Unit::new_unchecked(axis), s * angle);
+                            let d =
+                                Rotation3::from_axis_angle(&Unit::new_unchecked(axis), s * angle);
                             // Turn about the centroid: x ↦ d(x − c) + c.
                             moves.push((d * r, d * t + c - d * c));
                             moves.push((r, t + axis * (s * shift)));
@@ -517,7 +521,11 @@ mod tests {
         let ico = symcorr_mesh::testmesh::icosahedron();
         let n = body.num_vertices() as u32;
         let mut positions = body.positions.clone();
-        positions.extend(ico.positions.iter().map(|p| [p[0] * 0.1 + 3.0, p[1] * 0.1, p[2] * 0.1]));
+        positions.extend(
+            ico.positions
+                .iter()
+                .map(|p| [p[0] * 0.1 + 3.0, p[1] * 0.1, p[2] * 0.1]),
+        );
         let mut triangles = body.triangles.clone();
         triangles.extend(ico.triangles.iter().map(|t| t.map(|v| v + n)));
         let mesh = TriMesh::new(positions, triangles).unwrap();
@@ -538,7 +546,12 @@ mod tests {
             ..AttachOptions::default()
         };
         match attach(&mesh, &sk, &refuse) {
-            Err(AttachError::PoorFit { check, value, limit, .. }) => {
+            Err(AttachError::PoorFit {
+                check,
+                value,
+                limit,
+                ..
+            }) => {
                 assert!(value > limit, "{check} {value} {limit}");
                 assert!(!e_has_newline(check));
             }

@@ -505,8 +505,8 @@ pub(crate) fn attach_with_usable(
             let f = fit::measure(&fit_mesh, &q, &qu, height, &m);
             if f.passed()
                 && best
-                .as_ref()
-                .is_none_or(|b: &(fit::FitQuality, _, _, _, _, _)| f.score > b.0.score)
+                    .as_ref()
+                    .is_none_or(|b: &(fit::FitQuality, _, _, _, _, _)| f.score > b.0.score)
             {
                 best = Some((f, q, qu, m, r, t));
             }
@@ -517,7 +517,9 @@ pub(crate) fn attach_with_usable(
             alignment.fit_after = f
                 .check(FitCheckKind::SurfaceDistance)
                 .map_or(f64::NAN, |c| c.value);
-            alignment.coverage = f.check(FitCheckKind::Coverage).map_or(f64::NAN, |c| c.value);
+            alignment.coverage = f
+                .check(FitCheckKind::Coverage)
+                .map_or(f64::NAN, |c| c.value);
             (fit, positions, usable, mirror) = (f, q, qu, m);
         }
     }

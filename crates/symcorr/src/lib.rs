@@ -67,8 +67,8 @@ pub use pipeline::{
     Correspondence, Method, MethodReport, Mode, Pipeline, PipelineOptions, DEFAULT_SAMPLES,
 };
 pub use prepare::{
-    PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS, DEFAULT_EIGENPAIRS,
-    DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO, metres_per_unit,
+    metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
+    DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO,
 };
 
 /// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.

@@ -5,10 +5,9 @@
 //! rename), so a failure never leaves a half-written output.
 
 use crate::formats::{
-    FitCheckEntry, FitEntry,
     Alignment, Component, CorrespondenceFile, ExplainFile, ExplainedCandidate, ExplainedSelection,
-    FilterCounts, JointMoveEntry, LabelDiagnostics, LabelsFile, MeshPair, MeshRef, RepairedJoint,
-    EXPLAIN_FORMAT, LABELS_FORMAT,
+    FilterCounts, FitCheckEntry, FitEntry, JointMoveEntry, LabelDiagnostics, LabelsFile, MeshPair,
+    MeshRef, RepairedJoint, EXPLAIN_FORMAT, LABELS_FORMAT,
 };
 use crate::{Correspondence, PreparedMesh};
 use nalgebra::{distance_squared, Point3};

@@ -58,8 +58,9 @@ fn load(dir: &Path) -> Result<BTreeMap<String, Body>, String> {
         let mesh = symcorr_mesh::io::read(&path)
             .map_err(|e| e.to_string())?
             .mesh;
-        let joints = symcorr::io::read_skeleton(&dir.join("joints").join(format!("{name}.json")), None)
-            .map_err(|e| e.to_string())?;
+        let joints =
+            symcorr::io::read_skeleton(&dir.join("joints").join(format!("{name}.json")), None)
+                .map_err(|e| e.to_string())?;
         let text = std::fs::read_to_string(dir.join("labels").join(format!("{name}.txt")))
             .map_err(|e| e.to_string())?;
         let labels = text
@@ -71,7 +72,14 @@ fn load(dir: &Path) -> Result<BTreeMap<String, Body>, String> {
                     .ok_or_else(|| format!("{name}: bad label {t}"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        out.insert(name, Body { mesh, joints, labels });
+        out.insert(
+            name,
+            Body {
+                mesh,
+                joints,
+                labels,
+            },
+        );
     }
     Ok(out)
 }
@@ -121,18 +129,26 @@ fn run_case(body: &Body, case: &str, joints: &Skeleton) {
     let mut line = format!("  {case:<14}");
     for k in FitCheckKind::ALL {
         match fit.check(k) {
-            Some(c) => line += &format!(
-                " {}={:.3}{}",
-                k.name(),
-                c.value,
-                if c.passed { " " } else { "*" }
-            ),
+            Some(c) => {
+                line += &format!(
+                    " {}={:.3}{}",
+                    k.name(),
+                    c.value,
+                    if c.passed { " " } else { "*" }
+                )
+            }
             None => line += &format!(" {}=-    ", k.name()),
         }
     }
     let moved = !a.diagnostics.alignment.is_identity();
     let n = body.labels.len().min(a.labels.len()) as f64;
-    let agree = a.labels.iter().zip(&body.labels).filter(|(x, y)| x == y).count() as f64 / n;
+    let agree = a
+        .labels
+        .iter()
+        .zip(&body.labels)
+        .filter(|(x, y)| x == y)
+        .count() as f64
+        / n;
     let mirror = a
         .labels
         .iter()
@@ -169,7 +185,11 @@ fn main() {
     let names: Vec<&String> = bodies.keys().collect();
     for (i, name) in names.iter().enumerate() {
         let body = &bodies[*name];
-        if args.only.as_ref().is_some_and(|o| !name.contains(o.as_str())) {
+        if args
+            .only
+            .as_ref()
+            .is_some_and(|o| !name.contains(o.as_str()))
+        {
             continue;
         }
         println!("{name}");
@@ -180,10 +200,18 @@ fn main() {
         run_case(body, "noisy", &noisy);
         for &deg in &args.turns {
             let r = Rotation3::from_axis_angle(&Vector3::y_axis(), deg.to_radians());
-            run_case(body, &format!("turned {deg}"), &transformed(&body.joints, |p| r * p));
+            run_case(
+                body,
+                &format!("turned {deg}"),
+                &transformed(&body.joints, |p| r * p),
+            );
         }
         let flip = Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI);
-        run_case(body, "upside down", &transformed(&body.joints, |p| flip * p));
+        run_case(
+            body,
+            "upside down",
+            &transformed(&body.joints, |p| flip * p),
+        );
         // Another pose of the same subject, and the same pose of another subject.
         let (subject, pose) = name.split_once('_').unwrap_or((name, ""));
         if let Some(other) = names

@@ -290,9 +290,7 @@ pub fn load_prepared(
 ) -> Result<PreparedMesh, CliError> {
     let m = read_mesh(mesh).map_err(|e| CliError(e.to_string()))?;
     let sk = read_skeleton_as(joints, frame, format).map_err(|e| CliError(e.to_string()))?;
-    pipeline
-        .prepare(m, &sk)
-        .map_err(|e| blame(mesh, joints, e))
+    pipeline.prepare(m, &sk).map_err(|e| blame(mesh, joints, e))
 }
 
 /// Names the file an error of preparing `mesh` with `joints` concerns: the joints for a
