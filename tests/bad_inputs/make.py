@@ -187,6 +187,22 @@ def main():
          ["scan", "--depth", "{F}/../scan/depth.png", "--intrinsics", "{F}/../scan/intrinsics.json",
           "--joints", "{F}/../scan/joints.json", "--out", "{O}/s.ply", "--discontinuity", "NaN"],
          1, ["discontinuity"], ["{O}/s.ply"])
+    with open(os.path.join(ROOT, "fixtures/synth/scan/joints.json")) as f:
+        shifted = json.load(f)
+    for fr in shifted["frames"]:
+        for k, v in fr["joints"].items():
+            p = v if isinstance(v, list) else v["position"]
+            p[0] += 0.8
+    case("scan_joints_of_another_frame",
+         ["scan", "--depth", "{F}/../scan/depth.png", "--intrinsics", "{F}/../scan/intrinsics.json",
+          "--joints", "{C}/j.json", "--out", "{O}/s.ply"],
+         1, ["do not lie on the body"], ["{O}/s.ply"], files={"j.json": json.dumps(shifted)})
+    case("scan_intrinsics_fx_1e308",
+         ["scan", "--depth", "{F}/../scan/depth.png", "--intrinsics", "{C}/k.json",
+          "--joints", "{F}/../scan/joints.json", "--out", "{O}/s.ply"],
+         1, ["k.json", "fx"], ["{O}/s.ply"],
+         files={"k.json": json.dumps({"format": "symcorr.intrinsics/1", "width": 640, "height": 480,
+                                      "fx": 1e308, "fy": 580.0, "cx": 319.5, "cy": 239.5})})
     # Meaningful but wrong: 0 flips (bench on a copy of the bodies with one body changed).
     for deg in (30, 90, 180):
         case(f"joints_turned_{deg}", ["bench", "{D}", "--mode", "dense", "--json", "{O}/b.json"], 0,

@@ -3,7 +3,10 @@
 //! 1. Every pixel with a depth in `[min_depth_m, max_depth_m]` is unprojected with
 //!    [`Intrinsics::unproject`] (the organised cloud keeps the pixel grid).
 //! 2. Background: with a skeleton, points outside the skeleton's bounding box grown by
-//!    `background_margin_m` are dropped (walls, furniture, other people).
+//!    `background_margin_m` are dropped (walls, furniture, other people). First the joints must
+//!    lie on the body the frame shows (at least half within [`JOINT_DEPTH_TOLERANCE_M`] of the
+//!    surface at their pixel); joints of another frame, camera or unit are refused rather than
+//!    left to crop the body.
 //! 3. Floor: RANSAC plane fit ([`ScanOptions::floor_iterations`] samples, deterministic seed);
 //!    the plane must be within 35° of horizontal (the skeleton's up, or camera +y without a
 //!    skeleton) and, with a skeleton, below the hip centre; its inliers (within
@@ -284,13 +287,70 @@ fn ransac_floor(
     best
 }
 
+/// Largest depth difference, metres, between a joint and the surface seen around its pixel for
+/// the joint to lie on the body in this frame: a joint sits at most ~0.2 m behind the surface the
+/// camera sees (a far-side joint in a profile view), plus the sensor's noise.
+pub const JOINT_DEPTH_TOLERANCE_M: f64 = 0.35;
+
+/// Refuses a skeleton whose joints do not lie on the body this depth frame shows (joints of
+/// another frame, camera or unit): fewer than half of the usable joints project into the image
+/// onto a surface within [`JOINT_DEPTH_TOLERANCE_M`] of their depth (a 7×7 pixel window, so a
+/// joint just beside a silhouette still finds it). Without the check the background box built
+/// from such joints silently cuts the body.
+fn check_joints_on_depth(
+    frame: &DepthFrame,
+    k: &Intrinsics,
+    points: &[Option<Point3<f64>>],
+    s: &Skeleton,
+) -> Result<(), KinectError> {
+    let (w, h) = (frame.width as i64, frame.height as i64);
+    let mut usable = 0;
+    let mut on_body = 0;
+    for j in Joint::ALL {
+        let p = s.position(j);
+        if !(s.confidence[j.index()] > 0.0 || s.interpolated[j.index()])
+            || !p.coords.iter().all(|x| x.is_finite())
+        {
+            continue;
+        }
+        usable += 1;
+        if p.z <= 0.0 {
+            continue;
+        }
+        let [u, v] = k.project(&p);
+        let (u, v) = (u.round() as i64, v.round() as i64);
+        let near = (-3..=3).any(|dv| {
+            (-3..=3).any(|du| {
+                let (x, y) = (u + du, v + dv);
+                (0..w).contains(&x)
+                    && (0..h).contains(&y)
+                    && points[(y * w + x) as usize]
+                        .is_some_and(|q| (q.z - p.z).abs() <= JOINT_DEPTH_TOLERANCE_M)
+            })
+        });
+        if near {
+            on_body += 1;
+        }
+    }
+    if usable > 0 && 2 * on_body < usable {
+        return Err(KinectError::Scan(format!(
+            "the joints do not lie on the body in this depth frame: only {on_body} of {usable} \
+             project onto a surface within {JOINT_DEPTH_TOLERANCE_M} m of their depth; are they \
+             from another frame, another camera or in another unit (metres expected)?"
+        )));
+    }
+    Ok(())
+}
+
 /// Builds the scan mesh of one depth frame (module docs). With a `skeleton` (same camera space),
 /// the background beyond its extent is removed and the floor is searched below its hips.
 ///
 /// Errors: [`KinectError::ScanOption`] for an invalid option ([`ScanOptions::validate`]),
 /// [`KinectError::Intrinsics`] for implausible intrinsics ([`Intrinsics::validate`]),
 /// [`KinectError::DepthSize`] if the frame does not match the intrinsics,
-/// [`KinectError::Scan`] if nothing is left to triangulate.
+/// [`KinectError::Scan`] if nothing is left to triangulate or the skeleton's joints do not lie on
+/// the body the frame shows (fewer than half within [`JOINT_DEPTH_TOLERANCE_M`] of the surface at
+/// their pixel: joints of another frame, camera or unit).
 pub fn scan_mesh(
     frame: &DepthFrame,
     k: &Intrinsics,
@@ -304,6 +364,7 @@ pub fn scan_mesh(
         ..ScanReport::default()
     };
     if let Some(s) = skeleton {
+        check_joints_on_depth(frame, k, &points, s)?;
         let margin = Vector3::repeat(opts.background_margin_m);
         let mut lo = Point3::from([f64::INFINITY; 3]);
         let mut hi = Point3::from([f64::NEG_INFINITY; 3]);

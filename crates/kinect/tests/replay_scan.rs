@@ -297,6 +297,35 @@ fn scan_keeps_only_the_subject_surface() {
 }
 
 #[test]
+fn joints_of_another_frame_or_unit_are_refused_not_used_to_crop() {
+    let k = small_k();
+    let frame = render(&k);
+    let moved = |f: &dyn Fn([f64; 3]) -> [f64; 3]| {
+        let s = subject_skeleton();
+        let mut p = [[0.0; 3]; 20];
+        for (i, q) in p.iter_mut().enumerate() {
+            *q = f(s.positions[i].into());
+        }
+        Skeleton::from_arrays(p)
+    };
+    // The person a metre to the side (joints of another frame), and joints in millimetres.
+    for s in [
+        moved(&|[x, y, z]| [x + 1.0, y, z]),
+        moved(&|q| q.map(|c| c * 1000.0)),
+    ] {
+        let e = scan_mesh(&frame, &k, Some(&s), &ScanOptions::default()).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("do not lie on the body") && !msg.contains('\n'),
+            "{msg}"
+        );
+    }
+    // A few centimetres of tracker offset is not another frame.
+    let s = moved(&|[x, y, z]| [x + 0.03, y - 0.02, z + 0.05]);
+    assert!(scan_mesh(&frame, &k, Some(&s), &ScanOptions::default()).is_ok());
+}
+
+#[test]
 fn without_cleanup_the_grid_mesh_never_bridges_depth_jumps() {
     let k = small_k();
     let frame = render(&k);

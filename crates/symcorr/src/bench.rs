@@ -151,6 +151,7 @@ pub fn run_bench(
     dataset: &Dataset,
     pipeline: &Pipeline,
     frame: Option<usize>,
+    max_input_bytes: u64,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<BenchReport, PipelineError> {
     let start = Instant::now();
@@ -172,7 +173,7 @@ pub fn run_bench(
                 file: mesh_path.display().to_string(),
                 message: e.to_string(),
             };
-            let mesh = crate::io::read_mesh(mesh_path)?;
+            let mesh = crate::io::read_mesh(mesh_path, max_input_bytes)?;
             let sk = crate::io::read_skeleton(&dataset.joints[name], frame)?;
             let p = pipeline.prepare(mesh, &sk).map_err(in_mesh)?;
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;

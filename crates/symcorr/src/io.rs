@@ -4,26 +4,10 @@
 
 use crate::PipelineError;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 use symcorr_kinect::JointFormat;
-use symcorr_mesh::io::{ReadOptions, DEFAULT_MAX_INPUT_BYTES};
+use symcorr_mesh::io::ReadOptions;
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::Skeleton;
-
-/// The input size limit of [`read_mesh`]: process-wide, because it is one command-line option
-/// (`--max-input-size`) that applies to every mesh every command reads.
-static MAX_INPUT_BYTES: AtomicU64 = AtomicU64::new(DEFAULT_MAX_INPUT_BYTES);
-
-/// Sets the most bytes [`read_mesh`] reads for one mesh (the file, plus a `.gltf`'s external
-/// buffers) from now on; the `symcorr` command sets it once from `--max-input-size`.
-pub fn set_max_input_bytes(bytes: u64) {
-    MAX_INPUT_BYTES.store(bytes, Ordering::Relaxed);
-}
-
-/// The current limit of [`read_mesh`] (default [`DEFAULT_MAX_INPUT_BYTES`], 1 GiB).
-pub fn max_input_bytes() -> u64 {
-    MAX_INPUT_BYTES.load(Ordering::Relaxed)
-}
 
 /// Parses a byte count: plain bytes (`1048576`) or a whole number with a binary suffix
 /// `K`, `M`, `G` or `T` (case-insensitive, optionally followed by `B` or `iB`: `2G`, `512MiB`).
@@ -63,10 +47,12 @@ pub fn parse_byte_size(text: &str) -> Result<u64, String> {
 }
 
 /// Reads a mesh file (OFF, OBJ, PLY, glTF/GLB, by extension) in the file's vertex order,
-/// refusing inputs over [`max_input_bytes`] (`MeshError::InputTooLarge`).
-pub fn read_mesh(path: &Path) -> Result<TriMesh, PipelineError> {
+/// refusing inputs over `max_input_bytes` (`MeshError::InputTooLarge`; the file plus a
+/// `.gltf`'s external buffers; the command line's `--max-input-size`, by default
+/// `symcorr_mesh::io::DEFAULT_MAX_INPUT_BYTES`, 1 GiB).
+pub fn read_mesh(path: &Path, max_input_bytes: u64) -> Result<TriMesh, PipelineError> {
     let options = ReadOptions {
-        max_input_bytes: max_input_bytes(),
+        max_input_bytes,
         ..ReadOptions::default()
     };
     Ok(symcorr_mesh::io::read_with_options(path, &options)?.mesh)

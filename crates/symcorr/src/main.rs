@@ -39,14 +39,14 @@ enum Command {
 fn main() -> ExitCode {
     restore_sigpipe();
     let args = Args::parse();
-    symcorr::io::set_max_input_bytes(args.max_input_size);
+    let limit = args.max_input_size;
     let result = match args.command {
-        Command::Spectrum(a) => cli::spectrum::run(a),
-        Command::Match(a) => cli::match_cmd::run(a),
-        Command::Bench(a) => cli::bench::run(a),
-        Command::Demo(a) => cli::demo::run(a),
+        Command::Spectrum(a) => cli::spectrum::run(a, limit),
+        Command::Match(a) => cli::match_cmd::run(a, limit),
+        Command::Bench(a) => cli::bench::run(a, limit),
+        Command::Demo(a) => cli::demo::run(a, limit),
         Command::Scan(a) => cli::scan::run(a),
-        Command::Label(a) => cli::label::run(a),
+        Command::Label(a) => cli::label::run(a, limit),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -634,7 +634,8 @@ fn run(args: &Args) -> Result<(), String> {
     let meshes: BTreeMap<String, Mesh> = names
         .par_iter()
         .map(|n| -> Result<(String, Mesh), String> {
-            let mesh = read_mesh(&ds.meshes[n]).map_err(|e| e.to_string())?;
+            let mesh = read_mesh(&ds.meshes[n], symcorr_mesh::io::DEFAULT_MAX_INPUT_BYTES)
+                .map_err(|e| e.to_string())?;
             let sk = read_skeleton(&ds.joints[n], None).map_err(|e| e.to_string())?;
             let p = pipeline
                 .prepare(mesh, &sk)

@@ -191,7 +191,7 @@ pub fn write_pair_files(
     Ok(())
 }
 
-pub fn run(args: BenchArgs) -> Result<(), CliError> {
+pub fn run(args: BenchArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let mut pipeline = args.method.pipeline(args.mode == ModeArg::Dense)?;
     let counts = std::sync::Arc::new(CacheCounts::default());
     let meshes = args.dataset.join("meshes");
@@ -205,10 +205,16 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
     let dataset =
         Dataset::open(&args.dataset, args.pairs.as_deref()).map_err(|e| CliError(e.to_string()))?;
     let bar = Bar::new();
-    let report = run_bench(&dataset, &pipeline, args.frame, &|p| match p {
-        Progress::Prepared { done, total } => bar.update("preparing meshes", done, total),
-        Progress::Matched { done, total } => bar.update("matching pairs", done, total),
-    })
+    let report = run_bench(
+        &dataset,
+        &pipeline,
+        args.frame,
+        max_input_bytes,
+        &|p| match p {
+            Progress::Prepared { done, total } => bar.update("preparing meshes", done, total),
+            Progress::Matched { done, total } => bar.update("matching pairs", done, total),
+        },
+    )
     .map_err(|e| CliError(e.to_string()))?;
     bar.finish();
     print!("{}", table(&report, true));

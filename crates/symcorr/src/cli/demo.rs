@@ -54,7 +54,7 @@ fn demo_pair(ds: &Dataset) -> (String, String) {
         .unwrap_or_default()
 }
 
-pub fn run(args: DemoArgs) -> Result<(), CliError> {
+pub fn run(args: DemoArgs, max_input_bytes: u64) -> Result<(), CliError> {
     if args.samples == 0 {
         return Err(CliError("--samples must be at least 1".into()));
     }
@@ -81,7 +81,8 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     let spin = Spinner::new("preparing meshes");
     let load = |name: &str| -> Result<(symcorr::PreparedMesh, f64), CliError> {
         let t = Instant::now();
-        let mesh = read_mesh(&ds.meshes[name]).map_err(|e| CliError(e.to_string()))?;
+        let mesh =
+            read_mesh(&ds.meshes[name], max_input_bytes).map_err(|e| CliError(e.to_string()))?;
         let sk = read_skeleton(&ds.joints[name], None).map_err(|e| CliError(e.to_string()))?;
         let p = symcorr::PreparedMesh::new(mesh, &sk, &methods, &options.prepare)
             .map_err(|e| CliError::with(ds.meshes[name].display(), e))?;

@@ -63,7 +63,7 @@ pub enum Boundaries {
 }
 
 /// Runs `symcorr label`.
-pub fn run(a: LabelArgs) -> Result<(), CliError> {
+pub fn run(a: LabelArgs, max_input_bytes: u64) -> Result<(), CliError> {
     // Every output is checked before any work (not a directory, not an input, its directory
     // exists).
     for out in [Some(&a.out), a.ply.as_ref(), a.glb.as_ref()]
@@ -72,7 +72,7 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
     {
         check_output(out, &[&a.mesh, &a.joints]).map_err(|e| CliError(e.to_string()))?;
     }
-    let mesh = read_mesh(&a.mesh).map_err(|e| CliError(e.to_string()))?;
+    let mesh = read_mesh(&a.mesh, max_input_bytes).map_err(|e| CliError(e.to_string()))?;
     let format = super::joints_format(a.joints_format.as_deref())?;
     let skeleton =
         read_skeleton_as(&a.joints, a.frame, format).map_err(|e| CliError(e.to_string()))?;
@@ -154,6 +154,11 @@ pub fn run(a: LabelArgs) -> Result<(), CliError> {
 
 #[cfg(test)]
 mod tests {
+    /// [`run`] with the default input limit.
+    fn run_default(a: LabelArgs) -> Result<(), CliError> {
+        run(a, symcorr_mesh::io::DEFAULT_MAX_INPUT_BYTES)
+    }
+
     use super::*;
     use serde_json::{json, Map, Value};
     use symcorr_skeleton::Joint;
@@ -176,7 +181,7 @@ mod tests {
         let out = dir.path().join("labels.json");
         let ply = dir.path().join("labels.ply");
         let glb = dir.path().join("labels.glb");
-        run(LabelArgs {
+        run_default(LabelArgs {
             mesh: mesh_path.clone(),
             joints: joints_path.clone(),
             out: out.clone(),
@@ -205,7 +210,7 @@ mod tests {
         assert!(symcorr_mesh::io::read(&glb).is_ok());
         // --boundaries makehuman: the same file layout, boundaries moved.
         let rig = dir.path().join("rig.json");
-        run(LabelArgs {
+        run_default(LabelArgs {
             mesh: mesh_path.clone(),
             joints: joints_path.clone(),
             out: rig.clone(),
@@ -234,7 +239,7 @@ mod tests {
         assert!(moved > 0 && moved * 4 < labels.len(), "{moved}");
         // A frame the file does not have is a user error, and nothing is written.
         let out2 = dir.path().join("none.json");
-        let e = run(LabelArgs {
+        let e = run_default(LabelArgs {
             mesh: mesh_path.clone(),
             joints: joints_path.clone(),
             out: out2.clone(),
@@ -254,7 +259,7 @@ mod tests {
         // --joints-format forces the parser: a JSON file read as a Kinect SDK text dump, or an
         // unknown format name, is a user error, and nothing is written.
         for format in ["kinect-text", "bvh"] {
-            let e = run(LabelArgs {
+            let e = run_default(LabelArgs {
                 mesh: mesh_path.clone(),
                 joints: joints_path.clone(),
                 out: out2.clone(),
@@ -296,7 +301,7 @@ mod tests {
             ("labels_makehuman", false, Boundaries::Makehuman),
         ] {
             let out = dir.path().join("labels.json");
-            run(LabelArgs {
+            run_default(LabelArgs {
                 mesh: mesh_path.clone(),
                 joints: joints_path.clone(),
                 out: out.clone(),

@@ -287,8 +287,9 @@ pub fn load_prepared(
     joints: &Path,
     frame: Option<usize>,
     format: Option<symcorr_kinect::JointFormat>,
+    max_input_bytes: u64,
 ) -> Result<PreparedMesh, CliError> {
-    let m = read_mesh(mesh).map_err(|e| CliError(e.to_string()))?;
+    let m = read_mesh(mesh, max_input_bytes).map_err(|e| CliError(e.to_string()))?;
     let sk = read_skeleton_as(joints, frame, format).map_err(|e| CliError(e.to_string()))?;
     pipeline.prepare(m, &sk).map_err(|e| blame(mesh, joints, e))
 }
@@ -342,7 +343,7 @@ pub fn write_coloured(
     Ok(())
 }
 
-pub fn run(args: MatchArgs) -> Result<(), CliError> {
+pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let mut pipeline = args.method.pipeline(args.dense)?;
     if args.accept_poor_fit {
         pipeline.options.prepare.attach.poor_fit = symcorr_attach::PoorFitPolicy::Accept;
@@ -404,6 +405,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
                 &args.template_joints,
                 args.frame.or(args.template_frame),
                 format,
+                max_input_bytes,
             )
         },
         || {
@@ -413,6 +415,7 @@ pub fn run(args: MatchArgs) -> Result<(), CliError> {
                 &args.target_joints,
                 args.frame.or(args.target_frame),
                 format,
+                max_input_bytes,
             )
         },
     );

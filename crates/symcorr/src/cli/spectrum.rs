@@ -26,8 +26,8 @@ pub struct SpectrumArgs {
     pub json: bool,
 }
 
-pub fn run(args: SpectrumArgs) -> Result<(), CliError> {
-    let (out, text) = compute(&args)?;
+pub fn run(args: SpectrumArgs, max_input_bytes: u64) -> Result<(), CliError> {
+    let (out, text) = compute(&args, max_input_bytes)?;
     if args.json {
         println!("{out}");
     } else {
@@ -37,14 +37,15 @@ pub fn run(args: SpectrumArgs) -> Result<(), CliError> {
 }
 
 /// Runs the stages; returns the JSON document and the human-readable table.
-fn compute(args: &SpectrumArgs) -> Result<(Value, String), CliError> {
+fn compute(args: &SpectrumArgs, max_input_bytes: u64) -> Result<(Value, String), CliError> {
     use std::fmt::Write;
     let path = args.mesh.display().to_string();
     let total = Instant::now();
 
     let clock = Instant::now();
     // MeshError messages already name the file.
-    let input = symcorr::io::read_mesh(&args.mesh).map_err(|e| CliError(e.to_string()))?;
+    let input =
+        symcorr::io::read_mesh(&args.mesh, max_input_bytes).map_err(|e| CliError(e.to_string()))?;
     // Default repair: drop degenerate/zero-area/duplicate triangles and unreferenced vertices
     // (the Laplacian needs every vertex to have positive mass).
     let repaired = symcorr_mesh::repair(&input, &symcorr_mesh::RepairOptions::default())
@@ -138,7 +139,11 @@ mod tests {
 
     #[test]
     fn spectrum_json_has_stable_keys_and_eigenvalues() {
-        let (out, text) = compute(&args("fixtures/spectral/ref_mesh.off", 8)).unwrap();
+        let (out, text) = compute(
+            &args("fixtures/spectral/ref_mesh.off", 8),
+            symcorr_mesh::io::DEFAULT_MAX_INPUT_BYTES,
+        )
+        .unwrap();
         for key in [
             "vertices",
             "triangles",
@@ -166,9 +171,17 @@ mod tests {
 
     #[test]
     fn spectrum_errors_are_one_line() {
-        let e = compute(&args("fixtures/spectral/ref_mesh.off", 0)).unwrap_err();
+        let e = compute(
+            &args("fixtures/spectral/ref_mesh.off", 0),
+            symcorr_mesh::io::DEFAULT_MAX_INPUT_BYTES,
+        )
+        .unwrap_err();
         assert!(e.0.contains("--k") && !e.0.contains('\n'));
-        let e = compute(&args("fixtures/spectral/no_such_mesh.off", 5)).unwrap_err();
+        let e = compute(
+            &args("fixtures/spectral/no_such_mesh.off", 5),
+            symcorr_mesh::io::DEFAULT_MAX_INPUT_BYTES,
+        )
+        .unwrap_err();
         assert!(e.0.contains("no_such_mesh.off") && !e.0.contains('\n'));
     }
 }
