@@ -53,7 +53,7 @@ impl DepthFrame {
 /// 16-bit single-channel.
 pub fn read_depth_png16(path: impl AsRef<Path>) -> Result<DepthFrame, KinectError> {
     let file = path.as_ref().display().to_string();
-    let bytes = std::fs::read(path.as_ref()).map_err(|e| KinectError::io(&file, e))?;
+    let bytes = crate::error::read_input(path.as_ref())?;
     decode_depth_png16(&bytes, &file)
 }
 

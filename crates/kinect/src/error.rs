@@ -133,3 +133,14 @@ impl KinectError {
         }
     }
 }
+
+/// Reads a whole input file through symcorr-mesh's bounded reader (at most
+/// `DEFAULT_MAX_INPUT_BYTES`): a wrong path such as `/dev/zero` is an error, not exhausted memory.
+/// I/O errors stay [`KinectError::Io`].
+pub(crate) fn read_input(path: &std::path::Path) -> Result<Vec<u8>, KinectError> {
+    use symcorr_mesh::{io, MeshError};
+    match io::read_input(path, io::DEFAULT_MAX_INPUT_BYTES) {
+        Err(MeshError::Io { file, source }) => Err(KinectError::Io { file, source }),
+        other => Ok(other?),
+    }
+}

@@ -234,7 +234,7 @@ pub fn parse_joints_as(
 
 fn read_text(path: &Path) -> Result<(String, String), KinectError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| KinectError::io(&file, e))?;
+    let bytes = crate::error::read_input(path)?;
     let text = String::from_utf8(bytes).map_err(|e| KinectError::UnknownFormat {
         file: file.clone(),
         message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),

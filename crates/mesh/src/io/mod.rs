@@ -301,17 +301,7 @@ pub fn read_with_options(
         None => Format::from_path_or_err(path)?,
     };
     let name = path.display().to_string();
-    let io_err = |source| MeshError::Io {
-        file: name.clone(),
-        source,
-    };
-    let file = std::fs::File::open(path).map_err(io_err)?;
-    let bytes = read_capped(file, options.max_input_bytes)
-        .map_err(io_err)?
-        .ok_or_else(|| MeshError::InputTooLarge {
-            file: name.clone(),
-            limit: options.max_input_bytes,
-        })?;
+    let bytes = read_input(path, options.max_input_bytes)?;
     let src = Source {
         name: name.clone(),
         dir: Some(
@@ -322,6 +312,35 @@ pub fn read_with_options(
         max_input_bytes: options.max_input_bytes,
     };
     parse(&bytes, format, &src)
+}
+
+/// Reads a whole input file of at most `max_input_bytes` bytes: the one bounded read every input
+/// of symcorr goes through (meshes here, joint logs and depth frames in symcorr-kinect). A
+/// larger regular file is refused from its length before reading; a device or FIFO
+/// (`/dev/zero`) is read no further than one byte past the limit.
+///
+/// Errors: [`MeshError::Io`], [`MeshError::InputTooLarge`], both naming the file.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("x.txt");
+/// std::fs::write(&path, b"0123456789").unwrap();
+/// assert_eq!(symcorr_mesh::io::read_input(&path, 10).unwrap().len(), 10);
+/// assert!(symcorr_mesh::io::read_input(&path, 9).is_err());
+/// ```
+pub fn read_input(path: &Path, max_input_bytes: u64) -> Result<Vec<u8>, MeshError> {
+    let name = path.display().to_string();
+    let io_err = |source| MeshError::Io {
+        file: name.clone(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io_err)?;
+    read_capped(file, max_input_bytes)
+        .map_err(io_err)?
+        .ok_or_else(|| MeshError::InputTooLarge {
+            file: name.clone(),
+            limit: max_input_bytes,
+        })
 }
 
 /// Parses a mesh from memory. Errors name the file `<memory>`; a `.gltf` with external

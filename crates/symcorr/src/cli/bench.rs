@@ -10,7 +10,7 @@ use symcorr::bench::{run_bench, BenchReport, Progress};
 use symcorr::output::{correspondence_json, curve_svg};
 use symcorr::Pipeline;
 use symcorr_eval::Dataset;
-use symcorr_mesh::io::atomic_write;
+use symcorr_mesh::io::OutputBatch;
 
 /// Sparse or dense matching.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,8 +168,9 @@ pub fn table(report: &BenchReport, total: bool) -> String {
     s
 }
 
-/// Writes the per-pair correspondence files into `dir`.
-pub fn write_pair_files(
+/// Stages the per-pair correspondence files into `dir` (created if needed) in `batch`.
+pub fn stage_pair_files(
+    batch: &mut OutputBatch,
     report: &BenchReport,
     dataset: &Dataset,
     dir: &Path,
@@ -186,7 +187,9 @@ pub fn write_pair_files(
             &symcorr::output::pair_timings(a, b, &p.correspondence),
         );
         let path = dir.join(format!("{}__{}.json", p.template, p.target));
-        atomic_write(&path, doc.to_json().as_bytes()).map_err(|e| CliError(e.to_string()))?;
+        batch
+            .add(&path, doc.to_json().as_bytes())
+            .map_err(|e| CliError(e.to_string()))?;
     }
     Ok(())
 }
@@ -196,11 +199,20 @@ pub fn run(args: BenchArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let counts = std::sync::Arc::new(CacheCounts::default());
     let meshes = args.dataset.join("meshes");
     pipeline.options.prepare.cache = args.cache.policy(&meshes, Some(&meshes), &counts);
-    if let Some(j) = &args.json {
-        // A summary that would land on a dataset file (pairs list, mirror map) is refused.
-        let pairs = args.pairs.iter().map(PathBuf::as_path);
-        let inputs: Vec<&Path> = pairs.collect();
-        symcorr_mesh::io::check_output(j, &inputs).map_err(|e| CliError(e.to_string()))?;
+    // Outputs are checked before any work: a summary or plot that would land on a dataset
+    // file (pairs list) or a directory is refused.
+    let inputs: Vec<&Path> = args.pairs.iter().map(PathBuf::as_path).collect();
+    for out in [args.json.as_ref(), args.plot.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        symcorr_mesh::io::check_output(out, &inputs).map_err(|e| CliError(e.to_string()))?;
+    }
+    if let Some(d) = args.out_dir.as_ref().filter(|d| d.exists() && !d.is_dir()) {
+        return Err(CliError(format!(
+            "{}: --out-dir exists and is not a directory",
+            d.display()
+        )));
     }
     let dataset =
         Dataset::open(&args.dataset, args.pairs.as_deref()).map_err(|e| CliError(e.to_string()))?;
@@ -243,23 +255,30 @@ pub fn run(args: BenchArgs, max_input_bytes: u64) -> Result<(), CliError> {
             .map(|d| d.join("curve.svg"))
             .or_else(|| args.json.as_ref().map(|j| j.with_extension("svg")))
     });
+    // Every file is staged, then committed together: an error leaves none of them.
+    let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
+    let mut batch = OutputBatch::new();
     if let Some(dir) = &args.out_dir {
-        write_pair_files(&report, &dataset, dir)?;
+        stage_pair_files(&mut batch, &report, &dataset, dir)?;
+    }
+    if let Some(p) = &plot {
+        batch.add(p, svg.as_bytes()).map_err(cli)?;
+    }
+    if let Some(j) = &args.json {
+        let doc = summary_json(&report, &pipeline, &args.dataset);
+        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError(e.to_string()))?;
+        batch.add(j, text.as_bytes()).map_err(cli)?;
+    }
+    batch.commit().map_err(cli)?;
+    if let Some(dir) = &args.out_dir {
         println!(
             "wrote {} correspondence files to {}",
             report.pairs.len(),
             dir.display()
         );
     }
-    if let Some(p) = &plot {
-        atomic_write(p, svg.as_bytes()).map_err(|e| CliError(e.to_string()))?;
+    for p in [plot.as_ref(), args.json.as_ref()].into_iter().flatten() {
         println!("wrote {}", p.display());
-    }
-    if let Some(j) = &args.json {
-        let doc = summary_json(&report, &pipeline, &args.dataset);
-        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError(e.to_string()))?;
-        atomic_write(j, text.as_bytes()).map_err(|e| CliError(e.to_string()))?;
-        println!("wrote {}", j.display());
     }
     Ok(())
 }

@@ -50,10 +50,6 @@ pub struct MatchArgs {
     /// Frame of the target's joint log (default: the first).
     #[arg(long, value_name = "N")]
     pub target_frame: Option<usize>,
-    /// Use a skeleton that fails a fit check instead of refusing it (the outputs' `fit` block
-    /// then says `accepted_poor_fit`).
-    #[arg(long)]
-    pub accept_poor_fit: bool,
     /// Force the joint files' format instead of detecting it from content:
     /// json, kinect-text or ntu.
     #[arg(long, value_name = "FORMAT")]
@@ -220,6 +216,10 @@ pub struct MethodArgs {
     /// Base vertex set radius, in units of sqrt(area).
     #[arg(long, default_value_t = symcorr::DEFAULT_BASE_RADIUS)]
     pub base_radius: f64,
+    /// Use a skeleton that fails a fit check instead of refusing it (the outputs' `fit` block
+    /// then says `accepted_poor_fit`).
+    #[arg(long)]
+    pub accept_poor_fit: bool,
 }
 
 impl MethodArgs {
@@ -256,6 +256,9 @@ impl MethodArgs {
         };
         o.prepare.eigenpairs = self.eigenpairs;
         o.prepare.base_radius = self.base_radius;
+        if self.accept_poor_fit {
+            o.prepare.attach.poor_fit = symcorr_attach::PoorFitPolicy::Accept;
+        }
         // The library's rules, checked before any file is read; the message names the flags.
         o.check().map_err(|e| CliError(flag_message(e)))?;
         Ok(Pipeline::new(o))
@@ -344,10 +347,7 @@ pub fn write_coloured(
 }
 
 pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
-    let mut pipeline = args.method.pipeline(args.dense)?;
-    if args.accept_poor_fit {
-        pipeline.options.prepare.attach.poor_fit = symcorr_attach::PoorFitPolicy::Accept;
-    }
+    let pipeline = args.method.pipeline(args.dense)?;
     let format = super::joints_format(args.joints_format.as_deref())?;
     // Every output is checked before any work: its directory exists, it is not a directory,
     // and it is none of the inputs.
