@@ -57,6 +57,7 @@ pub mod cache;
 pub mod figures;
 pub mod formats;
 pub mod io;
+pub mod npy;
 mod midline;
 pub mod output;
 mod pipeline;

@@ -1,0 +1,288 @@
+//! NumPy `.npy` files (format version 1.0) written row by row: what `symcorr track` streams its
+//! per-frame correspondence and confidence into, and what numpy users load directly
+//! (`numpy.load`, or `numpy.load(..., mmap_mode="r")` for a long session).
+//!
+//! The header fixes the shape, so a file is created for a known number of rows; rows are
+//! appended as they complete, and [`NpyWriter::resume`] reopens a file after its last complete
+//! row (an interrupted run). Format: the magic `\x93NUMPY`, version `1.0`, a little-endian `u16`
+//! header length, the header — a Python dict literal `{'descr': '<i4', 'fortran_order': False,
+//! 'shape': (R, C), }` padded with spaces and ended by `\n` so that the data starts at a multiple
+//! of 64 bytes — then the values in C order, little-endian.
+
+use std::fs::{File, OpenOptions};
+use std::io::{Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// Element types written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NpyType {
+    /// `<i4`.
+    I32,
+    /// `<f4`.
+    F32,
+}
+
+impl NpyType {
+    fn descr(self) -> &'static str {
+        match self {
+            NpyType::I32 => "<i4",
+            NpyType::F32 => "<f4",
+        }
+    }
+}
+
+/// Errors of [`NpyWriter`], naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum NpyError {
+    /// Reading or writing failed.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// A row of another length than the file's columns, or more rows than its shape.
+    #[error("{file}: {message}")]
+    Shape {
+        /// The file.
+        file: String,
+        /// What did not fit.
+        message: String,
+    },
+    /// The file to resume is not the one this writer would create.
+    #[error("{file}: cannot resume: {message}")]
+    Resume {
+        /// The file.
+        file: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// The header bytes of a `(rows, cols)` array of `ty` (module docs).
+///
+/// ```
+/// use symcorr::npy::{header, NpyType};
+/// let h = header(NpyType::I32, 2, 3);
+/// assert_eq!(h.len() % 64, 0);
+/// assert!(h.starts_with(b"\x93NUMPY\x01\x00"));
+/// assert!(String::from_utf8_lossy(&h).contains("'shape': (2, 3), }"));
+/// ```
+pub fn header(ty: NpyType, rows: usize, cols: usize) -> Vec<u8> {
+    let dict = format!(
+        "{{'descr': '{}', 'fortran_order': False, 'shape': ({rows}, {cols}), }}",
+        ty.descr()
+    );
+    // magic (6) + version (2) + length (2) + dict + padding + '\n' ≡ 0 (mod 64).
+    let unpadded = 10 + dict.len() + 1;
+    let pad = (64 - unpadded % 64) % 64;
+    let len = dict.len() + pad + 1;
+    let mut out = Vec::with_capacity(10 + len);
+    out.extend_from_slice(b"\x93NUMPY\x01\x00");
+    // Invariant: the dict of two usize numbers is far below 65,535 bytes.
+    out.extend_from_slice(&(len as u16).to_le_bytes());
+    out.extend_from_slice(dict.as_bytes());
+    out.extend(std::iter::repeat_n(b' ', pad));
+    out.push(b'\n');
+    out
+}
+
+/// A `.npy` file of a fixed `(rows, cols)` shape filled row by row.
+#[derive(Debug)]
+pub struct NpyWriter {
+    file: File,
+    path: PathBuf,
+    ty: NpyType,
+    rows: usize,
+    cols: usize,
+    written: usize,
+}
+
+impl NpyWriter {
+    /// Creates (or truncates) `path` with the header of a `(rows, cols)` array of `ty`. Until
+    /// every row is written the file is shorter than its header says (numpy refuses it); an
+    /// interrupted file is completed through [`NpyWriter::resume`].
+    ///
+    /// ```
+    /// use symcorr::npy::{NpyType, NpyWriter};
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("c.npy");
+    /// let mut w = NpyWriter::create(&path, NpyType::I32, 2, 3).unwrap();
+    /// w.push_i32(&[1, -1, 7]).unwrap();
+    /// w.push_i32(&[0, 2, 3]).unwrap();
+    /// assert_eq!(std::fs::metadata(&path).unwrap().len(), 128 + 24);
+    /// ```
+    pub fn create(path: &Path, ty: NpyType, rows: usize, cols: usize) -> Result<NpyWriter, NpyError> {
+        let io = |source| NpyError::Io {
+            file: path.display().to_string(),
+            source,
+        };
+        let mut file = File::create(path).map_err(io)?;
+        file.write_all(&header(ty, rows, cols)).map_err(io)?;
+        Ok(NpyWriter {
+            file,
+            path: path.to_path_buf(),
+            ty,
+            rows,
+            cols,
+            written: 0,
+        })
+    }
+
+    /// Reopens `path`, written by [`NpyWriter::create`] with the same type and shape, to continue
+    /// after its first `rows_done` rows (a partly written row after them is overwritten).
+    ///
+    /// Errors: [`NpyError::Resume`] when the header differs or the file holds fewer rows.
+    pub fn resume(
+        path: &Path,
+        ty: NpyType,
+        rows: usize,
+        cols: usize,
+        rows_done: usize,
+    ) -> Result<NpyWriter, NpyError> {
+        let name = path.display().to_string();
+        let io = |source| NpyError::Io {
+            file: name.clone(),
+            source,
+        };
+        let want = header(ty, rows, cols);
+        let bytes_done = (want.len() + rows_done * cols * 4) as u64;
+        let mut file = OpenOptions::new().read(true).write(true).open(path).map_err(io)?;
+        let mut head = vec![0u8; want.len()];
+        use std::io::Read as _;
+        let same = file.read_exact(&mut head).is_ok() && head == want;
+        if !same {
+            return Err(NpyError::Resume {
+                file: name,
+                message: format!("its header is not that of a {rows} × {cols} {} array", ty.descr()),
+            });
+        }
+        let len = file.metadata().map_err(io)?.len();
+        if len < bytes_done || rows_done > rows {
+            return Err(NpyError::Resume {
+                file: name,
+                message: format!("it holds fewer than the {rows_done} rows to keep"),
+            });
+        }
+        file.seek(SeekFrom::Start(bytes_done)).map_err(io)?;
+        Ok(NpyWriter {
+            file,
+            path: path.to_path_buf(),
+            ty,
+            rows,
+            cols,
+            written: rows_done,
+        })
+    }
+
+    fn check(&self, ty: NpyType, len: usize) -> Result<(), NpyError> {
+        let err = |message: String| {
+            Err(NpyError::Shape {
+                file: self.path.display().to_string(),
+                message,
+            })
+        };
+        if ty != self.ty {
+            return err(format!("a {} row into a {} file", ty.descr(), self.ty.descr()));
+        }
+        if len != self.cols {
+            return err(format!("a row of {len} values, the file has {} columns", self.cols));
+        }
+        if self.written >= self.rows {
+            return err(format!("more than the {} rows of its shape", self.rows));
+        }
+        Ok(())
+    }
+
+    fn push_bytes(&mut self, bytes: &[u8]) -> Result<(), NpyError> {
+        self.file.write_all(bytes).map_err(|source| NpyError::Io {
+            file: self.path.display().to_string(),
+            source,
+        })?;
+        self.written += 1;
+        Ok(())
+    }
+
+    /// Appends a row of an `I32` file.
+    pub fn push_i32(&mut self, row: &[i32]) -> Result<(), NpyError> {
+        self.check(NpyType::I32, row.len())?;
+        let bytes: Vec<u8> = row.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.push_bytes(&bytes)
+    }
+
+    /// Appends a row of an `F32` file.
+    pub fn push_f32(&mut self, row: &[f32]) -> Result<(), NpyError> {
+        self.check(NpyType::F32, row.len())?;
+        let bytes: Vec<u8> = row.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.push_bytes(&bytes)
+    }
+
+    /// Rows written so far.
+    pub fn rows_written(&self) -> usize {
+        self.written
+    }
+
+    /// Flushes the rows to the disk (`fsync`): after it they survive a crash.
+    pub fn sync(&mut self) -> Result<(), NpyError> {
+        self.file.sync_data().map_err(|source| NpyError::Io {
+            file: self.path.display().to_string(),
+            source,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The header of the NumPy format specification's layout, written out by hand for one shape.
+    #[test]
+    fn the_header_is_the_specifications() {
+        let h = header(NpyType::F32, 3, 13380);
+        let dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (3, 13380), }";
+        let mut want = b"\x93NUMPY\x01\x00".to_vec();
+        let total = 64 * (10 + dict.len() + 1).div_ceil(64);
+        let len = (total - 10) as u16;
+        want.extend_from_slice(&len.to_le_bytes());
+        want.extend_from_slice(dict.as_bytes());
+        want.extend(std::iter::repeat_n(b' ', total - 10 - dict.len() - 1));
+        want.push(b'\n');
+        assert_eq!(h, want);
+        assert_eq!(h.len(), 128);
+    }
+
+    #[test]
+    fn rows_are_little_endian_in_c_order_and_resume_overwrites_a_partial_row() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.npy");
+        let mut w = NpyWriter::create(&path, NpyType::I32, 3, 2).unwrap();
+        w.push_i32(&[1, -1]).unwrap();
+        assert!(w.push_i32(&[1, 2, 3]).is_err());
+        assert!(w.push_f32(&[1.0, 2.0]).is_err());
+        w.push_i32(&[0x0102_0304, 5]).unwrap();
+        drop(w);
+        // A third row cut short by a crash.
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(&[9, 9, 9]).unwrap();
+        drop(f);
+        let mut w = NpyWriter::resume(&path, NpyType::I32, 3, 2, 2).unwrap();
+        w.push_i32(&[7, 8]).unwrap();
+        assert!(w.push_i32(&[7, 8]).is_err(), "past the shape");
+        drop(w);
+        let bytes = std::fs::read(&path).unwrap();
+        let h = header(NpyType::I32, 3, 2).len();
+        assert_eq!(bytes.len(), h + 3 * 2 * 4);
+        let data = &bytes[h..];
+        assert_eq!(&data[0..4], &1i32.to_le_bytes());
+        assert_eq!(&data[4..8], &(-1i32).to_le_bytes());
+        assert_eq!(&data[8..12], &[4, 3, 2, 1]);
+        assert_eq!(&data[16..24], &[7, 0, 0, 0, 8, 0, 0, 0]);
+        // Another shape, or fewer rows than claimed, is refused.
+        assert!(NpyWriter::resume(&path, NpyType::I32, 4, 2, 1).is_err());
+        assert!(NpyWriter::resume(&path, NpyType::F32, 3, 2, 1).is_err());
+        let short = dir.path().join("s.npy");
+        NpyWriter::create(&short, NpyType::I32, 3, 2).unwrap();
+        assert!(NpyWriter::resume(&short, NpyType::I32, 3, 2, 1).is_err());
+    }
+}
