@@ -1,4 +1,4 @@
-//! Recorded sessions, the reading side: a recording folder of depth frames with their times
+//! Recordings, the reading side: a recording folder of depth frames with their times
 //! ([`Recording`]), the joints of a joint log at a depth frame's time ([`JointTrack`]), temporal
 //! smoothing of joints ([`OneEuroFilter`], [`SkeletonFilter`]) and the evidence that a tracker
 //! exchanged left and right between two frames ([`swap_evidence`]).
