@@ -97,6 +97,28 @@ pub enum KinectError {
     /// A replay request that the log cannot satisfy (frame out of range, empty window, ...).
     #[error("{0}")]
     Replay(String),
+    /// A recording folder does not have the expected layout, or a frame of it does not fit it
+    /// (naming the folder or file).
+    #[error("{file}: {message}")]
+    Recording {
+        /// The folder or file.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A joint log cannot be used as a track (empty, times not increasing, bad offset).
+    #[error("joint track: {0}")]
+    Track(String),
+    /// A one-euro filter parameter is out of range ([`crate::OneEuroFilter::new`]).
+    #[error("one-euro filter {parameter} = {value}: expected {expected}")]
+    FilterParameter {
+        /// The parameter.
+        parameter: &'static str,
+        /// Its value.
+        value: f64,
+        /// What is accepted.
+        expected: &'static str,
+    },
     /// A scan option is out of range ([`crate::ScanOptions::validate`]).
     #[error("scan option {option} = {value}: expected {expected}")]
     ScanOption {

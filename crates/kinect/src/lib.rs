@@ -12,6 +12,10 @@
 //!   ([`camera`]) → organised point cloud → [`scan_mesh`] (background, floor and depth
 //!   discontinuities removed; [`scan`]). Whether a skeleton's left/right agree with a scan is
 //!   symcorr-attach's `handedness_verdict` (this crate depends on mesh and skeleton only).
+//! * Recordings: a recording folder ([`Recording`]: intrinsics, numbered PNG-16 depth frames, their
+//!   times) → per depth frame, the joint log's skeleton at its time ([`JointTrack`], interpolated
+//!   or skipped), smoothed over time ([`SkeletonFilter`], one-euro) and checked for left/right
+//!   swaps between frames ([`swap_evidence`]; [`recording`]).
 //!
 //! ```
 //! use symcorr_skeleton::Joint;
@@ -56,6 +60,7 @@ pub mod ntu;
 #[cfg(feature = "openni2")]
 #[allow(unsafe_code)] // the OpenNI2 C API: every call is wrapped and checked in this module
 pub mod openni2;
+pub mod recording;
 pub mod replay;
 pub mod scan;
 pub mod sdk_text;
@@ -67,6 +72,10 @@ pub use joints::{
     read_joints, read_joints_with_format, write_joints_json, JointFormat, JointFrame, JointLog,
 };
 pub use mapping::SkeletonKind;
+pub use recording::{
+    arms_swapped, legs_swapped, limb_swap_evidence, swap_evidence, JointTrack, LimbPair,
+    OneEuroFilter, Recording, SkeletonFilter, SkipReason, TimedSkeleton,
+};
 pub use replay::{BoneLengthReport, FrameSelect};
 pub use scan::{fuse_depth_frames, scan_mesh, ScanMesh, ScanOptions};
 
