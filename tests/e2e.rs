@@ -683,3 +683,155 @@ fn max_input_size_bounds_every_mesh_read() {
         assert_eq!(o.status.code(), Some(2), "{bad}");
     }
 }
+
+/// A four-frame recording in the project's layout, from the committed depth sequence.
+fn sequence_recording(dir: &Path) -> PathBuf {
+    let seq = fixtures().join("../sequence");
+    let rec = dir.join("rec");
+    std::fs::create_dir_all(rec.join("depth")).unwrap();
+    for i in 0..4 {
+        std::fs::copy(
+            seq.join(format!("depth/frame_{i:03}.png")),
+            rec.join(format!("depth/{i:06}.png")),
+        )
+        .unwrap();
+    }
+    std::fs::copy(seq.join("intrinsics.json"), rec.join("intrinsics.json")).unwrap();
+    std::fs::write(
+        rec.join("depth_times.txt"),
+        "0\n0.0333333\n0.0666667\n0.1\n",
+    )
+    .unwrap();
+    rec
+}
+
+fn npy_rows(path: &Path, cols: usize) -> Vec<Vec<u8>> {
+    let bytes = std::fs::read(path).unwrap();
+    let header = u16::from_le_bytes([bytes[8], bytes[9]]) as usize + 10;
+    bytes[header..]
+        .chunks(cols * 4)
+        .map(<[u8]>::to_vec)
+        .collect()
+}
+
+#[test]
+fn track_streams_a_recording_and_resumes_after_an_interruption() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sequence_recording(dir.path());
+    let log = fixtures().join("../sequence/joints.json");
+    let out = dir.path().join("track");
+    let o = run(bin()
+        .args(["track", rec.to_str().unwrap(), "--joints"])
+        .arg(&log)
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success());
+    let doc = read_json(&out.join("track.json"));
+    assert_eq!(doc["format"], "symcorr.track/1");
+    let frames = doc["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 4);
+    let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
+    assert_eq!(n, 13380);
+    let rows = npy_rows(&out.join("correspondence.npy"), n);
+    assert_eq!(rows.len(), 4);
+    for (f, row) in frames.iter().zip(&rows) {
+        assert_eq!(f["status"], "ok", "{f}");
+        let scan_vertices = f["scan_vertices"].as_i64().unwrap();
+        let ids: Vec<i32> = row
+            .chunks(4)
+            .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        let shown = ids.iter().filter(|&&x| x >= 0).count() as f64 / n as f64;
+        assert!((shown - f["coverage"].as_f64().unwrap()).abs() < 1e-9);
+        assert!(
+            shown > 0.3,
+            "a front view shows a good part of the body: {shown}"
+        );
+        assert!(ids.iter().all(|&x| x >= -1 && i64::from(x) < scan_vertices));
+    }
+    // The same folder again without --resume is refused; nothing is touched.
+    let before = std::fs::read(out.join("track.json")).unwrap();
+    let o = bin()
+        .args(["track", rec.to_str().unwrap(), "--joints"])
+        .arg(&log)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--resume"));
+    assert_eq!(std::fs::read(out.join("track.json")).unwrap(), before);
+    // Interrupted after two frames, in the middle of the third: the journal's third line and
+    // the arrays' third rows are cut short, and there is no track.json yet.
+    let journal = std::fs::read_to_string(out.join("journal.jsonl")).unwrap();
+    let lines: Vec<&str> = journal.lines().collect();
+    std::fs::write(
+        out.join("journal.jsonl"),
+        format!("{}\n{}\n{}\n{{\"fra", lines[0], lines[1], lines[2]),
+    )
+    .unwrap();
+    for name in ["correspondence.npy", "confidence.npy"] {
+        let p = out.join(name);
+        let len = std::fs::metadata(&p).unwrap().len();
+        let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
+        f.set_len(len - (2 * n * 4 - 100) as u64).unwrap();
+    }
+    std::fs::remove_file(out.join("track.json")).unwrap();
+    let o = run(bin()
+        .args(["track", rec.to_str().unwrap(), "--resume", "--joints"])
+        .arg(&log)
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success());
+    let doc = read_json(&out.join("track.json"));
+    assert_eq!(doc["frames"].as_array().unwrap().len(), 4);
+    assert_eq!(doc["summary"]["ok"], 4);
+    let resumed = npy_rows(&out.join("correspondence.npy"), n);
+    assert_eq!(resumed.len(), 4);
+    assert_eq!(
+        resumed[..2],
+        rows[..2],
+        "the complete frames are kept as they were"
+    );
+}
+
+#[test]
+fn track_skips_frames_the_joint_log_does_not_cover() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sequence_recording(dir.path());
+    // Only the first two frames of the log: the last depth frame (0.1 s) is more than 1.5 log
+    // periods from it.
+    let mut log = read_json(&fixtures().join("../sequence/joints.json"));
+    log["frames"].as_array_mut().unwrap().truncate(2);
+    let log_path = dir.path().join("short.json");
+    std::fs::write(&log_path, log.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let o = run(bin()
+        .args([
+            "track",
+            rec.to_str().unwrap(),
+            "--frames",
+            "1..4",
+            "--joints",
+        ])
+        .arg(&log_path)
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success());
+    let doc = read_json(&out.join("track.json"));
+    let frames = doc["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 3);
+    assert_eq!(frames[0]["frame"], 1);
+    assert_eq!(frames[0]["status"], "ok");
+    assert!(
+        frames[2]["status"]
+            .as_str()
+            .unwrap()
+            .starts_with("skipped: "),
+        "{}",
+        frames[2]
+    );
+    let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
+    let rows = npy_rows(&out.join("correspondence.npy"), n);
+    assert!(rows[2].chunks(4).all(|b| b == (-1i32).to_le_bytes()));
+}

@@ -351,7 +351,7 @@ impl LabelsFile {
     ///   "format":"symcorr.labels/1","joints":{"head":[0,1.7,0]},"labels":[0,0,1],
     ///   "mesh":{"path":"body.ply","vertices":3},"segments":["head","torso"]}"#;
     /// let doc = LabelsFile::from_json_str(text, "<memory>").unwrap();
-    /// assert_eq!(doc.labels, vec![0, 0, 1]);
+    /// assert_eq!(doc.labels, vec![Some(0), Some(0), Some(1)]);
     /// assert_eq!(LabelsFile::from_json_str(&doc.to_json(), "<memory>").unwrap(), doc);
     /// let e = LabelsFile::from_json_str("[]", "l.json").unwrap_err();
     /// assert!(e.to_string().starts_with("l.json: not a symcorr.labels/1 file"));

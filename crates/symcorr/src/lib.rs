@@ -57,11 +57,12 @@ pub mod cache;
 pub mod figures;
 pub mod formats;
 pub mod io;
-pub mod npy;
 mod midline;
+pub mod npy;
 pub mod output;
 mod pipeline;
 mod prepare;
+pub mod track;
 
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{

@@ -34,6 +34,8 @@ enum Command {
     Scan(cli::scan::ScanArgs),
     /// Attach a skeleton to a mesh: 17 segment labels (symcorr.labels/1) and a coloured mesh.
     Label(cli::label::LabelArgs),
+    /// A recorded session (depth frames + joint log) matched frame by frame (symcorr.track/1).
+    Track(cli::track::TrackArgs),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +49,7 @@ fn main() -> ExitCode {
         Command::Demo(a) => cli::demo::run(a, limit),
         Command::Scan(a) => cli::scan::run(a),
         Command::Label(a) => cli::label::run(a, limit),
+        Command::Track(a) => cli::track::run(a, limit),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -113,7 +113,12 @@ impl NpyWriter {
     /// w.push_i32(&[0, 2, 3]).unwrap();
     /// assert_eq!(std::fs::metadata(&path).unwrap().len(), 128 + 24);
     /// ```
-    pub fn create(path: &Path, ty: NpyType, rows: usize, cols: usize) -> Result<NpyWriter, NpyError> {
+    pub fn create(
+        path: &Path,
+        ty: NpyType,
+        rows: usize,
+        cols: usize,
+    ) -> Result<NpyWriter, NpyError> {
         let io = |source| NpyError::Io {
             file: path.display().to_string(),
             source,
@@ -148,14 +153,21 @@ impl NpyWriter {
         };
         let want = header(ty, rows, cols);
         let bytes_done = (want.len() + rows_done * cols * 4) as u64;
-        let mut file = OpenOptions::new().read(true).write(true).open(path).map_err(io)?;
+        let mut file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(io)?;
         let mut head = vec![0u8; want.len()];
         use std::io::Read as _;
         let same = file.read_exact(&mut head).is_ok() && head == want;
         if !same {
             return Err(NpyError::Resume {
                 file: name,
-                message: format!("its header is not that of a {rows} × {cols} {} array", ty.descr()),
+                message: format!(
+                    "its header is not that of a {rows} × {cols} {} array",
+                    ty.descr()
+                ),
             });
         }
         let len = file.metadata().map_err(io)?.len();
@@ -184,10 +196,17 @@ impl NpyWriter {
             })
         };
         if ty != self.ty {
-            return err(format!("a {} row into a {} file", ty.descr(), self.ty.descr()));
+            return err(format!(
+                "a {} row into a {} file",
+                ty.descr(),
+                self.ty.descr()
+            ));
         }
         if len != self.cols {
-            return err(format!("a row of {len} values, the file has {} columns", self.cols));
+            return err(format!(
+                "a row of {len} values, the file has {} columns",
+                self.cols
+            ));
         }
         if self.written >= self.rows {
             return err(format!("more than the {} rows of its shape", self.rows));

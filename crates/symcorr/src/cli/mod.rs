@@ -7,6 +7,7 @@ pub mod match_cmd;
 pub mod progress;
 pub mod scan;
 pub mod spectrum;
+pub mod track;
 
 /// A user error: printed as one line on stderr, exit status 1.
 #[derive(Debug, thiserror::Error)]

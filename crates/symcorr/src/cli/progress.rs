@@ -55,6 +55,20 @@ impl Bar {
         Bar(Some(pb))
     }
 
+    /// A bar for a stream of frames: rate and time left.
+    pub fn frames() -> Bar {
+        if !visible() {
+            return Bar(None);
+        }
+        let pb = ProgressBar::new(0);
+        if let Ok(style) = ProgressStyle::with_template(
+            "{msg:10} [{bar:30}] {pos}/{len} frames {per_sec} eta {eta}",
+        ) {
+            pb.set_style(style.progress_chars("=> "));
+        }
+        Bar(Some(pb))
+    }
+
     /// Shows `done` of `total` under `message`.
     pub fn update(&self, message: &'static str, done: usize, total: usize) {
         if let Some(pb) = &self.0 {

@@ -1,0 +1,403 @@
+//! `symcorr track RECORDING --joints LOG --out DIR [--template MESH --template-joints J]
+//! [--frames A..B] [--every N] [--joint-offset S] [--threads N] [--resume] [--scans]`:
+//! a recorded session matched frame by frame ([`symcorr::track::Tracker`]).
+//!
+//! DIR is written as frames complete, never with all frames in memory:
+//! * `journal.jsonl` — a header line (what is being run), then one line per processed frame,
+//!   appended and synced after the frame's rows: the record `--resume` continues from;
+//! * `correspondence.npy` (int32, frames × template vertices: the scan vertex each template
+//!   vertex matches, −1 where the frame does not show it) and `confidence.npy` (float32);
+//! * with `--scans`, `scans/NNNNNN.ply` (the frame's scan in camera space, its vertex ids those
+//!   of `correspondence.npy`, segment colours);
+//! * `track.json` (`symcorr.track/1`), written when the run ends: every frame and a summary.
+
+use super::progress::Bar;
+use super::CliError;
+use clap::Args;
+use serde_json::{json, Value};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use symcorr::npy::{NpyType, NpyWriter};
+use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
+use symcorr::{Pipeline, PipelineOptions};
+use symcorr_kinect::{JointTrack, Recording};
+
+const EXAMPLES: &str = "Examples:
+  symcorr track fixtures/synth/recording --joints fixtures/synth/recording/joints.json --out track/
+  symcorr track rec/ --joints rec/joints.json --out part3/ --frames 300..400
+  symcorr track rec/ --joints rec/joints.json --out track/ --resume";
+
+/// Arguments of `symcorr track`.
+#[derive(Args, Debug)]
+#[command(after_help = EXAMPLES)]
+pub struct TrackArgs {
+    /// The recording: a folder with intrinsics.json, depth/000000.png, … and depth_times.txt.
+    pub recording: PathBuf,
+    /// The skeleton tracker's joint log (any joint format symcorr reads).
+    #[arg(long)]
+    pub joints: PathBuf,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Template mesh (default: the bundled CC0 body with its exact joints).
+    #[arg(long, requires = "template_joints")]
+    pub template: Option<PathBuf>,
+    /// Joints of the template.
+    #[arg(long, requires = "template")]
+    pub template_joints: Option<PathBuf>,
+    /// Frames to process, `A..B` (B excluded; either end may be left out): a slice of a long
+    /// recording for one job of an array.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
+    /// Process every N-th frame of the slice.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub every: usize,
+    /// Seconds added to every depth frame's time before the joint log is read.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub joint_offset: f64,
+    /// Worker threads (default: every core).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Continue an interrupted run in DIR after its last complete frame.
+    #[arg(long)]
+    pub resume: bool,
+    /// Also write each frame's scan as scans/NNNNNN.ply.
+    #[arg(long)]
+    pub scans: bool,
+}
+
+/// The bundled template: the CC0 MakeHuman body in its rest pose and its exact joints.
+const TEMPLATE_MESH: &[u8] = include_bytes!("../../../../fixtures/synth/bodies/meshes/s0_rest.ply");
+const TEMPLATE_JOINTS: &str = include_str!("../../../../fixtures/synth/bodies/joints/s0_rest.json");
+
+/// `A..B` → the frame indices of a recording of `len` frames, every `every`-th.
+fn frame_list(spec: Option<&str>, every: usize, len: usize) -> Result<Vec<usize>, CliError> {
+    if every == 0 {
+        return Err(CliError("--every 0: expected at least 1".into()));
+    }
+    let (a, b) = match spec {
+        None => (0, len),
+        Some(s) => {
+            let (a, b) = s.split_once("..").ok_or_else(|| {
+                CliError(format!(
+                    "--frames {s:?}: expected A..B (B excluded), e.g. 0..300"
+                ))
+            })?;
+            let num = |t: &str, default: usize| -> Result<usize, CliError> {
+                if t.is_empty() {
+                    return Ok(default);
+                }
+                t.parse()
+                    .map_err(|_| CliError(format!("--frames {s:?}: {t:?} is not a frame number")))
+            };
+            (num(a, 0)?, num(b, len)?)
+        }
+    };
+    if a >= b || b > len {
+        return Err(CliError(format!(
+            "--frames {a}..{b}: the recording has frames 0..{len}"
+        )));
+    }
+    Ok((a..b).step_by(every).collect())
+}
+
+fn load_template(
+    args: &TrackArgs,
+    pipeline: &Pipeline,
+    max_input_bytes: u64,
+) -> Result<(symcorr::PreparedMesh, String), CliError> {
+    match (&args.template, &args.template_joints) {
+        (Some(m), Some(j)) => {
+            let p = super::match_cmd::load_prepared(pipeline, m, j, None, None, max_input_bytes)?;
+            Ok((p, m.display().to_string()))
+        }
+        _ => {
+            let mesh =
+                symcorr_mesh::io::read_from_bytes(TEMPLATE_MESH, symcorr_mesh::io::Format::Ply)
+                    .map_err(|e| CliError::with("bundled template", e))?
+                    .mesh;
+            let (log, _) =
+                symcorr_kinect::joints::parse_joints(TEMPLATE_JOINTS, "bundled template joints")
+                    .map_err(|e| CliError(e.to_string()))?;
+            let sk = log
+                .frames
+                .into_iter()
+                .next()
+                .map(|f| f.skeleton)
+                .ok_or_else(|| CliError("bundled template joints: no frame".into()))?;
+            let p = pipeline
+                .prepare(mesh, &sk)
+                .map_err(|e| CliError::with("bundled template", e))?;
+            Ok((p, "bundled:s0_rest".to_string()))
+        }
+    }
+}
+
+/// The journal's first line: what the run is, so `--resume` continues only the same run.
+fn journal_header(args: &TrackArgs, frames: &[usize], template: &str, vertices: usize) -> Value {
+    json!({
+        "format": "symcorr.track-journal/1",
+        "recording": args.recording.display().to_string(),
+        "joints": args.joints.display().to_string(),
+        "template": template,
+        "template_vertices": vertices,
+        "frames": frames,
+        "joint_offset_s": args.joint_offset,
+        "scans": args.scans,
+    })
+}
+
+/// The complete frame lines of an existing journal whose header is `header`; a last line cut
+/// short by an interruption is dropped (and cut from the file).
+fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
+    let err = |m: String| CliError(format!("{}: cannot resume: {m}", path.display()));
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let complete = match text.rfind('\n') {
+        Some(i) => &text[..=i],
+        None => "",
+    };
+    let mut lines = complete.lines();
+    let first: Value = lines
+        .next()
+        .and_then(|l| serde_json::from_str(l).ok())
+        .ok_or_else(|| err("no header line".into()))?;
+    if &first != header {
+        return Err(err(
+            "it was written for another recording, template, joints or frame list".into(),
+        ));
+    }
+    let frames = lines
+        .map(|l| serde_json::from_str(l).map_err(|e| err(format!("bad line: {e}"))))
+        .collect::<Result<Vec<Value>, _>>()?;
+    if complete.len() < text.len() {
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| err(e.to_string()))?;
+        f.set_len(complete.len() as u64)
+            .map_err(|e| err(e.to_string()))?;
+    }
+    Ok(frames)
+}
+
+/// Runs `symcorr track`.
+pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| CliError(format!("--threads {n}: {e}")))?;
+    }
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(CliError(format!(
+            "{}: --out must be a folder",
+            args.out.display()
+        )));
+    }
+    let journal_path = args.out.join("journal.jsonl");
+    if journal_path.exists() && !args.resume {
+        return Err(CliError(format!(
+            "{}: holds a previous run; pass --resume to continue it or choose another folder",
+            args.out.display()
+        )));
+    }
+    let recording = Recording::open(&args.recording).map_err(|e| CliError(e.to_string()))?;
+    let frames = frame_list(args.frames.as_deref(), args.every, recording.len())?;
+    let log = symcorr_kinect::read_joints(&args.joints).map_err(|e| CliError(e.to_string()))?;
+    let joints = JointTrack::new(log, 0.0).map_err(|e| CliError::with(args.joints.display(), e))?;
+    let pipeline = Pipeline::new(PipelineOptions {
+        mode: symcorr::Mode::Dense,
+        ..PipelineOptions::default()
+    });
+    let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
+    let n = template.input_mesh().num_vertices();
+    let header = journal_header(&args, &frames, &template_name, n);
+    std::fs::create_dir_all(&args.out).map_err(|e| CliError::with(args.out.display(), e))?;
+    if args.scans {
+        let d = args.out.join("scans");
+        std::fs::create_dir_all(&d).map_err(|e| CliError::with(d.display(), e))?;
+    }
+    let (corr_path, conf_path) = (
+        args.out.join("correspondence.npy"),
+        args.out.join("confidence.npy"),
+    );
+    let npy = |e: symcorr::npy::NpyError| CliError(e.to_string());
+    let (mut done, mut corr_npy, mut conf_npy) = if args.resume && journal_path.exists() {
+        let done = read_journal(&journal_path, &header)?;
+        let k = done.len();
+        (
+            done,
+            NpyWriter::resume(&corr_path, NpyType::I32, frames.len(), n, k).map_err(npy)?,
+            NpyWriter::resume(&conf_path, NpyType::F32, frames.len(), n, k).map_err(npy)?,
+        )
+    } else {
+        let mut j = std::fs::File::create(&journal_path)
+            .map_err(|e| CliError::with(journal_path.display(), e))?;
+        writeln!(j, "{header}").map_err(|e| CliError::with(journal_path.display(), e))?;
+        (
+            Vec::new(),
+            NpyWriter::create(&corr_path, NpyType::I32, frames.len(), n).map_err(npy)?,
+            NpyWriter::create(&conf_path, NpyType::F32, frames.len(), n).map_err(npy)?,
+        )
+    };
+    let mut journal = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&journal_path)
+        .map_err(|e| CliError::with(journal_path.display(), e))?;
+    let options = TrackOptions {
+        joint_offset_s: args.joint_offset,
+        ..TrackOptions::default()
+    };
+    let mut tracker = Tracker::new(
+        &pipeline,
+        &template,
+        *recording.intrinsics(),
+        joints,
+        options,
+    );
+    let bar = Bar::frames();
+    let start = Instant::now();
+    let total = frames.len();
+    let skipped_rows = (vec![-1i32; n], vec![0f32; n]);
+    for (k, &i) in frames.iter().enumerate().skip(done.len()) {
+        bar.update("tracking", k, total);
+        let time = recording.time(i).unwrap_or(f64::NAN);
+        let t0 = Instant::now();
+        let outcome = match recording.frame(i) {
+            Ok(depth) => tracker.frame(time, &depth),
+            Err(e) => {
+                tracker.reset();
+                FrameOutcome::Skipped(e.to_string())
+            }
+        };
+        let entry = match &outcome {
+            FrameOutcome::Matched(m) => {
+                corr_npy.push_i32(&m.target_of).map_err(npy)?;
+                conf_npy.push_f32(&m.confidence).map_err(npy)?;
+                if args.scans {
+                    let colours: Vec<[u8; 3]> = m
+                        .scan_labels
+                        .iter()
+                        .map(
+                            |l| match l.and_then(|x| symcorr_attach::Segment::ALL.get(x)) {
+                                Some(s) => symcorr_attach::palette::colour(*s),
+                                None => [128, 128, 128],
+                            },
+                        )
+                        .collect();
+                    let p = args.out.join("scans").join(format!("{i:06}.ply"));
+                    let mut batch = symcorr_mesh::io::OutputBatch::new();
+                    batch
+                        .add_mesh(&p, &m.scan.mesh, Some(&colours))
+                        .map_err(|e| CliError(e.to_string()))?;
+                    batch.commit().map_err(|e| CliError(e.to_string()))?;
+                }
+                json!({
+                    "frame": i,
+                    "time_s": time,
+                    "status": "ok",
+                    "corrections": m.corrections.iter().map(|c| c.name()).collect::<Vec<_>>(),
+                    "coverage": m.coverage,
+                    "mean_confidence": m.mean_confidence,
+                    "fit_score": m.fit_score,
+                    "scan_vertices": m.scan.mesh.num_vertices(),
+                    "timings_s": m.timings.iter().map(|(s, t)| (s.to_string(), json!(t))).collect::<serde_json::Map<_, _>>(),
+                    "seconds": t0.elapsed().as_secs_f64(),
+                })
+            }
+            FrameOutcome::Skipped(reason) => {
+                corr_npy.push_i32(&skipped_rows.0).map_err(npy)?;
+                conf_npy.push_f32(&skipped_rows.1).map_err(npy)?;
+                json!({
+                    "frame": i,
+                    "time_s": time,
+                    "status": format!("skipped: {reason}"),
+                    "seconds": t0.elapsed().as_secs_f64(),
+                })
+            }
+        };
+        // Rows first, then the journal line: a frame is done once its line is on disk.
+        corr_npy.sync().map_err(npy)?;
+        conf_npy.sync().map_err(npy)?;
+        writeln!(journal, "{entry}").map_err(|e| CliError::with(journal_path.display(), e))?;
+        journal
+            .sync_data()
+            .map_err(|e| CliError::with(journal_path.display(), e))?;
+        done.push(entry);
+    }
+    bar.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let ok: Vec<&Value> = done.iter().filter(|e| e["status"] == "ok").collect();
+    let mean = |key: &str| {
+        if ok.is_empty() {
+            Value::Null
+        } else {
+            json!(
+                ok.iter()
+                    .map(|e| e[key].as_f64().unwrap_or(0.0))
+                    .sum::<f64>()
+                    / ok.len() as f64
+            )
+        }
+    };
+    let fixed = |name: &str| {
+        done.iter()
+            .filter(|e| {
+                e["corrections"]
+                    .as_array()
+                    .is_some_and(|c| c.iter().any(|x| x == name))
+            })
+            .count()
+    };
+    let summary = json!({
+        "frames": done.len(),
+        "ok": ok.len(),
+        "skipped": done.len() - ok.len(),
+        "legs_swap_fixed": fixed("legs_swap_fixed"),
+        "arms_swap_fixed": fixed("arms_swap_fixed"),
+        "sides_swap_fixed": fixed("sides_swap_fixed"),
+        "mean_coverage": mean("coverage"),
+        "mean_confidence": mean("mean_confidence"),
+        "frames_per_second_this_run": if seconds > 0.0 { json!((done.len() as f64) / seconds) } else { Value::Null },
+    });
+    let doc = json!({
+        "format": "symcorr.track/1",
+        "run": header,
+        "frames": done,
+        "summary": summary,
+    });
+    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
+    symcorr_mesh::io::atomic_write(&args.out.join("track.json"), text.as_bytes())
+        .map_err(|e| CliError(e.to_string()))?;
+    println!(
+        "tracked {} frames ({} matched, {} skipped) into {}",
+        summary["frames"],
+        summary["ok"],
+        summary["skipped"],
+        args.out.display()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::frame_list;
+
+    #[test]
+    fn frame_slices_parse_and_are_checked_against_the_recording() {
+        assert_eq!(frame_list(None, 1, 3).unwrap(), vec![0, 1, 2]);
+        assert_eq!(frame_list(Some("1..3"), 1, 5).unwrap(), vec![1, 2]);
+        assert_eq!(frame_list(Some("..4"), 2, 5).unwrap(), vec![0, 2]);
+        assert_eq!(frame_list(Some("3.."), 1, 5).unwrap(), vec![3, 4]);
+        for bad in ["3..3", "0..9", "a..2", "2"] {
+            assert!(frame_list(Some(bad), 1, 5).is_err(), "{bad}");
+        }
+        assert!(frame_list(None, 0, 5).is_err());
+    }
+}

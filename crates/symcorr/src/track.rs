@@ -1,0 +1,289 @@
+//! Recorded sessions frame by frame ([`Tracker`]): each depth frame of a recording is matched
+//! with one prepared template, with the skeleton tracker's log read at the frame's time.
+//!
+//! Per frame (DESIGN.md, Recorded sessions):
+//! 1. **Joints at the frame's time** ([`symcorr_kinect::JointTrack::at`], shifted by
+//!    [`TrackOptions::joint_offset_s`]): interpolated between the two nearest log frames; a frame
+//!    with no log frame within 1.5 log periods, or whose skeleton has no tracked joint, is
+//!    skipped with that reason — never matched to garbage.
+//! 2. **Left/right swaps** the tracker makes when the body turns sideways: each limb pair (legs,
+//!    arms) is compared with the previous frame's skeleton; if it fits better with left and
+//!    right exchanged ([`symcorr_kinect::limb_swap_evidence`] above
+//!    [`symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD`]) it is swapped back, and the frame says so. The
+//!    attachment's handedness check against the scan then fixes a whole-body swap.
+//! 3. **Smoothing**: a one-euro filter per joint coordinate ([`symcorr_kinect::SkeletonFilter`],
+//!    Casiez et al. 2012: little jitter at rest, little lag in fast motion), reset after a
+//!    skipped frame.
+//! 4. **Scan** ([`symcorr_kinect::scan_mesh`]) of the depth frame with those joints, **prepare**
+//!    it (skeleton attachment; joints and depth share the camera frame, so no alignment, and a
+//!    poor fit is recorded, not refused: a profile view's far-side joints lie behind the only
+//!    surface the camera sees) and **match** the template onto it with the pipeline's method.
+//!
+//! The result per frame ([`FrameResult`]) is the row of the correspondence — for every
+//! template input vertex the scan vertex it matches, or −1 where the frame does not show it —
+//! with a confidence, and what was corrected.
+
+use crate::{Pipeline, PipelineError, PreparedMesh};
+use std::time::Instant;
+use symcorr_attach::PoorFitPolicy;
+use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
+use symcorr_kinect::{
+    limb_swap_evidence, scan_mesh, DepthFrame, Intrinsics, JointTrack, LimbPair, ScanMesh,
+    ScanOptions, SkeletonFilter, SkipReason,
+};
+use symcorr_skeleton::Skeleton;
+
+/// Options of a [`Tracker`].
+#[derive(Debug, Clone)]
+pub struct TrackOptions {
+    /// Added to every depth frame's time before the joint log is read (the log's clock minus the
+    /// depth stream's), seconds.
+    pub joint_offset_s: f64,
+    /// Swap limbs back when they fit the previous frame better exchanged.
+    pub fix_swaps: bool,
+    /// Temporal smoothing of the joints (`None`: raw joints).
+    pub smoothing: Option<symcorr_kinect::OneEuroFilter>,
+    /// Scan meshing options.
+    pub scan: ScanOptions,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        TrackOptions {
+            joint_offset_s: 0.0,
+            fix_swaps: true,
+            smoothing: Some(symcorr_kinect::OneEuroFilter::default()),
+            scan: ScanOptions::default(),
+        }
+    }
+}
+
+/// Something the tracker corrected in a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Correction {
+    /// The joints were interpolated between two log frames.
+    JointsInterpolated,
+    /// The legs' left and right were swapped back (continuity with the previous frame).
+    LegsSwapped,
+    /// The arms' left and right were swapped back (continuity with the previous frame).
+    ArmsSwapped,
+    /// The whole skeleton's sides were swapped to fit the scan (handedness check).
+    SidesSwapped,
+    /// The skeleton failed a fit check and was used anyway.
+    PoorFitAccepted,
+}
+
+impl Correction {
+    /// The name in `track.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Correction::JointsInterpolated => "joints_interpolated",
+            Correction::LegsSwapped => "legs_swap_fixed",
+            Correction::ArmsSwapped => "arms_swap_fixed",
+            Correction::SidesSwapped => "sides_swap_fixed",
+            Correction::PoorFitAccepted => "poor_fit_accepted",
+        }
+    }
+}
+
+/// A frame that was matched.
+#[derive(Debug, Clone)]
+pub struct MatchedFrame {
+    /// Per template input vertex, the scan vertex it matches, or −1 where the frame does not
+    /// show it.
+    pub target_of: Vec<i32>,
+    /// Per template input vertex, the match's confidence (0 where `target_of` is −1).
+    pub confidence: Vec<f32>,
+    /// What was corrected.
+    pub corrections: Vec<Correction>,
+    /// Fraction of the template's vertices the frame shows (matched, not −1).
+    pub coverage: f64,
+    /// Mean confidence of the matched vertices.
+    pub mean_confidence: f64,
+    /// The target skeleton's fit score ([`symcorr_attach::FitQuality::score`]).
+    pub fit_score: f64,
+    /// The scan, its vertex ids being those of `target_of`.
+    pub scan: ScanMesh,
+    /// Per scan vertex, its segment label index (`None` where the attachment left it out).
+    pub scan_labels: Vec<Option<usize>>,
+    /// Seconds per stage: `scan`, `prepare`, `match`.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+/// What happened to one frame.
+#[derive(Debug, Clone)]
+pub enum FrameOutcome {
+    /// Matched.
+    Matched(Box<MatchedFrame>),
+    /// Skipped, with the reason (no skeleton near its time, no body, a scan or match that
+    /// failed).
+    Skipped(String),
+}
+
+/// Matches the frames of one recording, in time order, against one prepared template.
+pub struct Tracker<'a> {
+    pipeline: Pipeline,
+    template: &'a PreparedMesh,
+    intrinsics: Intrinsics,
+    joints: JointTrack,
+    options: TrackOptions,
+    filter: Option<SkeletonFilter>,
+    previous: Option<Skeleton>,
+}
+
+impl<'a> Tracker<'a> {
+    /// A tracker for frames seen through `intrinsics`, with the joints of `joints`; `pipeline`
+    /// prepared `template` (its method and mode are used for every frame).
+    pub fn new(
+        pipeline: &Pipeline,
+        template: &'a PreparedMesh,
+        intrinsics: Intrinsics,
+        joints: JointTrack,
+        options: TrackOptions,
+    ) -> Tracker<'a> {
+        let mut pipeline = pipeline.clone();
+        // Joints and depth share the camera frame: no alignment search; a profile view's fit is
+        // recorded, not refused.
+        pipeline.options.prepare.attach.align = false;
+        pipeline.options.prepare.attach.poor_fit = PoorFitPolicy::Accept;
+        pipeline.options.prepare.cache = None;
+        Tracker {
+            pipeline,
+            template,
+            intrinsics,
+            joints,
+            filter: options.smoothing.map(SkeletonFilter::new),
+            options,
+            previous: None,
+        }
+    }
+
+    /// Forgets the previous frame (after a skipped frame, or before a jump in time).
+    pub fn reset(&mut self) {
+        self.previous = None;
+        if let Some(f) = &mut self.filter {
+            f.reset();
+        }
+    }
+
+    /// Matches the depth frame taken at `time_s` (depth stream clock).
+    pub fn frame(&mut self, time_s: f64, depth: &DepthFrame) -> FrameOutcome {
+        match self.frame_inner(time_s, depth) {
+            Ok(m) => FrameOutcome::Matched(Box::new(m)),
+            Err(reason) => {
+                self.reset();
+                FrameOutcome::Skipped(reason)
+            }
+        }
+    }
+
+    fn frame_inner(&mut self, time_s: f64, depth: &DepthFrame) -> Result<MatchedFrame, String> {
+        let mut corrections = Vec::new();
+        let timed = self
+            .joints
+            .at(time_s + self.options.joint_offset_s)
+            .map_err(|e: SkipReason| e.to_string())?;
+        if timed.interpolated {
+            corrections.push(Correction::JointsInterpolated);
+        }
+        let mut skeleton = timed.skeleton;
+        if let (true, Some(prev)) = (self.options.fix_swaps, &self.previous) {
+            for (pair, fix) in [
+                (LimbPair::Legs, Correction::LegsSwapped),
+                (LimbPair::Arms, Correction::ArmsSwapped),
+            ] {
+                if limb_swap_evidence(prev, &skeleton, pair) > SWAP_EVIDENCE_THRESHOLD {
+                    skeleton = swap_limbs(&skeleton, pair);
+                    corrections.push(fix);
+                }
+            }
+        }
+        if let Some(f) = &mut self.filter {
+            skeleton = f.filter(time_s, &skeleton);
+        }
+        let t = Instant::now();
+        let scan = scan_mesh(depth, &self.intrinsics, Some(&skeleton), &self.options.scan)
+            .map_err(|e| e.to_string())?;
+        let t_scan = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let target = self
+            .pipeline
+            .prepare(scan.mesh.clone(), &skeleton)
+            .map_err(|e| e.to_string())?;
+        let t_prepare = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let corr = self
+            .pipeline
+            .run(self.template, &target)
+            .map_err(|e: PipelineError| e.to_string())?;
+        let t_match = t.elapsed().as_secs_f64();
+        let d = &target.attachment.diagnostics;
+        if d.mirror.swapped {
+            corrections.push(Correction::SidesSwapped);
+        }
+        if d.fit.accepted_poor_fit {
+            corrections.push(Correction::PoorFitAccepted);
+        }
+        let n = self.template.input_mesh().num_vertices();
+        let mut target_of = vec![-1i32; n];
+        let mut confidence = vec![0f32; n];
+        let shown = corr.has_counterpart();
+        for (i, p) in corr.pairs.iter().enumerate() {
+            if shown.is_some_and(|h| !h[i]) {
+                continue;
+            }
+            let v = self.template.input_id(p.template) as usize;
+            target_of[v] = target.input_id(p.target) as i32;
+            confidence[v] = p.confidence as f32;
+        }
+        let matched = target_of.iter().filter(|&&x| x >= 0).count();
+        let mean_confidence = if matched > 0 {
+            confidence.iter().map(|&c| f64::from(c)).sum::<f64>() / matched as f64
+        } else {
+            0.0
+        };
+        let labels: Vec<Option<usize>> = target.labels().iter().map(|s| Some(s.index())).collect();
+        let scan_labels = target.to_input(&labels, None);
+        // Continuity is judged against what was used, the corrected and smoothed joints.
+        self.previous = Some(skeleton);
+        Ok(MatchedFrame {
+            coverage: matched as f64 / n.max(1) as f64,
+            mean_confidence,
+            fit_score: d.fit.score,
+            target_of,
+            confidence,
+            corrections,
+            scan,
+            scan_labels,
+            timings: vec![("scan", t_scan), ("prepare", t_prepare), ("match", t_match)],
+        })
+    }
+}
+
+/// `skeleton` with the left and right joints of one limb pair exchanged.
+fn swap_limbs(skeleton: &Skeleton, pair: LimbPair) -> Skeleton {
+    let mut out = skeleton.clone();
+    for l in pair.left_joints() {
+        let (a, b) = (l.index(), l.mirror().index());
+        out.positions.swap(a, b);
+        out.confidence.swap(a, b);
+        out.interpolated.swap(a, b);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use symcorr_skeleton::Joint;
+
+    #[test]
+    fn swapping_a_limb_pair_exchanges_only_its_joints_and_twice_is_identity() {
+        let sk = symcorr_attach::testbody::t_pose(1.0);
+        let s = swap_limbs(&sk, LimbPair::Legs);
+        assert_eq!(s.position(Joint::KneeLeft), sk.position(Joint::KneeRight));
+        assert_eq!(s.position(Joint::FootRight), sk.position(Joint::FootLeft));
+        assert_eq!(s.position(Joint::HandLeft), sk.position(Joint::HandLeft));
+        assert_eq!(swap_limbs(&s, LimbPair::Legs).positions, sk.positions);
+    }
+}
