@@ -1,7 +1,7 @@
 //! Recorded sessions frame by frame ([`Tracker`]): each depth frame of a recording is matched
 //! with one prepared template, with the skeleton tracker's log read at the frame's time.
 //!
-//! Per frame (DESIGN.md, Recorded sessions):
+//! Per frame (DESIGN.md, Algorithms, Recorded sessions):
 //! 1. **Joints at the frame's time** ([`symcorr_kinect::JointTrack::at`], shifted by
 //!    [`TrackOptions::joint_offset_s`]): interpolated between the two nearest log frames; a frame
 //!    with no log frame within 1.5 log periods, or whose skeleton has no tracked joint, is
