@@ -7,6 +7,8 @@
 #   bodies20_scans/  the same templates, each target a single-view virtual-Kinect scan
 #   bodies50k/       4 poses x 2 shapes, Loop-subdivided once (53,514 vertices)
 #   bodies20_fine/   13,380-vertex templates, targets one Loop level finer (another triangulation)
+#   recording/       a 10 s synthetic Kinect recording (300 frames, 640x480, turn to profile and
+#                    back, corrupted joint log, ground truth) for symcorr track
 # Shapes and noise are those of the committed fixtures (tools/synth/src/fixtures.rs).
 # Usage: bash tools/bench/make_datasets.sh   then e.g.
 #   cargo run --release -- bench target/bench-data/bodies20 --mode dense --json dense.json
@@ -38,3 +40,7 @@ echo "$out/bodies50k: $(wc -l < "$out/bodies50k/pairs.txt") pairs of $(wc -l < "
 # (53,514 vertices) while the template keeps 13,380; truth/NAME_fine.txt = body vertex ids.
 "$synth" dataset --out "$out/bodies20_fine" "${common[@]}" --finer-targets 1
 echo "$out/bodies20_fine: $(wc -l < "$out/bodies20_fine/pairs.txt") pairs, targets one Loop level finer"
+# A synthetic Kinect recording (symcorr.recording/1): 10 s at 30 fps, 640x480, the body walking
+# in place and turning to profile and back, a tracker-like corrupted joint log and ground truth.
+"$synth" recording --frames 300 --fps 30 --width 640 --height 480 --seed 7 --out "$out/recording"
+echo "$out/recording: $(ls "$out/recording/depth" | wc -l) depth frames"

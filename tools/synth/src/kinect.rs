@@ -45,6 +45,17 @@ fn write_camera_files(
     let k = serde_json::to_string(&camera.intrinsics)
         .map_err(|e| SynthError::Invalid(e.to_string()))?;
     write_text(&out.join("intrinsics.json"), &(k + "\n"))?;
+    write_camera_json(out, camera, mesh_ref, realism)
+}
+
+/// Writes `camera.json`: the camera's position, look-at point, world → camera transform, the
+/// body mesh it saw (`mesh_ref`) and the realism settings.
+pub(crate) fn write_camera_json(
+    out: &Path,
+    camera: &Camera,
+    mesh_ref: &str,
+    realism: &Realism,
+) -> Result<()> {
     let t = camera.world_to_camera();
     // The file keeps its layout: rotation as rows, translation as an array.
     let rotation_rows: [[f64; 3]; 3] = [0, 1, 2].map(|k| t.r.row(k).transpose().into());

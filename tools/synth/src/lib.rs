@@ -11,7 +11,8 @@
 //! targets; rig joints recomputed from the shaped mesh) → [`Body::pose`] with a [`Pose`]
 //! (named, walk-cycle or random; [`poses`]) → [`Posed`] mesh → [`mapping`]: 20 Kinect v1
 //! joints and 17-segment reference labels → optional joint noise ([`noise`]) → [`dataset`]
-//! folders, or [`render`]: a virtual-Kinect depth frame with per-pixel vertex ids ([`kinect`]).
+//! folders, or [`render`]: a virtual-Kinect depth frame with per-pixel vertex ids ([`kinect`]),
+//! or a whole recording with a tracker-like corrupted joint log ([`recording`]).
 //!
 //! ```
 //! use symcorr_synth::{Assets, Model, Shape, poses, mapping};
@@ -63,6 +64,7 @@ pub mod mapping;
 pub mod math;
 pub mod noise;
 pub mod poses;
+pub mod recording;
 pub mod render;
 
 pub use assets::Assets;

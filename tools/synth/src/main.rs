@@ -11,6 +11,7 @@ use symcorr_synth::kinect::{write_scan, write_sequence};
 use symcorr_synth::mapping::{kinect_joints, reference_labels, SelfIntersectionCheck};
 use symcorr_synth::noise::JointNoise;
 use symcorr_synth::poses::{interpolate, walk_pose};
+use symcorr_synth::recording::{kinect_v1_intrinsics, write_recording, RecordingSpec};
 use symcorr_synth::render::{Camera, Realism};
 use symcorr_synth::{fixtures, Assets, Model, Pose, Result, Shape, SynthError};
 
@@ -158,6 +159,30 @@ enum Cmd {
         /// … to this pose over the sequence.
         #[arg(long)]
         to: Option<String>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Write a synthetic Kinect recording (symcorr.recording/1): the body walks in place
+    /// and turns to profile and back; corrupted joint log, ground truth (tools/synth/README.md).
+    Recording {
+        #[command(flatten)]
+        view: ViewArgs,
+        /// Number of frames.
+        #[arg(long, default_value_t = 300)]
+        frames: usize,
+        /// Frame rate of the depth and joint streams (frames per second).
+        #[arg(long, default_value_t = 30.0)]
+        fps: f64,
+        /// Depth image width in pixels (Kinect v1 field of view).
+        #[arg(long, default_value_t = 640)]
+        width: u32,
+        /// Depth image height in pixels.
+        #[arg(long, default_value_t = 480)]
+        height: u32,
+        /// Largest turn about the vertical axis, reached halfway (degrees; 90 = profile).
+        #[arg(long, default_value_t = 90.0, allow_negative_numbers = true)]
+        max_turn_deg: f64,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -384,6 +409,47 @@ fn run(cli: Cli) -> Result<()> {
                     .collect(),
             };
             write_sequence(&out, &body, &poses, fps, &view.camera()?, &view.realism()?)?;
+        }
+        Cmd::Recording {
+            view,
+            frames,
+            fps,
+            width,
+            height,
+            max_turn_deg,
+            out,
+        } => {
+            let camera = Camera {
+                intrinsics: kinect_v1_intrinsics(width, height)?,
+                ..view.camera()?
+            };
+            let body = model.body(&Shape::parse(&view.shape)?)?;
+            let spec = RecordingSpec {
+                frames,
+                fps,
+                max_turn_deg,
+                seed: view.seed,
+                // Without the binary's path, so that the manifest does not depend on the build.
+                command: std::iter::once("symcorr-synth".to_string())
+                    .chain(std::env::args().skip(1))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            };
+            let s = write_recording(
+                &out,
+                &body,
+                model.assets.walk.as_ref(),
+                &spec,
+                &camera,
+                &view.realism()?,
+            )?;
+            eprintln!(
+                "{}: {} frames, leg swaps {:?}, lost body {:?}",
+                out.display(),
+                s.frames,
+                s.swaps,
+                s.lost_body_frames
+            );
         }
         Cmd::Fixtures { out } => fixtures::write_fixtures(&model, Path::new(&out))?,
         Cmd::Convention { out } => {

@@ -1,0 +1,309 @@
+//! The committed synthetic Kinect recording (`fixtures/synth/recording/`): its layout, and the
+//! corruptions its manifest lists really are in its joint log, and that the generator still
+//! writes it bit for bit. Reads only the project's fixtures/.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use symcorr_kinect::joints::{read_joints, JointLog};
+use symcorr_kinect::{read_depth_png16, Intrinsics};
+use symcorr_skeleton::{Joint, Skeleton};
+use symcorr_synth::recording::{
+    fixture_recording, write_recording, DEPTH_TIME_JITTER_S, INFERRED_CONFIDENCE,
+    INFERRED_MIN_TURN_DEG, JOINT_CLOCK_OFFSET_S, LEG_PAIRS, RECORDING_FORMAT, SWAP_FRAMES,
+    SWAP_MIN_TURN_DEG,
+};
+
+/// Vertices of the bundled body model.
+const BODY_VERTICES: u32 = 13_380;
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/recording")
+}
+
+fn manifest() -> serde_json::Value {
+    let text = std::fs::read_to_string(dir().join("recording.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+fn frames() -> usize {
+    manifest()["frames"].as_u64().unwrap() as usize
+}
+
+fn depth_times() -> Vec<f64> {
+    std::fs::read_to_string(dir().join("depth_times.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect()
+}
+
+fn log() -> JointLog {
+    read_joints(dir().join("joints.json")).unwrap()
+}
+
+fn truth() -> JointLog {
+    read_joints(dir().join("truth/joints.json")).unwrap()
+}
+
+fn usize_list(v: &serde_json::Value) -> Vec<usize> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap() as usize)
+        .collect()
+}
+
+fn swaps() -> Vec<[usize; 2]> {
+    manifest()["swaps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let r = usize_list(r);
+            [r[0], r[1]]
+        })
+        .collect()
+}
+
+fn in_swap(f: usize) -> bool {
+    swaps().iter().any(|&[a, b]| (a..=b).contains(&f))
+}
+
+/// Summed distance of the log's leg joints to the truth's legs, as named and exchanged.
+fn leg_distances(log: &Skeleton, truth: &Skeleton) -> (f64, f64) {
+    let mut same = 0.0;
+    let mut crossed = 0.0;
+    for (l, r) in LEG_PAIRS {
+        same += (log.position(l) - truth.position(l)).norm()
+            + (log.position(r) - truth.position(r)).norm();
+        crossed += (log.position(l) - truth.position(r)).norm()
+            + (log.position(r) - truth.position(l)).norm();
+    }
+    (same, crossed)
+}
+
+#[test]
+fn layout_is_exactly_the_recording_format() {
+    let m = manifest();
+    assert_eq!(m["format"], RECORDING_FORMAT);
+    let n = frames();
+    assert!((30..=60).contains(&n), "{n} frames");
+    let names = |d: &Path| -> BTreeSet<String> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect()
+    };
+    let top: BTreeSet<String> = [
+        "intrinsics.json",
+        "depth",
+        "depth_times.txt",
+        "joints.json",
+        "truth",
+        "recording.json",
+        "camera.json",
+    ]
+    .map(String::from)
+    .into();
+    assert_eq!(names(&dir()), top);
+    let pngs: BTreeSet<String> = (0..n).map(|f| format!("{f:06}.png")).collect();
+    assert_eq!(names(&dir().join("depth")), pngs);
+    let mut truth_files = pngs.clone();
+    truth_files.insert("joints.json".into());
+    assert_eq!(names(&dir().join("truth")), truth_files);
+
+    let k = Intrinsics::read(dir().join("intrinsics.json")).unwrap();
+    assert_eq!(
+        (k.width as u64, k.height as u64),
+        (m["width"].as_u64().unwrap(), m["height"].as_u64().unwrap())
+    );
+    for f in 0..n {
+        let d = read_depth_png16(dir().join(format!("depth/{f:06}.png"))).unwrap();
+        assert_eq!((d.width, d.height), (k.width, k.height), "depth frame {f}");
+        assert!(d.data_mm.iter().any(|&z| z > 0), "depth frame {f} is empty");
+    }
+
+    let times = depth_times();
+    assert_eq!(times.len(), n);
+    assert!(times.windows(2).all(|w| w[0] < w[1]));
+    let fps = m["fps"].as_f64().unwrap();
+    let mut jittered = 0;
+    for (f, t) in times.iter().enumerate() {
+        let dt = t - f as f64 / fps;
+        assert!(dt.abs() <= DEPTH_TIME_JITTER_S + 1e-9, "frame {f}: {dt}");
+        jittered += usize::from(dt.abs() > 1e-4);
+    }
+    assert!(jittered > n / 2, "depth times are not jittered");
+
+    let truth = truth();
+    assert_eq!(truth.frames.len(), n);
+    for (fr, t) in truth.frames.iter().zip(&times) {
+        assert_eq!(fr.time_s, *t);
+    }
+}
+
+#[test]
+fn joint_log_runs_at_exactly_the_frame_rate_with_a_40_ms_offset() {
+    let m = manifest();
+    assert_eq!(m["joint_offset_s"].as_f64().unwrap(), 0.04);
+    assert_eq!(JOINT_CLOCK_OFFSET_S, 0.04);
+    let fps = m["fps"].as_f64().unwrap();
+    let log = log();
+    assert_eq!(log.frames.len(), frames());
+    let times = depth_times();
+    for (k, fr) in log.frames.iter().enumerate() {
+        assert!(
+            (fr.time_s - (k as f64 / fps + 0.04)).abs() < 1e-9,
+            "frame {k}"
+        );
+        // The depth frame showing the same moment is 40 ms earlier on the log's clock.
+        assert!((fr.time_s - 0.04 - times[k]).abs() <= DEPTH_TIME_JITTER_S + 1e-9);
+    }
+}
+
+#[test]
+fn the_listed_corruptions_are_in_the_joint_log() {
+    let m = manifest();
+    let n = frames();
+    let log = log();
+    let truth = truth();
+    let turn: Vec<f64> = m["turn_deg"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_f64().unwrap())
+        .collect();
+    assert_eq!(turn.len(), n);
+    assert!(
+        turn.iter().cloned().fold(0.0, f64::max) > 85.0,
+        "no profile"
+    );
+    assert!(turn[0] < 5.0);
+
+    // Lost body: two consecutive frames without any usable joint, and only those.
+    let lost = usize_list(&m["lost_body_frames"]);
+    assert_eq!(lost.len(), 2);
+    assert_eq!(lost[1], lost[0] + 1);
+    for (f, fr) in log.frames.iter().enumerate() {
+        let none = fr.skeleton.confidence.iter().all(|&c| c == 0.0);
+        assert_eq!(none, lost.contains(&f), "frame {f}");
+    }
+
+    // Leg swaps: 3–6 frames, sideways, legs exchanged relative to the truth; elsewhere not.
+    let swaps = swaps();
+    assert!(!swaps.is_empty());
+    for &[a, b] in &swaps {
+        assert!((SWAP_FRAMES.0..=SWAP_FRAMES.1).contains(&(b - a + 1)));
+        assert!((a..=b).all(|f| turn[f] > SWAP_MIN_TURN_DEG - 1.0));
+    }
+    for f in (0..n).filter(|f| !lost.contains(f)) {
+        let (same, crossed) = leg_distances(&log.frames[f].skeleton, &truth.frames[f].skeleton);
+        if in_swap(f) {
+            assert!(crossed < same, "frame {f}: legs not swapped");
+        } else {
+            assert!(same < crossed, "frame {f}: legs swapped");
+        }
+    }
+
+    // Inferred far-side joints in profile, confidence 0.5; full confidence elsewhere.
+    let inferred = usize_list(&m["inferred_frames"]);
+    assert!(!inferred.is_empty());
+    for (f, fr) in log.frames.iter().enumerate() {
+        if lost.contains(&f) {
+            continue;
+        }
+        let half = fr
+            .skeleton
+            .confidence
+            .iter()
+            .filter(|&&c| c == INFERRED_CONFIDENCE)
+            .count();
+        if inferred.contains(&f) {
+            assert_eq!(half, 6, "frame {f}");
+            assert!(turn[f] > INFERRED_MIN_TURN_DEG - 1.0);
+        } else {
+            assert!(
+                fr.skeleton.confidence.iter().all(|&c| c == 1.0),
+                "frame {f}"
+            );
+        }
+    }
+
+    // Jitter: tracked, unswapped joints lie within a few centimetres of the truth.
+    let mut sum = 0.0;
+    let mut count = 0;
+    for f in (0..n).filter(|f| !lost.contains(f) && !in_swap(*f)) {
+        for j in Joint::ALL {
+            if log.frames[f].skeleton.confidence[j.index()] == 1.0 {
+                let d = log.frames[f].skeleton.position(j) - truth.frames[f].skeleton.position(j);
+                sum += d.norm_squared();
+                count += 1;
+            }
+        }
+    }
+    let rms_cm = (sum / count as f64).sqrt() * 100.0;
+    assert!((1.0..6.0).contains(&rms_cm), "joint jitter {rms_cm} cm rms");
+}
+
+#[test]
+fn truth_images_name_body_vertices() {
+    let k = Intrinsics::read(dir().join("intrinsics.json")).unwrap();
+    for f in 0..frames() {
+        let ids = read_depth_png16(dir().join(format!("truth/{f:06}.png"))).unwrap();
+        assert_eq!((ids.width, ids.height), (k.width, k.height));
+        assert!(ids.data_mm.iter().all(|&v| u32::from(v) <= BODY_VERTICES));
+        let depth = read_depth_png16(dir().join(format!("depth/{f:06}.png"))).unwrap();
+        let seen = ids.data_mm.iter().filter(|&&v| v > 0).count();
+        assert!(seen > 500, "frame {f}: {seen} body pixels");
+        // A pixel that names a vertex has a depth reading.
+        assert!(ids
+            .data_mm
+            .iter()
+            .zip(&depth.data_mm)
+            .all(|(&v, &z)| v == 0 || z > 0));
+    }
+}
+
+#[test]
+fn committed_recording_regenerates_bit_for_bit() {
+    let model = symcorr_synth::Model::new(
+        symcorr_synth::Assets::load(&symcorr_synth::Assets::default_dir()).unwrap(),
+    )
+    .unwrap();
+    let body = model.body(&symcorr_synth::Shape::default()).unwrap();
+    let (spec, camera, realism) = fixture_recording().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let summary = write_recording(
+        out.path(),
+        &body,
+        model.assets.walk.as_ref(),
+        &spec,
+        &camera,
+        &realism,
+    )
+    .unwrap();
+    assert_eq!(summary.frames, frames());
+    let mut files = 0;
+    let mut stack = vec![PathBuf::new()];
+    while let Some(rel) = stack.pop() {
+        for e in std::fs::read_dir(out.path().join(&rel)).unwrap() {
+            let e = e.unwrap();
+            let r = rel.join(e.file_name());
+            if e.file_type().unwrap().is_dir() {
+                stack.push(r);
+                continue;
+            }
+            let new = std::fs::read(e.path()).unwrap();
+            let old = std::fs::read(dir().join(&r))
+                .unwrap_or_else(|_| panic!("{} not committed", r.display()));
+            assert!(
+                new == old,
+                "{} differs from the committed fixture",
+                r.display()
+            );
+            files += 1;
+        }
+    }
+    assert_eq!(files, 2 * frames() + 6);
+}
