@@ -1,0 +1,146 @@
+//! `symcorr track`'s per-frame accuracy on a synthetic recording with ground truth
+//! (`symcorr-synth recording`: truth/NNNNNN.png holds, per pixel, the body vertex id + 1).
+//!
+//! ```text
+//! cargo run --release -p symcorr-experiments --bin track_eval -- fixtures/synth/recording
+//! ```
+//!
+//! For every frame, the template (fixtures/synth/bodies s0_rest, the recording body's topology)
+//! is matched by `symcorr::track::Tracker` exactly as `symcorr track` does; each matched template
+//! vertex `v` lands on a scan vertex, whose pixel's truth names the body vertex `b` seen there.
+//! The error is the geodesic distance from `v` to `b` on the template over its √area (the body
+//! vertex ids are the template's), a flip is `b` nearer `v`'s mirror twin (symcorr-eval's
+//! `evaluate`). One line per frame (status, corrections, coverage, mean error, flips, matches on
+//! pixels with no body vertex, seconds), then the totals.
+
+use clap::Parser;
+use std::path::PathBuf;
+use std::time::Instant;
+use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
+use symcorr::{Pipeline, PipelineOptions};
+use symcorr_eval::{evaluate, read_mirror, EvalGraph};
+use symcorr_kinect::{read_depth_png16, JointTrack, Recording};
+
+/// Per-frame accuracy of `symcorr track` on a recording with ground truth.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Recording folder with truth/ (symcorr-synth recording).
+    recording: PathBuf,
+    /// Joint log (default: RECORDING/joints.json).
+    #[arg(long)]
+    joints: Option<PathBuf>,
+    /// Template body folder (meshes/, joints/, mirror.txt), the recording body's topology.
+    #[arg(long, default_value = "fixtures/synth/bodies")]
+    bodies: PathBuf,
+    /// Template name in the body folder.
+    #[arg(long, default_value = "s0_rest")]
+    template: String,
+    /// Seconds added to every depth frame's time before the joint log is read.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    joint_offset: f64,
+    /// Turn the limb-swap fix off.
+    #[arg(long)]
+    no_swap_fix: bool,
+    /// Turn the joint smoothing off.
+    #[arg(long)]
+    no_smoothing: bool,
+}
+
+fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
+    let rec = Recording::open(&args.recording)?;
+    let joints = args
+        .joints
+        .clone()
+        .unwrap_or_else(|| args.recording.join("joints.json"));
+    let track = JointTrack::new(symcorr_kinect::read_joints(&joints)?, 0.0)?;
+    let mesh_path = args
+        .bodies
+        .join("meshes")
+        .join(format!("{}.ply", args.template));
+    let mesh = symcorr_mesh::io::read(&mesh_path)?.mesh;
+    let sk = symcorr::io::read_skeleton(
+        &args
+            .bodies
+            .join("joints")
+            .join(format!("{}.json", args.template)),
+        None,
+    )?;
+    let mirror = read_mirror(&args.bodies.join("mirror.txt"))?;
+    let graph = EvalGraph::new(&mesh);
+    let area = mesh.total_area();
+    let pipeline = Pipeline::new(PipelineOptions {
+        mode: symcorr::Mode::Dense,
+        ..PipelineOptions::default()
+    });
+    let template = pipeline.prepare(mesh, &sk)?;
+    let options = TrackOptions {
+        joint_offset_s: args.joint_offset,
+        fix_swaps: !args.no_swap_fix,
+        smoothing: (!args.no_smoothing).then(symcorr_kinect::OneEuroFilter::default),
+        ..TrackOptions::default()
+    };
+    let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);
+    let (mut all_errors, mut flips, mut counted, mut off_body, mut matched_frames) =
+        (Vec::new(), 0usize, 0usize, 0usize, 0usize);
+    let mut seconds = 0.0;
+    println!("frame status corrections coverage mean_error flips off_body seconds");
+    for i in 0..rec.len() {
+        let time = rec.time(i).unwrap_or(f64::NAN);
+        let depth = rec.frame(i)?;
+        let truth = read_depth_png16(args.recording.join(format!("truth/{i:06}.png")))?;
+        let t = Instant::now();
+        let outcome = tracker.frame(time, &depth);
+        let dt = t.elapsed().as_secs_f64();
+        seconds += dt;
+        match outcome {
+            FrameOutcome::Skipped(reason) => println!("{i} skipped: {reason}"),
+            FrameOutcome::Matched(m) => {
+                matched_frames += 1;
+                let mut pairs = Vec::new();
+                let mut off = 0;
+                for (v, &s) in m.target_of.iter().enumerate() {
+                    if s < 0 {
+                        continue;
+                    }
+                    let pixel = m.scan.pixel_ids[s as usize] as usize;
+                    match truth.data_mm.get(pixel).copied().unwrap_or(0) {
+                        0 => off += 1,
+                        b => pairs.push((v as u32, u32::from(b) - 1)),
+                    }
+                }
+                let e = evaluate(&graph, area, &pairs, |p| p, Some(&mirror));
+                let (c, f) = e.flip_counts();
+                let names: Vec<&str> = m.corrections.iter().map(|c| c.name()).collect();
+                println!(
+                    "{i} ok {} {:.3} {:.4} {f}/{c} {off} {dt:.2}",
+                    if names.is_empty() {
+                        "-".to_string()
+                    } else {
+                        names.join(",")
+                    },
+                    m.coverage,
+                    e.mean_error()
+                );
+                all_errors.extend(e.errors);
+                flips += f;
+                counted += c;
+                off_body += off;
+            }
+        }
+    }
+    let mean = all_errors.iter().sum::<f64>() / all_errors.len().max(1) as f64;
+    println!(
+        "ALL frames {} matched {matched_frames} mean_error {mean:.4} flips {flips}/{counted} off_body {off_body} frames/s {:.2}",
+        rec.len(),
+        rec.len() as f64 / seconds.max(f64::MIN_POSITIVE)
+    );
+    Ok(())
+}
+
+fn main() {
+    let args = Args::parse();
+    if let Err(e) = run(&args) {
+        eprintln!("track_eval: {e}");
+        std::process::exit(1);
+    }
+}
