@@ -354,8 +354,8 @@ pub struct Diagnostics {
     /// guard once more, against the joint planes' labels); `None` without
     /// [`AttachOptions::convention`].
     pub convention_changes: Option<usize>,
-    /// Wall-clock seconds per stage: `align`, `mirror`, `refine`, `heat`, `labels` (argmax,
-    /// joint planes, midline guard).
+    /// Wall-clock seconds per stage: `align`, `mirror`, `fit` (the checks and, when one fails,
+    /// the rotation search), `refine`, `heat`, `labels` (argmax, joint planes, midline guard).
     pub timings_s: Vec<(&'static str, f64)>,
 }
 
@@ -487,6 +487,7 @@ pub(crate) fn attach_with_usable(
     //    better placement (turned about its up axis, upside down).
     let (mut positions, mut usable, mut mirror) =
         mirror_step(mesh, positions, rep.usable, height, options.mirror)?;
+    lap("mirror", &mut clock);
     let fit_mesh = fit::FitMesh::new(mesh);
     let mut fit = fit::measure(&fit_mesh, &positions, &usable, height, &mirror);
     if !fit.passed() && options.align {
@@ -517,9 +518,7 @@ pub(crate) fn attach_with_usable(
             alignment.fit_after = f
                 .check(FitCheckKind::SurfaceDistance)
                 .map_or(f64::NAN, |c| c.value);
-            alignment.coverage = f
-                .check(FitCheckKind::Coverage)
-                .map_or(f64::NAN, |c| c.value);
+            alignment.coverage = align::coverage(mesh, &q, &qu, height);
             (fit, positions, usable, mirror) = (f, q, qu, m);
         }
     }
@@ -536,7 +535,7 @@ pub(crate) fn attach_with_usable(
             PoorFitPolicy::Accept => fit.accepted_poor_fit = true,
         }
     }
-    lap("mirror", &mut clock);
+    lap("fit", &mut clock);
     // Before refinement, which evens out left/right bone lengths.
     let asymmetry = planes::joint_asymmetry(&positions, &usable);
     // 4. Refinement.
