@@ -835,3 +835,87 @@ fn track_skips_frames_the_joint_log_does_not_cover() {
     let rows = npy_rows(&out.join("correspondence.npy"), n);
     assert!(rows[2].chunks(4).all(|b| b == (-1i32).to_le_bytes()));
 }
+
+/// Ctrl-C stops after the frame in progress: track.json and track.svg cover the frames done,
+/// the exit status is 1 with one line saying how to continue, and --resume finishes the run.
+#[cfg(unix)]
+#[test]
+#[allow(unsafe_code)] // one libc::kill, see SAFETY below
+fn track_stops_cleanly_on_ctrl_c_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let out = dir.path().join("track");
+    let args = |resume: bool| {
+        let mut c = bin();
+        c.args([
+            "track",
+            rec.to_str().unwrap(),
+            "--joint-offset",
+            "0.04",
+            "--joints",
+        ])
+        .arg(rec.join("joints.json"))
+        .arg("--out")
+        .arg(&out);
+        if resume {
+            c.arg("--resume");
+        }
+        c
+    };
+    let child = args(false)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for two complete frames, then interrupt.
+    let journal = out.join("journal.jsonl");
+    while std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count()) < 3 {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let pid = i32::try_from(child.id()).unwrap();
+    // SAFETY: sends SIGINT to the child we spawned and still own.
+    unsafe {
+        libc::kill(pid, libc::SIGINT);
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("--resume") && stderr.trim().lines().count() == 1,
+        "{stderr}"
+    );
+    let doc = read_json(&out.join("track.json"));
+    let done = doc["summary"]["frames"].as_u64().unwrap();
+    assert!((2..60).contains(&done), "{done}");
+    assert_eq!(doc["summary"]["frames_in_run"], 60);
+    assert!(out.join("track.svg").exists());
+    let o = run(&mut args(true));
+    assert!(o.status.success());
+    let doc = read_json(&out.join("track.json"));
+    assert_eq!(doc["summary"]["frames"], 60);
+    // The lost-body frames of the recording are skipped with their reason, never matched.
+    let skipped: Vec<u64> = doc["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["status"] != "ok")
+        .map(|f| f["frame"].as_u64().unwrap())
+        .collect();
+    let manifest = read_json(&rec.join("recording.json"));
+    let lost: Vec<u64> = manifest["lost_body_frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    assert!(
+        !skipped.is_empty() && skipped.len() <= lost.len() + 1,
+        "{skipped:?} {lost:?}"
+    );
+    assert!(
+        skipped
+            .iter()
+            .all(|f| lost.iter().any(|l| f.abs_diff(*l) <= 1)),
+        "{skipped:?} {lost:?}"
+    );
+}

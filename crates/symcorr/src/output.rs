@@ -382,6 +382,33 @@ pub fn segment_colours(p: &PreparedMesh) -> Vec<[u8; 3]> {
 /// The cumulative error curve(s) as a self-contained SVG plot: x = normalised geodesic error in
 /// [0, `max_x`], y = fraction of matches. `curves` are `(label, points)`.
 pub fn curve_svg(title: &str, curves: &[(String, Vec<(f64, f64)>)], max_x: f64) -> String {
+    line_plot_svg(
+        &PlotAxes {
+            title,
+            x_label: "geodesic error / sqrt(area)",
+            y_label: "% of matches",
+            max_x,
+        },
+        curves,
+    )
+}
+
+/// The frame of a [`line_plot_svg`]: x in `[0, max_x]`, y in `[0, 1]` shown as percent.
+#[derive(Debug, Clone, Copy)]
+pub struct PlotAxes<'a> {
+    /// Title above the plot.
+    pub title: &'a str,
+    /// Label under the x axis.
+    pub x_label: &'a str,
+    /// Label beside the y axis.
+    pub y_label: &'a str,
+    /// Right end of the x axis.
+    pub max_x: f64,
+}
+
+/// Curves `(label, points)` with y in `[0, 1]` as a self-contained SVG line plot.
+pub fn line_plot_svg(axes: &PlotAxes<'_>, curves: &[(String, Vec<(f64, f64)>)]) -> String {
+    let (title, max_x) = (axes.title, axes.max_x);
     let (w, h) = (640.0, 440.0);
     let (l, r, t, b) = (70.0, 20.0, 40.0, 60.0);
     let pw = w - l - r;
@@ -400,10 +427,15 @@ pub fn curve_svg(title: &str, curves: &[(String, Vec<(f64, f64)>)], max_x: f64) 
         let x = max_x * i as f64 / 5.0;
         let px = sx(x);
         s += &format!(
-            "<line x1=\"{px:.1}\" y1=\"{:.1}\" x2=\"{px:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>\n<text x=\"{px:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{x:.2}</text>\n",
+            "<line x1=\"{px:.1}\" y1=\"{:.1}\" x2=\"{px:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>\n<text x=\"{px:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>\n",
             sy(0.0),
             sy(1.0),
-            sy(0.0) + 18.0
+            sy(0.0) + 18.0,
+            if max_x >= 10.0 {
+                format!("{x:.0}")
+            } else {
+                format!("{x:.2}")
+            }
         );
         let y = i as f64 / 5.0;
         let py = sy(y);
@@ -418,12 +450,14 @@ pub fn curve_svg(title: &str, curves: &[(String, Vec<(f64, f64)>)], max_x: f64) 
     }
     s += &format!(
         "<rect x=\"{l}\" y=\"{t}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>\n\
-         <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">geodesic error / sqrt(area)</text>\n\
-         <text x=\"18\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 18 {})\">% of matches</text>\n",
+         <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n\
+         <text x=\"18\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 18 {})\">{}</text>\n",
         l + pw / 2.0,
         h - 15.0,
+        xml_escape(axes.x_label),
         t + ph / 2.0,
-        t + ph / 2.0
+        t + ph / 2.0,
+        xml_escape(axes.y_label)
     );
     const COLOURS: [&str; 6] = [
         "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",

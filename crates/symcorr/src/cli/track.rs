@@ -9,7 +9,8 @@
 //!   vertex matches, −1 where the frame does not show it) and `confidence.npy` (float32);
 //! * with `--scans`, `scans/NNNNNN.ply` (the frame's scan in camera space, its vertex ids those
 //!   of `correspondence.npy`, segment colours);
-//! * `track.json` (`symcorr.track/1`), written when the run ends: every frame and a summary.
+//! * `track.json` (`symcorr.track/1`) and `track.svg` (coverage, confidence and time per frame),
+//!   written when the run ends: every frame and a summary.
 
 use super::progress::Bar;
 use super::CliError;
@@ -261,11 +262,29 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         joints,
         options,
     );
+    // Ctrl-C stops after the frame in progress; track.json then covers the frames done and
+    // --resume continues. A second Ctrl-C (or any other kill) leaves the journal and the
+    // arrays consistent all the same.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // Fails only if a handler is already set (a second run in one process): then Ctrl-C
+        // simply ends the process, which the journal survives.
+        let _ = ctrlc::set_handler(move || {
+            if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
     let bar = Bar::frames();
     let start = Instant::now();
+    let done_before = done.len();
     let total = frames.len();
     let skipped_rows = (vec![-1i32; n], vec![0f32; n]);
     for (k, &i) in frames.iter().enumerate().skip(done.len()) {
+        if stop.load(std::sync::atomic::Ordering::SeqCst) {
+            break;
+        }
         bar.update("tracking", k, total);
         let time = recording.time(i).unwrap_or(f64::NAN);
         let t0 = Instant::now();
@@ -357,6 +376,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     };
     let summary = json!({
         "frames": done.len(),
+        "frames_in_run": total,
         "ok": ok.len(),
         "skipped": done.len() - ok.len(),
         "legs_swap_fixed": fixed("legs_swap_fixed"),
@@ -364,7 +384,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         "sides_swap_fixed": fixed("sides_swap_fixed"),
         "mean_coverage": mean("coverage"),
         "mean_confidence": mean("mean_confidence"),
-        "frames_per_second_this_run": if seconds > 0.0 { json!((done.len() as f64) / seconds) } else { Value::Null },
+        "frames_per_second_this_run": if seconds > 0.0 { json!(((done.len() - done_before) as f64) / seconds) } else { Value::Null },
     });
     let doc = json!({
         "format": "symcorr.track/1",
@@ -373,8 +393,17 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         "summary": summary,
     });
     let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    symcorr_mesh::io::atomic_write(&args.out.join("track.json"), text.as_bytes())
+    let mut batch = symcorr_mesh::io::OutputBatch::new();
+    batch
+        .add(&args.out.join("track.json"), text.as_bytes())
         .map_err(|e| CliError(e.to_string()))?;
+    batch
+        .add(
+            &args.out.join("track.svg"),
+            track_svg(&done, total).as_bytes(),
+        )
+        .map_err(|e| CliError(e.to_string()))?;
+    batch.commit().map_err(|e| CliError(e.to_string()))?;
     println!(
         "tracked {} frames ({} matched, {} skipped) into {}",
         summary["frames"],
@@ -382,7 +411,55 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         summary["skipped"],
         args.out.display()
     );
+    if done.len() < total {
+        return Err(CliError(format!(
+            "interrupted after {} of {total} frames; {} holds them, --resume continues",
+            done.len(),
+            args.out.display()
+        )));
+    }
     Ok(())
+}
+
+/// Per processed frame (x: its position in the run): coverage, mean confidence and the time it
+/// took relative to the slowest frame; skipped frames are gaps.
+fn track_svg(frames: &[Value], total: usize) -> String {
+    let slowest = frames
+        .iter()
+        .filter_map(|f| f["seconds"].as_f64())
+        .fold(0.0f64, f64::max);
+    let series = |key: &str, scale: f64| -> Vec<(f64, f64)> {
+        frames
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f["status"] == "ok")
+            .filter_map(|(k, f)| {
+                f[key]
+                    .as_f64()
+                    .map(|v| (k as f64, (v / scale).clamp(0.0, 1.0)))
+            })
+            .collect()
+    };
+    let curves = vec![
+        ("coverage".to_string(), series("coverage", 1.0)),
+        (
+            "mean confidence".to_string(),
+            series("mean_confidence", 1.0),
+        ),
+        (
+            format!("seconds (100 % = {slowest:.2} s)"),
+            series("seconds", slowest.max(f64::MIN_POSITIVE)),
+        ),
+    ];
+    symcorr::output::line_plot_svg(
+        &symcorr::output::PlotAxes {
+            title: "symcorr track",
+            x_label: "frame of the run",
+            y_label: "% (coverage, confidence, time)",
+            max_x: total.max(1) as f64,
+        },
+        &curves,
+    )
 }
 
 #[cfg(test)]
