@@ -11,7 +11,8 @@
 //! The error is the geodesic distance from `v` to `b` on the template over its √area (the body
 //! vertex ids are the template's), a flip is `b` nearer `v`'s mirror twin (symcorr-eval's
 //! `evaluate`). One line per frame (status, corrections, coverage, mean error, flips, matches on
-//! pixels with no body vertex, seconds), then the totals.
+//! pixels with no body vertex, seconds, and the share of scan vertices whose segment label is
+//! the template's label of the body vertex they show), then the totals.
 
 use clap::Parser;
 use std::path::PathBuf;
@@ -73,6 +74,8 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         ..PipelineOptions::default()
     });
     let template = pipeline.prepare(mesh, &sk)?;
+    let index: Vec<usize> = template.labels().iter().map(|l| l.index()).collect();
+    let template_labels: Vec<usize> = template.to_input(&index, usize::MAX);
     let options = TrackOptions {
         joint_offset_s: args.joint_offset,
         fix_swaps: !args.no_swap_fix,
@@ -83,7 +86,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let (mut all_errors, mut flips, mut counted, mut off_body, mut matched_frames) =
         (Vec::new(), 0usize, 0usize, 0usize, 0usize);
     let mut seconds = 0.0;
-    println!("frame status corrections coverage mean_error flips off_body seconds");
+    println!("frame status corrections coverage mean_error flips off_body seconds labels_agreement");
     for i in 0..rec.len() {
         let time = rec.time(i).unwrap_or(f64::NAN);
         let depth = rec.frame(i)?;
@@ -108,18 +111,30 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                         b => pairs.push((v as u32, u32::from(b) - 1)),
                     }
                 }
+                // The scan's segment labels against the template's at the body vertex each scan
+                // vertex shows: how well the frame's attachment went.
+                let (mut agree, mut seen) = (0usize, 0usize);
+                for (sv, l) in m.scan_labels.iter().enumerate() {
+                    let pixel = m.scan.pixel_ids[sv] as usize;
+                    let b = truth.data_mm.get(pixel).copied().unwrap_or(0);
+                    if let (Some(l), true) = (l, b > 0) {
+                        seen += 1;
+                        agree += usize::from(*l == template_labels[usize::from(b) - 1]);
+                    }
+                }
                 let e = evaluate(&graph, area, &pairs, |p| p, Some(&mirror));
                 let (c, f) = e.flip_counts();
                 let names: Vec<&str> = m.corrections.iter().map(|c| c.name()).collect();
                 println!(
-                    "{i} ok {} {:.3} {:.4} {f}/{c} {off} {dt:.2}",
+                    "{i} ok {} {:.3} {:.4} {f}/{c} {off} {dt:.2} {:.3}",
                     if names.is_empty() {
                         "-".to_string()
                     } else {
                         names.join(",")
                     },
                     m.coverage,
-                    e.mean_error()
+                    e.mean_error(),
+                    agree as f64 / seen.max(1) as f64
                 );
                 all_errors.extend(e.errors);
                 flips += f;
