@@ -86,7 +86,9 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let (mut all_errors, mut flips, mut counted, mut off_body, mut matched_frames) =
         (Vec::new(), 0usize, 0usize, 0usize, 0usize);
     let mut seconds = 0.0;
-    println!("frame status corrections coverage mean_error flips off_body seconds labels_agreement");
+    println!(
+        "frame status corrections coverage mean_error flips off_body seconds labels_agreement"
+    );
     for i in 0..rec.len() {
         let time = rec.time(i).unwrap_or(f64::NAN);
         let depth = rec.frame(i)?;
