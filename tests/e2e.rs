@@ -862,7 +862,7 @@ fn track_stops_cleanly_on_ctrl_c_and_resumes() {
         }
         c
     };
-    let child = args(false)
+    let mut child = args(false)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -870,6 +870,10 @@ fn track_stops_cleanly_on_ctrl_c_and_resumes() {
     // Wait for two complete frames, then interrupt.
     let journal = out.join("journal.jsonl");
     while std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count()) < 3 {
+        // A run that ended on its own (an error) would never be interrupted: fail, don't hang.
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("track ended before two frames were done: {status}");
+        }
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
     let pid = i32::try_from(child.id()).unwrap();
