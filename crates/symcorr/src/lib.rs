@@ -18,6 +18,10 @@
 //!   [`Method::Refined`]: skeleton landmark coordinates + si-HKS within segment pools, then
 //!   segment-constrained ZoomOut. [`Method::Paper`]: the paper's si-HKS candidates, skeleton
 //!   filter and eq. 8 selection (DESIGN.md, Algorithms 1–6).
+//! * [`track::Tracker`] — a recorded session frame by frame: the joints at each depth frame's
+//!   time, limb swaps fixed by continuity, smoothing, the frame's scan prepared and matched with
+//!   the pipeline's method against one prepared template; `symcorr track` streams the rows into
+//!   [`npy`] files.
 //! * [`io`] reads the input meshes and joint files; [`bench`](mod@bench) runs a benchmark folder in
 //!   DESIGN.md's layout and scores it with symcorr-eval; [`output`] writes the
 //!   `symcorr.correspondence/1` JSON ([`formats`]), coloured meshes and the error-curve plot;
@@ -36,7 +40,11 @@
 //!
 //! # Invariants
 //! * Every output speaks the input file's vertex ids ([`PreparedMesh::input_id`]), whatever
-//!   the repair removed; the stages work on the repaired mesh.
+//!   the repair removed; the stages work on the repaired mesh. Components no bone reaches are
+//!   left out of it ([`PreparedMesh::unreached`]): unlabelled, never matched.
+//! * Each mesh's skeleton fits it or preparing fails naming the check
+//!   (`symcorr_attach::FitQuality`), unless the attachment options accept a poor fit; each mesh
+//!   has its own unit ([`PreparedMesh::metres_per_unit`]).
 //! * Options that would silently run something other than asked are errors
 //!   ([`PipelineOptions::check`]: the skeleton-filter ablation exists only for the paper).
 //! * Stage timings are wall clock per stage; attachment runs concurrently with the spectral

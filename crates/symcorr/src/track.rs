@@ -19,7 +19,7 @@
 //!    poor fit is recorded, not refused: a profile view's far-side joints lie behind the only
 //!    surface the camera sees) and **match** the template onto it with the pipeline's method.
 //!
-//! The result per frame ([`FrameResult`]) is the row of the correspondence — for every
+//! The result per frame ([`FrameOutcome`]) is the row of the correspondence — for every
 //! template input vertex the scan vertex it matches, or −1 where the frame does not show it —
 //! with a confidence, and what was corrected.
 
