@@ -42,6 +42,21 @@ fn joints(name: &str) -> PathBuf {
     fixtures().join("joints").join(format!("{name}.json"))
 }
 
+/// `symcorr match BODY s0_walk-10 --out OUT` with the rest pose's and walk-10's joints.
+fn match_onto_walk10(body: &Path, out: &Path) -> Command {
+    let mut c = bin();
+    c.arg("match")
+        .arg(body)
+        .arg(mesh("s0_walk-10"))
+        .arg("--template-joints")
+        .arg(joints("s0_rest"))
+        .arg("--target-joints")
+        .arg(joints("s0_walk-10"))
+        .arg("--out")
+        .arg(out);
+    c
+}
+
 fn mirror() -> Vec<u32> {
     std::fs::read_to_string(fixtures().join("mirror.txt"))
         .unwrap()
@@ -407,16 +422,7 @@ fn too_many_eigenpairs_is_a_user_error() {
     // `match --method paper --eigenpairs` too large: the same error, no output file.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("corr.json");
-    let o = bin()
-        .arg("match")
-        .arg(&body)
-        .arg(mesh("s0_walk-10"))
-        .arg("--template-joints")
-        .arg(joints("s0_rest"))
-        .arg("--target-joints")
-        .arg(joints("s0_walk-10"))
-        .arg("--out")
-        .arg(&out)
+    let o = match_onto_walk10(&body, &out)
         .args(["--method", "paper", "--eigenpairs", "13000"])
         .output()
         .unwrap();
@@ -657,16 +663,7 @@ fn max_input_size_bounds_every_mesh_read() {
     );
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("corr.json");
-    let o = bin()
-        .arg("match")
-        .arg(&body)
-        .arg(mesh("s0_walk-10"))
-        .arg("--template-joints")
-        .arg(joints("s0_rest"))
-        .arg("--target-joints")
-        .arg(joints("s0_walk-10"))
-        .arg("--out")
-        .arg(&out)
+    let o = match_onto_walk10(&body, &out)
         .args(["--max-input-size", "2048"])
         .output()
         .unwrap();

@@ -125,14 +125,7 @@ impl NpyWriter {
         };
         let mut file = File::create(path).map_err(io)?;
         file.write_all(&header(ty, rows, cols)).map_err(io)?;
-        Ok(NpyWriter {
-            file,
-            path: path.to_path_buf(),
-            ty,
-            rows,
-            cols,
-            written: 0,
-        })
+        Ok(NpyWriter::at(file, path, ty, [rows, cols], 0))
     }
 
     /// Reopens `path`, written by [`NpyWriter::create`] with the same type and shape, to continue
@@ -178,14 +171,19 @@ impl NpyWriter {
             });
         }
         file.seek(SeekFrom::Start(bytes_done)).map_err(io)?;
-        Ok(NpyWriter {
+        Ok(NpyWriter::at(file, path, ty, [rows, cols], rows_done))
+    }
+
+    /// A writer on `file`, positioned after `written` rows of a `shape` array.
+    fn at(file: File, path: &Path, ty: NpyType, shape: [usize; 2], written: usize) -> NpyWriter {
+        NpyWriter {
             file,
             path: path.to_path_buf(),
             ty,
-            rows,
-            cols,
-            written: rows_done,
-        })
+            rows: shape[0],
+            cols: shape[1],
+            written,
+        }
     }
 
     fn check(&self, ty: NpyType, len: usize) -> Result<(), NpyError> {

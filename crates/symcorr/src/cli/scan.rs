@@ -328,17 +328,22 @@ mod tests {
         DepthFrame::new(k.width, k.height, data).unwrap()
     }
 
-    #[test]
-    fn scan_from_png_and_intrinsics_writes_the_subject_mesh() {
-        let dir = tempfile::tempdir().unwrap();
-        let k = Intrinsics {
+    /// A 160×120 Kinect v1 camera.
+    fn small_intrinsics() -> Intrinsics {
+        Intrinsics {
             width: 160,
             height: 120,
             fx: 142.8,
             fy: 142.8,
             cx: 80.0,
             cy: 60.0,
-        };
+        }
+    }
+
+    #[test]
+    fn scan_from_png_and_intrinsics_writes_the_subject_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let k = small_intrinsics();
         let png = dir.path().join("d.png");
         symcorr_kinect::write_depth_png16(&png, &sphere_frame(&k)).unwrap();
         let kj = dir.path().join("k.json");
@@ -457,14 +462,7 @@ mod tests {
     #[test]
     fn implausible_intrinsics_files_are_refused_naming_the_file() {
         let dir = tempfile::tempdir().unwrap();
-        let k = Intrinsics {
-            width: 160,
-            height: 120,
-            fx: 142.8,
-            fy: 142.8,
-            cx: 80.0,
-            cy: 60.0,
-        };
+        let k = small_intrinsics();
         symcorr_kinect::write_depth_png16(dir.path().join("d.png"), &sphere_frame(&k)).unwrap();
         let mut p = [[0.0; 3]; 20];
         for (i, q) in p.iter_mut().enumerate() {
