@@ -63,7 +63,7 @@ pub struct BenchArgs {
     pub cache: CacheArgs,
 }
 
-/// The JSON summary (keys fixed by the issue: `mean_error`, `flip_rate`, `within_0.05`,
+/// The JSON summary (keys fixed by DESIGN.md: `mean_error`, `flip_rate`, `within_0.05`,
 /// `within_0.10`, `table1_row`, `seconds_per_pair`, `pairs`).
 pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -> Value {
     let pairs: Vec<Value> = report
