@@ -6,11 +6,10 @@
 //! in the mesh, the best of the 24 axis rotations about the bounding-box centres. Refused when
 //! nothing fits ([`FIT_LIMIT`], [`COVER_LIMIT`]).
 
-use crate::geom::Joints;
+use crate::geom::{bone_segments, distance_to_bones, Joints};
 use crate::repair::{extent, skeleton_height};
 use crate::{AttachError, FrameAlignment};
 use nalgebra::{distance, Matrix3, Point3, Rotation3, Vector3};
-use symcorr_mesh::geometry::closest_on_segment;
 use symcorr_mesh::TriMesh;
 
 /// Largest accepted median joint-to-surface distance, in skeleton heights. Joints inside a
@@ -49,23 +48,13 @@ pub(crate) fn fit(mesh: &TriMesh, p: &Joints, usable: &[bool; 20], height: f64) 
 /// Median distance from (up to 1000 evenly spread) mesh vertices to the nearest bone, over
 /// `height`.
 pub(crate) fn coverage(mesh: &TriMesh, p: &Joints, usable: &[bool; 20], height: f64) -> f64 {
-    let bones: Vec<(Point3<f64>, Point3<f64>)> = crate::BONES
-        .iter()
-        .filter(|b| usable[b.parent.index()] && usable[b.child.index()])
-        .map(|b| (p[b.parent.index()], p[b.child.index()]))
-        .collect();
+    let bones = bone_segments(p, usable);
     let stride = (mesh.num_vertices() / 1000).max(1);
     let mut d: Vec<f64> = mesh
         .positions
         .iter()
         .step_by(stride)
-        .map(|&x| {
-            let x = Point3::from(x);
-            bones
-                .iter()
-                .map(|(a, b)| closest_on_segment(&x, a, b).1)
-                .fold(f64::INFINITY, f64::min)
-        })
+        .map(|&x| distance_to_bones(&Point3::from(x), &bones))
         .collect();
     d.sort_by(f64::total_cmp);
     if d.is_empty() {

@@ -23,11 +23,10 @@
 //! measured on generated bodies with exact and noisy (σ = 3 cm) joints against turned, flipped,
 //! other-pose and other-body joints: `docs/decisions/2026-12-02-attach-fit-quality.md`.
 
-use crate::geom::Joints;
+use crate::geom::{bone_segments, distance_to_bones, Joints};
 use crate::refine::torso_frame;
-use crate::{MirrorCheck, BONES};
+use crate::MirrorCheck;
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
-use symcorr_mesh::geometry::closest_on_segment;
 use symcorr_mesh::TriMesh;
 
 /// The score at which a fit is accepted: every check within its limit.
@@ -247,18 +246,12 @@ fn signed_volume(mesh: &TriMesh) -> f64 {
 /// Each usable joint and three points along each bone between usable joints.
 fn bone_samples(p: &Joints, usable: &[bool; 20]) -> Vec<Point3<f64>> {
     let mut samples: Vec<Point3<f64>> = (0..20).filter(|&j| usable[j]).map(|j| p[j]).collect();
-    for b in active_bones(usable) {
-        let (a, c) = (p[BONES[b].parent.index()], p[BONES[b].child.index()]);
+    for (a, c) in bone_segments(p, usable) {
         for t in [0.25, 0.5, 0.75] {
             samples.push(a + (c - a) * t);
         }
     }
     samples
-}
-
-fn active_bones(usable: &[bool; 20]) -> impl Iterator<Item = usize> + '_ {
-    (0..BONES.len())
-        .filter(move |&b| usable[BONES[b].parent.index()] && usable[BONES[b].child.index()])
 }
 
 /// Measures the fit of the (aligned, handedness-fixed) joints `p` in `mesh` (module docs).
@@ -271,15 +264,8 @@ pub(crate) fn measure(
     mirror: &MirrorCheck,
 ) -> FitQuality {
     let h = height.max(f64::MIN_POSITIVE);
-    let bones: Vec<(Point3<f64>, Point3<f64>)> = active_bones(usable)
-        .map(|b| (p[BONES[b].parent.index()], p[BONES[b].child.index()]))
-        .collect();
-    let bone_distance = |x: &Point3<f64>| {
-        bones
-            .iter()
-            .map(|(a, b)| closest_on_segment(x, a, b).1)
-            .fold(f64::INFINITY, f64::min)
-    };
+    let bones = bone_segments(p, usable);
+    let bone_distance = |x: &Point3<f64>| distance_to_bones(x, &bones);
     let median = |mut d: Vec<f64>| {
         d.sort_by(f64::total_cmp);
         d.get(d.len() / 2).copied().unwrap_or(f64::INFINITY)
@@ -376,20 +362,13 @@ fn objective(fm: &FitMesh, p: &Joints, usable: &[bool; 20], h: f64) -> f64 {
             .map(|x| fm.nearest(x).map_or(f64::INFINITY, |(_, d)| d))
             .sum(),
     };
-    let bones: Vec<(Point3<f64>, Point3<f64>)> = active_bones(usable)
-        .map(|b| (p[BONES[b].parent.index()], p[BONES[b].child.index()]))
-        .collect();
+    let bones = bone_segments(p, usable);
     let stride = (fm.positions.len() / 500).max(1);
     let mut cover: Vec<f64> = fm
         .positions
         .iter()
         .step_by(stride)
-        .map(|x| {
-            bones
-                .iter()
-                .map(|(a, b)| closest_on_segment(x, a, b).1)
-                .fold(f64::INFINITY, f64::min)
-        })
+        .map(|x| distance_to_bones(x, &bones))
         .collect();
     cover.sort_by(f64::total_cmp);
     let median = cover.get(cover.len() / 2).copied().unwrap_or(f64::INFINITY);
