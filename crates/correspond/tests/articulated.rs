@@ -86,6 +86,8 @@ fn side<'a>(
         labels: &att.labels,
         joints: &att.joints,
         area: mesh.total_area(),
+        triangles: Some(&mesh.triangles),
+        viewpoint: None,
     }
 }
 

@@ -77,7 +77,7 @@ pub use recording::{
     OneEuroFilter, Recording, SkeletonFilter, SkipReason, TimedSkeleton,
 };
 pub use replay::{BoneLengthReport, FrameSelect};
-pub use scan::{fuse_depth_frames, scan_mesh, ScanMesh, ScanOptions};
+pub use scan::{fuse_depth_frames, scan_mesh, ComponentFilter, ScanMesh, ScanOptions};
 
 use std::path::Path;
 

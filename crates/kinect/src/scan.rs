@@ -14,7 +14,10 @@
 //! 4. Grid triangulation: each 2×2 pixel block gives up to two triangles, kept only if no edge
 //!    spans a depth jump larger than `discontinuity_m` (a silhouette edge, not a surface).
 //!    Triangles are counter-clockwise seen from the camera (their normals face it).
-//! 5. The largest connected component is kept (if `largest_component`).
+//! 5. Connected components are kept by [`ScanOptions::components`] ([`ComponentFilter`]): by
+//!    default every component near the skeleton's bones (a body seen in profile falls apart at
+//!    its own depth jumps — the near arm in front of the torso, one leg in front of the other
+//!    — and each piece is body), else the largest.
 //!
 //! The result keeps, per vertex, the pixel it came from (`v · width + u`), so results can be
 //! related back to the depth image. [`fuse_depth_frames`] merges a few frames of a static subject
@@ -45,8 +48,8 @@ pub struct ScanOptions {
     pub floor_threshold_m: f64,
     /// Margin around the skeleton's bounding box kept as foreground, metres.
     pub background_margin_m: f64,
-    /// Keep only the largest connected component.
-    pub largest_component: bool,
+    /// Which connected components are kept.
+    pub components: ComponentFilter,
     /// Seed of the RANSAC sampler (results are deterministic for a given seed).
     pub seed: u64,
 }
@@ -61,8 +64,41 @@ impl Default for ScanOptions {
             floor_iterations: 300,
             floor_threshold_m: 0.02,
             background_margin_m: 0.3,
-            largest_component: true,
+            components: ComponentFilter::default(),
             seed: 0x5eed,
+        }
+    }
+}
+
+/// Which connected components of the grid mesh a scan keeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ComponentFilter {
+    /// Every component.
+    All,
+    /// Only the largest (by triangles).
+    Largest,
+    /// With a skeleton, every component whose median vertex lies within `max_median_m` of the
+    /// nearest bone (between tracked joints) and that has at least `min_share` of the largest
+    /// component's triangles (a few flying pixels at a silhouette are not body); without a
+    /// skeleton, the largest. A body turned sideways is several components — the near arm
+    /// and leg are cut from the torso and the far leg by depth jumps — and all of them are
+    /// body; a ball or a chair inside the skeleton's box is not near a bone.
+    NearBones {
+        /// Largest median distance from a kept component's vertices to the nearest bone,
+        /// metres.
+        max_median_m: f64,
+        /// Smallest kept component, as a share of the largest one's triangles.
+        min_share: f64,
+    },
+}
+
+impl Default for ComponentFilter {
+    /// [`ComponentFilter::NearBones`] within 0.2 m (a torso's surface lies about 0.15 m from
+    /// its spine) and at least 0.5 % of the largest component.
+    fn default() -> Self {
+        ComponentFilter::NearBones {
+            max_median_m: 0.2,
+            min_share: 0.005,
         }
     }
 }
@@ -161,6 +197,102 @@ pub struct ScanReport {
     pub discontinuity_triangles: usize,
     /// Vertices dropped with smaller components.
     pub component_vertices_removed: usize,
+}
+
+/// Distinct vertices of `tris`.
+fn count_vertices(tris: &[[usize; 3]]) -> usize {
+    let mut v: Vec<usize> = tris.iter().flatten().copied().collect();
+    v.sort_unstable();
+    v.dedup();
+    v.len()
+}
+
+/// Keeps the triangles of the components `filter` selects (not [`ComponentFilter::All`]).
+fn keep_components(
+    tris: &mut Vec<[usize; 3]>,
+    points: &[Option<Point3<f64>>],
+    skeleton: Option<&Skeleton>,
+    filter: ComponentFilter,
+) {
+    let mut parent: Vec<usize> = (0..points.len()).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    for t in tris.iter() {
+        for e in [(t[0], t[1]), (t[1], t[2])] {
+            let (a, b) = (find(&mut parent, e.0), find(&mut parent, e.1));
+            if a != b {
+                parent[a] = b;
+            }
+        }
+    }
+    let root: Vec<usize> = tris.iter().map(|t| find(&mut parent, t[0])).collect();
+    let mut size = std::collections::BTreeMap::new();
+    for &r in &root {
+        *size.entry(r).or_insert(0usize) += 1;
+    }
+    // Deterministic choice among equal sizes: the smallest root id.
+    let Some((&largest, &largest_size)) =
+        size.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+    else {
+        return;
+    };
+    let bones: Vec<(Point3<f64>, Point3<f64>)> = skeleton
+        .map(|s| {
+            symcorr_skeleton::BONES
+                .iter()
+                .filter(|b| {
+                    s.confidence[b.parent.index()] > 0.0 && s.confidence[b.child.index()] > 0.0
+                })
+                .map(|b| (s.position(b.parent), s.position(b.child)))
+                .collect()
+        })
+        .unwrap_or_default();
+    let kept: std::collections::BTreeSet<usize> = match filter {
+        ComponentFilter::NearBones {
+            max_median_m,
+            min_share,
+        } if !bones.is_empty() => {
+            // Per component, its vertices' distances to the nearest bone.
+            let mut distances: std::collections::BTreeMap<usize, Vec<f64>> = Default::default();
+            let mut seen = vec![false; points.len()];
+            for (t, &r) in tris.iter().zip(&root) {
+                if (size[&r] as f64) < min_share * largest_size as f64 {
+                    continue;
+                }
+                for &v in t {
+                    if std::mem::replace(&mut seen[v], true) {
+                        continue;
+                    }
+                    if let Some(x) = points[v] {
+                        let d = bones
+                            .iter()
+                            .map(|(a, b)| symcorr_mesh::geometry::closest_on_segment(&x, a, b).1)
+                            .fold(f64::INFINITY, f64::min);
+                        distances.entry(r).or_default().push(d);
+                    }
+                }
+            }
+            distances
+                .into_iter()
+                .filter_map(|(r, mut d)| {
+                    let mid = d.len() / 2;
+                    let median = *d.select_nth_unstable_by(mid, f64::total_cmp).1;
+                    (median <= max_median_m).then_some(r)
+                })
+                .collect()
+        }
+        _ => std::iter::once(largest).collect(),
+    };
+    let mut k = 0;
+    tris.retain(|_| {
+        k += 1;
+        kept.contains(&root[k - 1])
+    });
 }
 
 /// The organised point cloud: per pixel (row-major) the camera-space point, or `None`.
@@ -429,39 +561,11 @@ pub fn scan_mesh(
         }
     }
 
-    // Largest component (union-find over pixels through triangles).
-    if opts.largest_component && !tris.is_empty() {
-        let mut parent: Vec<usize> = (0..points.len()).collect();
-        fn find(parent: &mut [usize], mut x: usize) -> usize {
-            while parent[x] != x {
-                parent[x] = parent[parent[x]];
-                x = parent[x];
-            }
-            x
-        }
-        for t in &tris {
-            for e in [(t[0], t[1]), (t[1], t[2])] {
-                let (a, b) = (find(&mut parent, e.0), find(&mut parent, e.1));
-                if a != b {
-                    parent[a] = b;
-                }
-            }
-        }
-        let mut size = std::collections::HashMap::new();
-        for t in &tris {
-            *size.entry(find(&mut parent, t[0])).or_insert(0usize) += 1;
-        }
-        // Deterministic choice among equal sizes: the smallest root id.
-        let keep = size
-            .iter()
-            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
-            .map(|(r, _)| *r);
-        if let Some(keep) = keep {
-            let before: std::collections::HashSet<usize> = tris.iter().flatten().copied().collect();
-            tris.retain(|t| find(&mut parent, t[0]) == keep);
-            let after: std::collections::HashSet<usize> = tris.iter().flatten().copied().collect();
-            report.component_vertices_removed = before.len() - after.len();
-        }
+    // Connected components (union-find over pixels through triangles).
+    if opts.components != ComponentFilter::All && !tris.is_empty() {
+        let before = count_vertices(&tris);
+        keep_components(&mut tris, &points, skeleton, opts.components);
+        report.component_vertices_removed = before - count_vertices(&tris);
     }
     if tris.is_empty() {
         return Err(KinectError::Scan(format!(

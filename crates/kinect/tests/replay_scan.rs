@@ -4,7 +4,9 @@
 use nalgebra::{distance, Point3, Vector3};
 use std::path::PathBuf;
 use symcorr_attach::{handedness_verdict, Handedness};
-use symcorr_kinect::scan::{depth_to_points, fuse_depth_frames, scan_mesh, ScanOptions};
+use symcorr_kinect::scan::{
+    depth_to_points, fuse_depth_frames, scan_mesh, ComponentFilter, ScanOptions,
+};
 use symcorr_kinect::{read_joints, DepthFrame, FrameSelect, Intrinsics, JointLog, KinectError};
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Bone, Joint, Skeleton};
@@ -331,7 +333,7 @@ fn without_cleanup_the_grid_mesh_never_bridges_depth_jumps() {
     let frame = render(&k);
     let opts = ScanOptions {
         remove_floor: false,
-        largest_component: false,
+        components: ComponentFilter::All,
         ..ScanOptions::default()
     };
     let scan = scan_mesh(&frame, &k, None, &opts).unwrap();

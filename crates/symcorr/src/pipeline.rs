@@ -256,6 +256,8 @@ fn articulated(
             labels: &m.attachment.labels,
             joints: &m.attachment.joints,
             area: m.area,
+            triangles: Some(&m.mesh.triangles),
+            viewpoint: m.viewpoint,
         }
     }
     let mut template_side = side(template, &tn, None, Some(&neighbors));

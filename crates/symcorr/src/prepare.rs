@@ -112,6 +112,12 @@ pub struct PreparedMesh {
     /// Total length of the mesh's boundary edges (0 for a closed surface): a single-view scan
     /// has a long one ([`PreparedMesh::is_partial`]).
     pub boundary_length: f64,
+    /// Where the mesh was seen from, when it is one view of a body (a depth scan's camera
+    /// centre, in the mesh's frame: the origin for `symcorr scan`'s camera-space scans). As a
+    /// target of the articulated method it turns on the occlusion test: template vertices
+    /// hidden behind the posed template's own surface get no counterpart. `None` (the
+    /// default): unknown, or not one view. Set with [`PreparedMesh::seen_from`].
+    pub viewpoint: Option<nalgebra::Point3<f64>>,
     /// Seconds per stage (`laplacian`, `eigenpairs`, `si_hks`, `curvature`, `base_set`,
     /// `base_profile`, `attachment`). Attachment runs in parallel with the spectral stages.
     pub timings: Vec<(String, f64)>,
@@ -205,6 +211,7 @@ impl PreparedMesh {
         let boundary_length = mesh.boundary_length();
         Ok(PreparedMesh {
             unreached: 0,
+            viewpoint: None,
             boundary_length,
             paper,
             refine,
@@ -216,6 +223,19 @@ impl PreparedMesh {
             attachment,
             timings,
         })
+    }
+
+    /// This mesh, seen from `eye` ([`PreparedMesh::viewpoint`]).
+    ///
+    /// ```no_run
+    /// # let (pipeline, scan, joints): (symcorr::Pipeline, symcorr_mesh::TriMesh, symcorr_attach::Skeleton) = unimplemented!();
+    /// // A camera-space depth scan: the camera sits at the origin.
+    /// let target = pipeline.prepare(scan, &joints)?.seen_from(nalgebra::Point3::origin());
+    /// # Ok::<(), symcorr::PipelineError>(())
+    /// ```
+    pub fn seen_from(mut self, eye: nalgebra::Point3<f64>) -> PreparedMesh {
+        self.viewpoint = Some(eye);
+        self
     }
 
     /// True when the mesh is a partial view of a body (a single-view scan): its boundary is

@@ -209,7 +209,9 @@ impl<'a> Tracker<'a> {
         let target = self
             .pipeline
             .prepare(scan.mesh.clone(), &skeleton)
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| e.to_string())?
+            // The scan is in camera space: its camera sits at the origin.
+            .seen_from(nalgebra::Point3::origin());
         let t_prepare = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let corr = self

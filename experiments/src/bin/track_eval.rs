@@ -45,6 +45,9 @@ struct Args {
     /// Turn the joint smoothing off.
     #[arg(long)]
     no_smoothing: bool,
+    /// Also print, for this frame, the mean error and match count per template segment.
+    #[arg(long, value_name = "FRAME")]
+    detail: Option<usize>,
 }
 
 fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
@@ -125,6 +128,53 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                     }
                 }
                 let e = evaluate(&graph, area, &pairs, |p| p, Some(&mirror));
+                if args.detail == Some(i) {
+                    let segs = symcorr_attach::Segment::ALL;
+                    let mut conf = vec![vec![0usize; segs.len()]; segs.len()];
+                    for (sv, l) in m.scan_labels.iter().enumerate() {
+                        let pixel = m.scan.pixel_ids[sv] as usize;
+                        let b = truth.data_mm.get(pixel).copied().unwrap_or(0);
+                        if let (Some(l), true) = (l, b > 0) {
+                            conf[template_labels[usize::from(b) - 1]][*l] += 1;
+                        }
+                    }
+                    for (seg, row) in segs.iter().zip(conf) {
+                        let on: Vec<String> = segs
+                            .iter()
+                            .zip(row)
+                            .filter(|(_, k)| *k > 0)
+                            .map(|(s, k)| format!("{s:?} {k}"))
+                            .collect();
+                        if !on.is_empty() {
+                            println!("  scan showing {seg:?} labelled {}", on.join(", "));
+                        }
+                    }
+                    let segs = symcorr_attach::Segment::ALL;
+                    let mut per =
+                        vec![(0.0f64, 0usize, vec![0usize; segs.len()], 0usize); segs.len()];
+                    for ((&(v, b), err), flip) in pairs.iter().zip(&e.errors).zip(&e.flips) {
+                        let s = &mut per[template_labels[v as usize]];
+                        s.0 += err;
+                        s.1 += 1;
+                        s.2[template_labels[b as usize]] += 1;
+                        s.3 += usize::from(*flip == Some(true));
+                    }
+                    for (seg, (sum, n, on, flips)) in segs.iter().zip(per) {
+                        if n > 0 {
+                            let on: Vec<String> = segs
+                                .iter()
+                                .zip(on)
+                                .filter(|(_, k)| *k > 0)
+                                .map(|(s, k)| format!("{s:?} {k}"))
+                                .collect();
+                            println!(
+                                "  {seg:?}: {n} matches, {flips} flips, mean error {:.4}, on {}",
+                                sum / n as f64,
+                                on.join(", ")
+                            );
+                        }
+                    }
+                }
                 let (c, f) = e.flip_counts();
                 let names: Vec<&str> = m.corrections.iter().map(|c| c.name()).collect();
                 println!(

@@ -2,6 +2,7 @@
 //! anchored by its two joints, then the template re-skinned (DESIGN.md, Algorithm 7, step 4).
 
 use super::transforms::{kabsch, skin, BoneTransforms, FitPair};
+use super::twist::TwistLimit;
 use super::Alignment;
 use crate::CorrespondError;
 use nalgebra::{Point3, Vector3};
@@ -21,11 +22,13 @@ const MIN_PAIR_WEIGHT: f64 = 0.1;
 /// pool group). Each round pairs every sampled posed vertex with its nearest pool vertex, keeps
 /// the pairs that hold at the round's gate (shrinking geometrically from `gate_start` to
 /// `gate_end`), re-fits each bone with enough pairs by weighted Kabsch plus its two joints as
-/// anchors, and re-skins. Returns the final posed positions and normals.
+/// anchors (held within `limit` for its bone), and re-skins. Returns the final posed positions
+/// and normals.
 pub(super) fn articulated_icp(
     al: &Alignment<'_>,
     transforms: &mut BoneTransforms,
     sample: &[Vec<u32>],
+    limit: Option<&TwistLimit>,
 ) -> Result<Posed, CorrespondError> {
     let (template, target, options) = (&al.template, &al.target, al.options);
     let (mut posed, mut posed_normals) =
@@ -40,13 +43,16 @@ pub(super) fn articulated_icp(
         let gate =
             al.unit_len * (options.gate_start * (options.gate_end / options.gate_start).powf(frac));
         let near = al.nearest(&posed, &posed_normals, Some(sample))?;
+        let visible = al.visibility(&posed);
         // Pairs per bone: (rest position, target position, weight).
         let mut per_bone: Vec<Vec<FitPair>> = vec![Vec::new(); Bone::COUNT];
         for (v, &(q, d2)) in near.iter().enumerate() {
             if !d2.is_finite() {
                 continue; // not in the sample
             }
-            if !al.holds(&posed[v], &posed_normals[v], q, gate) {
+            if visible.as_ref().is_some_and(|s| !s[v])
+                || !al.holds(&posed[v], &posed_normals[v], q, gate)
+            {
                 continue;
             }
             let y = al.target_positions[q as usize];
@@ -76,7 +82,10 @@ pub(super) fn articulated_icp(
                     ));
                 }
                 if let Some(fit) = kabsch(&pairs) {
-                    *tr = fit;
+                    *tr = match limit {
+                        Some(l) if l.bone == b => l.apply(fit),
+                        _ => fit,
+                    };
                 }
             });
         (posed, posed_normals) = skin(template.positions, template.normals, al.weights, transforms);

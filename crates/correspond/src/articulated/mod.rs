@@ -51,9 +51,11 @@ mod icp;
 mod nonrigid;
 mod transforms;
 mod twist;
+mod visibility;
 
 pub use transforms::{bone_transforms, outward_normals, skin, BoneTransforms};
-pub use twist::TWISTS;
+use twist::TwistLimit;
+pub use twist::{MAX_HEAD_TWIST_DEG, TWISTS};
 
 use crate::kdtree::PoolTrees;
 use crate::{CorrespondError, Pair, SegmentPools};
@@ -81,6 +83,14 @@ pub struct ArticulatedInputs<'a> {
     pub neighbors: Option<&'a [Vec<u32>]>,
     /// Total surface area.
     pub area: f64,
+    /// The mesh's triangles; on the template side they carry the occlusion test of a
+    /// single-view target (`None`: no occlusion test).
+    pub triangles: Option<&'a [[u32; 3]]>,
+    /// Where a single-view mesh was seen from (a depth scan's camera centre, in the mesh's
+    /// frame); on the target side it turns on the occlusion test: a template vertex hidden
+    /// behind the posed template's own surface, seen from here, has no counterpart (module
+    /// `visibility`). `None`: the mesh is not one view (or its viewpoint is unknown).
+    pub viewpoint: Option<Point3<f64>>,
 }
 
 /// Options of [`articulated_match`]; lengths in units of the template's √area.
@@ -114,6 +124,10 @@ pub struct ArticulatedOptions {
     /// Smoothness weight λ of the non-rigid displacement field (per edge, against 1 per
     /// accepted pair).
     pub nonrigid_smoothing: f64,
+    /// With a target viewpoint: a posed template vertex farther than this behind the posed
+    /// template's nearest surface along its line of sight is occluded (no pair, no
+    /// counterpart).
+    pub occlusion_tolerance: f64,
 }
 
 impl Default for ArticulatedOptions {
@@ -131,6 +145,7 @@ impl Default for ArticulatedOptions {
             nonrigid_rounds: 3,
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
+            occlusion_tolerance: 0.01,
         }
     }
 }
@@ -181,9 +196,10 @@ pub fn articulated_match(
 
     let t = Instant::now();
     let al = Alignment::new(template, weights, target, &pools, options)?;
-    let mut transforms = initial_transforms(&al)?;
+    let (mut transforms, head_limit) = initial_transforms(&al)?;
     let sample = al.icp_sample();
-    let (mut posed, posed_normals) = icp::articulated_icp(&al, &mut transforms, &sample)?;
+    let (mut posed, posed_normals) =
+        icp::articulated_icp(&al, &mut transforms, &sample, head_limit.as_ref())?;
     timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
@@ -346,6 +362,19 @@ impl<'a> Alignment<'a> {
         self.trees.nearest(self.pools, &f, subset)
     }
 
+    /// Per posed template vertex, can the target show it: `None` when every vertex may be
+    /// shown (no target viewpoint or no template triangles), else the occlusion test of
+    /// module `visibility` from the target's viewpoint.
+    fn visibility(&self, posed: &[Point3<f64>]) -> Option<Vec<bool>> {
+        let (eye, triangles) = (self.target.viewpoint?, self.template.triangles?);
+        Some(visibility::visible_from(
+            &eye,
+            posed,
+            triangles,
+            self.options.occlusion_tolerance * self.unit_len,
+        ))
+    }
+
     /// Does the pair (posed template point `x`, its normal `n`) → target vertex `q` hold at
     /// this gate? Close enough, facing the same way, and not hanging over the target's border.
     fn holds(&self, x: &Point3<f64>, n: &Vector3<f64>, q: u32, gate: f64) -> bool {
@@ -375,14 +404,25 @@ fn feature(x: &Point3<f64>, n: &Vector3<f64>, beta: f64) -> [f64; 6] {
 }
 
 /// The bone transforms that pose the template on the target's skeleton
-/// ([`bone_transforms`]), with the head bone's roll chosen by the twist search.
-fn initial_transforms(al: &Alignment<'_>) -> Result<BoneTransforms, CorrespondError> {
+/// ([`bone_transforms`]), with the head bone's roll chosen by the twist search, and the limit
+/// that holds the head's twist near the chest's pose ([`twist::MAX_HEAD_TWIST_DEG`]) in every
+/// later fit.
+fn initial_transforms(
+    al: &Alignment<'_>,
+) -> Result<(BoneTransforms, Option<TwistLimit>), CorrespondError> {
     let mut transforms = bone_transforms(al.template.joints, al.target.joints);
     let head = Bone::new(Joint::ShoulderCenter, Joint::Head);
     // Invariant: the neck → head bone is one of BONES.
     let head_bone = BONES.iter().position(|&b| b == head).unwrap_or(2);
-    transforms[head_bone] = twist::twist_search(al, head_bone, transforms[head_bone])?;
-    Ok(transforms)
+    let limit = TwistLimit::new(
+        al,
+        head_bone,
+        transforms[head_bone],
+        twist::MAX_HEAD_TWIST_DEG,
+    );
+    transforms[head_bone] =
+        twist::twist_search(al, head_bone, transforms[head_bone], limit.as_ref())?;
+    Ok((transforms, limit))
 }
 
 /// The dense map of [`articulated_match`], per template vertex.
@@ -402,6 +442,7 @@ fn final_map(
 ) -> Result<FinalMap, CorrespondError> {
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None)?;
+    let visible = al.visibility(posed);
     let n = posed.len();
     let mut has_counterpart = Vec::with_capacity(n);
     let mut distance = Vec::with_capacity(n);
@@ -410,7 +451,10 @@ fn final_map(
         .enumerate()
         .map(|(v, &(q, _))| {
             let d = (posed[v] - al.target_positions[q as usize]).norm();
-            has_counterpart.push(al.holds(&posed[v], &posed_normals[v], q, gate));
+            has_counterpart.push(
+                visible.as_ref().is_none_or(|s| s[v])
+                    && al.holds(&posed[v], &posed_normals[v], q, gate),
+            );
             distance.push(d / al.unit_len);
             Pair {
                 template: v as u32,

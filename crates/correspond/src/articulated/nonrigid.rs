@@ -38,10 +38,13 @@ pub(super) fn nonrigid_step(
         };
         let round_gate = al.unit_len * g0 * (options.gate_end / g0).powf(frac);
         let near = al.nearest(posed, posed_normals, None)?;
+        let visible = al.visibility(posed);
         let mut d = vec![Vector3::zeros(); n];
         let mut r = vec![0.0; n];
         for (v, &(q, _)) in near.iter().enumerate() {
-            if al.holds(&posed[v], &posed_normals[v], q, round_gate) {
+            if visible.as_ref().is_none_or(|s| s[v])
+                && al.holds(&posed[v], &posed_normals[v], q, round_gate)
+            {
                 d[v] = al.target_positions[q as usize] - posed[v];
                 r[v] = 1.0;
             }

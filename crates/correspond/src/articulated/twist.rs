@@ -5,8 +5,74 @@
 use super::transforms::{isometry, kabsch, unit};
 use super::Alignment;
 use crate::CorrespondError;
-use nalgebra::{IsometryMatrix3, Rotation3, Unit};
+use nalgebra::{IsometryMatrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
 use symcorr_skeleton::BONES;
+
+/// Largest twist of the head about its bone against the pose the chest gives it, degrees.
+/// A neck turns about ±80° (range of motion of cervical rotation); every fit of the head —
+/// the starts of the twist search, their ICP steps and the articulated ICP's rounds — is held
+/// within it. Seen in profile, a head's back fits the visible side about as well as its face,
+/// and unconstrained ICP steps turned whole heads round (mirrored ears and cheeks).
+pub const MAX_HEAD_TWIST_DEG: f64 = 90.0;
+
+/// A bone whose twist about its target axis is held within ±`max` of a reference pose.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TwistLimit {
+    /// The bone (index into [`BONES`]).
+    pub bone: usize,
+    /// The reference pose (template frame → target frame).
+    reference: IsometryMatrix3<f64>,
+    /// The target bone's unit axis, parent → child joint.
+    axis: Unit<Vector3<f64>>,
+    /// The bone's parent joint in the template frame: kept where a fit puts it.
+    pivot: Point3<f64>,
+    /// Largest twist, radians.
+    max: f64,
+}
+
+impl TwistLimit {
+    /// The limit of bone `b` around `reference`; `None` when the target bone has no length.
+    pub fn new(
+        al: &Alignment<'_>,
+        b: usize,
+        reference: IsometryMatrix3<f64>,
+        max_deg: f64,
+    ) -> Option<TwistLimit> {
+        let (p, c) = (BONES[b].parent, BONES[b].child);
+        let axis = unit(al.target.joints.position(c) - al.target.joints.position(p))?;
+        Some(TwistLimit {
+            bone: b,
+            reference,
+            axis: Unit::new_unchecked(axis),
+            pivot: al.template.joints.position(p),
+            max: max_deg.to_radians(),
+        })
+    }
+
+    /// `fit` with its twist against the reference clamped to ±max (swing–twist decomposition of
+    /// the relative rotation about the target axis); the parent joint stays where `fit` puts it.
+    pub fn apply(&self, fit: IsometryMatrix3<f64>) -> IsometryMatrix3<f64> {
+        let relative = fit.rotation * self.reference.rotation.inverse();
+        let q = UnitQuaternion::from_rotation_matrix(&relative);
+        // q = swing · twist, twist = (w, (v·a) a) normalised: angle 2·atan2(v·a, w).
+        let along = q.imag().dot(&self.axis);
+        let mut angle = 2.0 * along.atan2(q.w);
+        if angle > std::f64::consts::PI {
+            angle -= std::f64::consts::TAU;
+        } else if angle < -std::f64::consts::PI {
+            angle += std::f64::consts::TAU;
+        }
+        if angle.abs() <= self.max {
+            return fit;
+        }
+        let twist = UnitQuaternion::from_axis_angle(&self.axis, angle);
+        let swing = q * twist.inverse();
+        let held = swing * UnitQuaternion::from_axis_angle(&self.axis, self.max.copysign(angle));
+        let r = held.to_rotation_matrix() * self.reference.rotation;
+        let x = fit * self.pivot;
+        isometry(*r.matrix(), x.coords - r * self.pivot.coords)
+    }
+}
 
 /// Starting twists of the head twist search of [`articulated_match`](crate::articulated_match),
 /// in degrees: within a head's range of rotation against the chest (about ±80°; the starting
@@ -24,11 +90,13 @@ const MIN_TWIST_VERTICES: usize = 20;
 /// of [`TWISTS`] about the target bone (axis through its parent joint), a few rigid ICP steps
 /// on an even sample of the vertices mostly on the bone (weight > 0.5), scored by the mean
 /// truncated squared distance (position and normal, the search's own metric) to their
-/// nearest pool vertices; the best start wins (the first on a tie).
+/// nearest pool vertices; the best start wins (the first on a tie). Every ICP step is held
+/// within `limit` (of bone `b`, around `initial`).
 pub(super) fn twist_search(
     al: &Alignment<'_>,
     b: usize,
     initial: IsometryMatrix3<f64>,
+    limit: Option<&TwistLimit>,
 ) -> Result<IsometryMatrix3<f64>, CorrespondError> {
     let (template, target, options) = (&al.template, &al.target, al.options);
     let n = template.positions.len();
@@ -106,7 +174,7 @@ pub(super) fn twist_search(
                     ));
                 }
                 match kabsch(&pairs) {
-                    Some(t) => tr = t,
+                    Some(t) => tr = limit.map_or(t, |l| l.apply(t)),
                     None => break,
                 }
             }

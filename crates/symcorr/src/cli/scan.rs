@@ -1,7 +1,7 @@
 //! `symcorr scan (--oni FILE | --depth PNG16 --intrinsics K.json | --device [--uri URI]) --joints J --out scan.ply`
 //!
 //! Turns one depth frame (or the per-pixel median of `--fuse N` consecutive frames) into a scan
-//! mesh: floor and background removed using the skeleton from `--joints`, largest component kept
+//! mesh: floor and background removed using the skeleton from `--joints`, the components near the bones kept
 //! (symcorr-kinect's `scan` module). The skeleton is the robust average of the whole joint log
 //! unless `--joints-frame N` picks one frame.
 
