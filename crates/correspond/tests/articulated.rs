@@ -7,7 +7,7 @@ use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::{
     articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
-    ArticulatedOptions,
+    ArticulatedOptions, ArticulatedStart,
 };
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Skeleton};
@@ -113,6 +113,7 @@ fn a_skinned_copy_is_matched_to_itself() {
         &side(&b.mesh, &att_b, &nb, None),
         &EdgeGraph::new(&b.mesh),
         &ArticulatedOptions::default(),
+        ArticulatedStart::Skeletons,
     )
     .unwrap();
     assert_eq!(out.pairs.len(), a.mesh.num_vertices());
@@ -197,6 +198,7 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
         &side(&scan, &att_s, &ns, Some(&scan.boundary_vertices())),
         &EdgeGraph::new(&scan),
         &ArticulatedOptions::default(),
+        ArticulatedStart::Skeletons,
     )
     .unwrap();
     let (mut tp, mut fp, mut fneg, mut err, mut n_err) = (0, 0, 0, 0.0, 0);

@@ -80,6 +80,7 @@ pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
     DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO,
 };
+pub use symcorr_correspond::{ArticulatedStart, BoneTransforms};
 
 /// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]

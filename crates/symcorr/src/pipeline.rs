@@ -8,8 +8,8 @@ use std::time::Instant;
 use symcorr_correspond::{
     articulated_match, coverage, explain_point, farthest_point_sample, match_points,
     outward_normals, refine_dense, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions,
-    FilterStats, Match, MatchOptions, Pair, PaperFilter, PointExplanation, RefineOptions,
-    RefinedInputs, SpectralBasis,
+    ArticulatedStart, BoneTransforms, FilterStats, Match, MatchOptions, Pair, PaperFilter,
+    PointExplanation, RefineOptions, RefinedInputs, SpectralBasis,
 };
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::Skeleton;
@@ -167,6 +167,12 @@ pub enum MethodReport {
         /// template point at all (`false`: no counterpart; the pair is then only the nearest
         /// guess). `None` for a whole surface, where every point has one.
         has_counterpart: Option<Vec<bool>>,
+        /// The template posed onto the target (final skinning plus the non-rigid step), per
+        /// template vertex of its prepared mesh, in the target's frame and unit.
+        posed: Vec<[f64; 3]>,
+        /// The final bone transforms (template frame → target frame); a next frame of a
+        /// recording starts from them ([`Pipeline::run_from`]).
+        transforms: BoneTransforms,
     },
 }
 
@@ -210,6 +216,7 @@ fn articulated(
     template: &PreparedMesh,
     target: &PreparedMesh,
     options: &ArticulatedOptions,
+    start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, PipelineError> {
     let graph = match &target.refine {
         Some(r) => std::borrow::Cow::Borrowed(&r.graph),
@@ -272,6 +279,7 @@ fn articulated(
         &side(target, &qn, Some(&boundary), None),
         &graph,
         options,
+        start,
     )?)
 }
 
@@ -352,6 +360,19 @@ impl Pipeline {
         template: &PreparedMesh,
         target: &PreparedMesh,
     ) -> Result<Correspondence, PipelineError> {
+        self.run_from(template, target, ArticulatedStart::Skeletons)
+    }
+
+    /// [`Pipeline::run`], the articulated method starting from `start` — a recording's next
+    /// frame from the previous frame's fit ([`ArticulatedStart::Warm`]: that correspondence's
+    /// [`MethodReport::Articulated`] `transforms` and that target's refined joints). The other
+    /// methods have no start and ignore it.
+    pub fn run_from(
+        &self,
+        template: &PreparedMesh,
+        target: &PreparedMesh,
+        start: ArticulatedStart<'_>,
+    ) -> Result<Correspondence, PipelineError> {
         self.options.check()?;
         let t = Instant::now();
         let points = self.points(template);
@@ -363,6 +384,7 @@ impl Pipeline {
                 &self.options.articulated,
                 &points,
                 self.options.mode,
+                start,
             )?,
             Method::Refined => run_refined(
                 template,
@@ -402,8 +424,9 @@ fn run_articulated(
     options: &ArticulatedOptions,
     points: &[u32],
     mode: Mode,
+    start: ArticulatedStart<'_>,
 ) -> Result<MethodOutput, PipelineError> {
-    let out = articulated(template, target, options)?;
+    let out = articulated(template, target, options, start)?;
     // Only a partial view leaves template points without a counterpart; on a whole surface
     // every point has one, however far the fit left it.
     let partial = target.is_partial();
@@ -417,6 +440,8 @@ fn run_articulated(
     let report = MethodReport::Articulated {
         coverage: coverage(&shown, target.num_vertices()),
         has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
+        posed: out.posed.iter().map(|p| p.coords.into()).collect(),
+        transforms: out.transforms,
     };
     Ok((
         pick(mode, points, out.pairs),

@@ -17,13 +17,20 @@
 //! 4. **Scan** ([`symcorr_kinect::scan_mesh`]) of the depth frame with those joints, **prepare**
 //!    it (skeleton attachment; joints and depth share the camera frame, so no alignment, and a
 //!    poor fit is recorded, not refused: a profile view's far-side joints lie behind the only
-//!    surface the camera sees) and **match** the template onto it with the pipeline's method.
+//!    surface the camera sees; the camera at the origin is its viewpoint, for the occlusion
+//!    test) and **match** the template onto it with the pipeline's method — **warm-started**
+//!    from the previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by
+//!    the joints' motion, what the joints cannot say, a bone's roll and the head's twist,
+//!    carried over; fewer ICP rounds), and started afresh from the skeletons after a skipped
+//!    frame or when a joint jumped more than [`TrackOptions::max_warm_jump_m`].
 //!
 //! The result per frame ([`FrameOutcome`]) is the row of the correspondence — for every
 //! template input vertex the scan vertex it matches, or −1 where the frame does not show it —
 //! with a confidence, and what was corrected.
 
-use crate::{Pipeline, PipelineError, PreparedMesh};
+use crate::{
+    ArticulatedStart, BoneTransforms, MethodReport, Pipeline, PipelineError, PreparedMesh,
+};
 use std::time::Instant;
 use symcorr_attach::PoorFitPolicy;
 use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
@@ -45,6 +52,12 @@ pub struct TrackOptions {
     pub smoothing: Option<symcorr_kinect::OneEuroFilter>,
     /// Scan meshing options.
     pub scan: ScanOptions,
+    /// Start each frame's fit from the previous frame's ([`ArticulatedStart::Warm`]).
+    pub warm_start: bool,
+    /// A frame whose joints moved farther than this (metres, the largest joint displacement
+    /// since the previous frame) starts afresh from the skeletons: the previous fit is no
+    /// longer near.
+    pub max_warm_jump_m: f64,
 }
 
 impl Default for TrackOptions {
@@ -54,6 +67,8 @@ impl Default for TrackOptions {
             fix_swaps: true,
             smoothing: Some(symcorr_kinect::OneEuroFilter::default()),
             scan: ScanOptions::default(),
+            warm_start: true,
+            max_warm_jump_m: 0.15,
         }
     }
 }
@@ -104,6 +119,12 @@ pub struct MatchedFrame {
     pub fit_score: f64,
     /// The scan, its vertex ids being those of `target_of`.
     pub scan: ScanMesh,
+    /// Per template input vertex, the template posed onto this frame (camera space, metres):
+    /// the articulated method's final skinning plus its non-rigid step; other methods pose
+    /// nothing (`None`).
+    pub posed: Option<Vec<[f32; 3]>>,
+    /// Whether the fit started from the previous frame's.
+    pub warm: bool,
     /// Per scan vertex, its segment label index (`None` where the attachment left it out).
     pub scan_labels: Vec<Option<usize>>,
     /// Seconds per stage: `scan`, `prepare`, `match`.
@@ -129,6 +150,8 @@ pub struct Tracker<'a> {
     options: TrackOptions,
     filter: Option<SkeletonFilter>,
     previous: Option<Skeleton>,
+    /// The previous frame's fit: its bone transforms and the refined joints they pose onto.
+    previous_fit: Option<(BoneTransforms, Skeleton)>,
 }
 
 impl<'a> Tracker<'a> {
@@ -155,12 +178,14 @@ impl<'a> Tracker<'a> {
             filter: options.smoothing.map(SkeletonFilter::new),
             options,
             previous: None,
+            previous_fit: None,
         }
     }
 
     /// Forgets the previous frame (after a skipped frame, or before a jump in time).
     pub fn reset(&mut self) {
         self.previous = None;
+        self.previous_fit = None;
         if let Some(f) = &mut self.filter {
             f.reset();
         }
@@ -214,11 +239,35 @@ impl<'a> Tracker<'a> {
             .seen_from(nalgebra::Point3::origin());
         let t_prepare = t.elapsed().as_secs_f64();
         let t = Instant::now();
+        let warm = self.previous_fit.as_ref().filter(|(_, joints)| {
+            self.options.warm_start
+                && largest_joint_motion(joints, &target.attachment.joints)
+                    <= self.options.max_warm_jump_m / target.metres_per_unit()
+        });
+        let start = match warm {
+            Some((transforms, joints)) => ArticulatedStart::Warm { transforms, joints },
+            None => ArticulatedStart::Skeletons,
+        };
+        let was_warm = warm.is_some();
         let corr = self
             .pipeline
-            .run(self.template, &target)
+            .run_from(self.template, &target, start)
             .map_err(|e: PipelineError| e.to_string())?;
         let t_match = t.elapsed().as_secs_f64();
+        let posed = match &corr.report {
+            MethodReport::Articulated {
+                posed, transforms, ..
+            } => {
+                self.previous_fit = Some((*transforms, target.attachment.joints.clone()));
+                let rest = &self.template.input_mesh().positions;
+                let mut out: Vec<[f32; 3]> = rest.iter().map(|p| p.map(|x| x as f32)).collect();
+                for (v, p) in posed.iter().enumerate() {
+                    out[self.template.input_id(v as u32) as usize] = p.map(|x| x as f32);
+                }
+                Some(out)
+            }
+            _ => None,
+        };
         let d = &target.attachment.diagnostics;
         if d.mirror.swapped {
             corrections.push(Correction::SidesSwapped);
@@ -257,9 +306,19 @@ impl<'a> Tracker<'a> {
             corrections,
             scan,
             scan_labels,
+            posed,
+            warm: was_warm,
             timings: vec![("scan", t_scan), ("prepare", t_prepare), ("match", t_match)],
         })
     }
+}
+
+/// The largest distance a joint moved from `a` to `b` (joints tracked in both).
+fn largest_joint_motion(a: &Skeleton, b: &Skeleton) -> f64 {
+    (0..a.positions.len())
+        .filter(|&j| a.confidence[j] > 0.0 && b.confidence[j] > 0.0)
+        .map(|j| (a.positions[j] - b.positions[j]).norm())
+        .fold(0.0, f64::max)
 }
 
 /// `skeleton` with the left and right joints of one limb pair exchanged.

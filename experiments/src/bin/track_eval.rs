@@ -45,6 +45,9 @@ struct Args {
     /// Turn the joint smoothing off.
     #[arg(long)]
     no_smoothing: bool,
+    /// Start every frame's fit from the skeletons (no warm start from the previous frame).
+    #[arg(long)]
+    cold: bool,
     /// Also print, for this frame, the mean error and match count per template segment.
     #[arg(long, value_name = "FRAME")]
     detail: Option<usize>,
@@ -82,6 +85,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let options = TrackOptions {
         joint_offset_s: args.joint_offset,
         fix_swaps: !args.no_swap_fix,
+        warm_start: !args.cold,
         smoothing: (!args.no_smoothing).then(symcorr_kinect::OneEuroFilter::default),
         ..TrackOptions::default()
     };

@@ -17,31 +17,41 @@ const MIN_BONE_PAIRS: usize = 20;
 /// A vertex pairs for a bone only when its skinning weight on the bone exceeds this.
 const MIN_PAIR_WEIGHT: f64 = 0.1;
 
-/// [`ArticulatedOptions::iterations`](crate::ArticulatedOptions) rounds of articulated ICP
-/// from `transforms` (updated in place), on the even stride `sample` of the template (per
-/// pool group). Each round pairs every sampled posed vertex with its nearest pool vertex, keeps
-/// the pairs that hold at the round's gate (shrinking geometrically from `gate_start` to
-/// `gate_end`), re-fits each bone with enough pairs by weighted Kabsch plus its two joints as
+/// How many ICP rounds, from which gate (a start from the skeletons or from an earlier fit).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Rounds {
+    /// Rounds.
+    pub iterations: usize,
+    /// Gate of the first round (√area units); the last one's is `gate_end`.
+    pub gate_start: f64,
+}
+
+/// `rounds` of articulated ICP from `transforms` (updated in place), on the even stride
+/// `sample` of the template (per pool group). Each round pairs every sampled posed vertex
+/// with its nearest pool vertex, keeps the pairs that hold at the round's gate (shrinking
+/// geometrically from the rounds' `gate_start` to `gate_end`), the template vertices the
+/// target's viewpoint cannot see excluded, re-fits each bone with enough pairs by weighted Kabsch plus its two joints as
 /// anchors (held within `limit` for its bone), and re-skins. Returns the final posed positions
 /// and normals.
 pub(super) fn articulated_icp(
     al: &Alignment<'_>,
     transforms: &mut BoneTransforms,
     sample: &[Vec<u32>],
+    rounds: Rounds,
     limit: Option<&TwistLimit>,
 ) -> Result<Posed, CorrespondError> {
     let (template, target, options) = (&al.template, &al.target, al.options);
     let (mut posed, mut posed_normals) =
         skin(template.positions, template.normals, al.weights, transforms);
-    let iterations = options.iterations.max(1);
+    let iterations = rounds.iterations.max(1);
+    let gate_start = rounds.gate_start.max(options.gate_end);
     for it in 0..iterations {
         let frac = if iterations > 1 {
             it as f64 / (iterations - 1) as f64
         } else {
             1.0
         };
-        let gate =
-            al.unit_len * (options.gate_start * (options.gate_end / options.gate_start).powf(frac));
+        let gate = al.unit_len * (gate_start * (options.gate_end / gate_start).powf(frac));
         let near = al.nearest(&posed, &posed_normals, Some(sample))?;
         let visible = al.visibility(&posed);
         // Pairs per bone: (rest position, target position, weight).

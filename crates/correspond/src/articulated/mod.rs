@@ -128,6 +128,10 @@ pub struct ArticulatedOptions {
     /// template's nearest surface along its line of sight is occluded (no pair, no
     /// counterpart).
     pub occlusion_tolerance: f64,
+    /// ICP iterations from a warm start ([`ArticulatedStart::Warm`]).
+    pub warm_iterations: usize,
+    /// Pair-rejection distance of the first iteration from a warm start.
+    pub warm_gate_start: f64,
 }
 
 impl Default for ArticulatedOptions {
@@ -146,8 +150,30 @@ impl Default for ArticulatedOptions {
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
             occlusion_tolerance: 0.01,
+            warm_iterations: 4,
+            warm_gate_start: 0.05,
         }
     }
+}
+
+/// Where [`articulated_match`] starts.
+#[derive(Debug, Clone, Copy)]
+pub enum ArticulatedStart<'a> {
+    /// From the two skeletons alone: [`bone_transforms`] and the head's twist search (steps 2
+    /// and 3 of the module docs), then [`ArticulatedOptions::iterations`] ICP rounds.
+    Skeletons,
+    /// From a nearby earlier fit onto the same template — the previous frame of a recording:
+    /// its bone transforms, each moved by how its bone moved between that fit's target
+    /// skeleton and this one's (`bone_transforms(joints, target joints)[b] ∘ transforms[b]`).
+    /// What the joints cannot say (a bone's roll, the head's twist) carries over from the
+    /// earlier fit instead of being searched again; [`ArticulatedOptions::warm_iterations`]
+    /// ICP rounds from [`ArticulatedOptions::warm_gate_start`] follow.
+    Warm {
+        /// The earlier fit's final bone transforms ([`ArticulatedMatches::transforms`]).
+        transforms: &'a BoneTransforms,
+        /// The earlier fit's target skeleton (the refined joints it was posed onto).
+        joints: &'a Skeleton,
+    },
 }
 
 /// Default [`ArticulatedOptions::icp_points`].
@@ -176,7 +202,7 @@ pub struct ArticulatedMatches {
 
 /// Matches every template vertex onto a (possibly partial) target by skeleton-driven
 /// articulated alignment (see the module docs). `weights` are the template's bone weights;
-/// `graph` is the target's edge graph (pool bands).
+/// `graph` is the target's edge graph (pool bands); `start` says where the alignment starts.
 ///
 /// Errors: [`CorrespondError::EmptyMesh`] for a mesh without vertices,
 /// [`CorrespondError::LengthMismatch`] when the tables of a side (or the template's weights)
@@ -187,6 +213,7 @@ pub fn articulated_match(
     target: &ArticulatedInputs<'_>,
     graph: &EdgeGraph,
     options: &ArticulatedOptions,
+    start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, CorrespondError> {
     validate(template, weights, target)?;
     let mut timings = Vec::new();
@@ -196,10 +223,20 @@ pub fn articulated_match(
 
     let t = Instant::now();
     let al = Alignment::new(template, weights, target, &pools, options)?;
-    let (mut transforms, head_limit) = initial_transforms(&al)?;
+    let (mut transforms, head_limit) = initial_transforms(&al, start)?;
     let sample = al.icp_sample();
+    let rounds = match start {
+        ArticulatedStart::Skeletons => icp::Rounds {
+            iterations: options.iterations,
+            gate_start: options.gate_start,
+        },
+        ArticulatedStart::Warm { .. } => icp::Rounds {
+            iterations: options.warm_iterations,
+            gate_start: options.warm_gate_start,
+        },
+    };
     let (mut posed, posed_normals) =
-        icp::articulated_icp(&al, &mut transforms, &sample, head_limit.as_ref())?;
+        icp::articulated_icp(&al, &mut transforms, &sample, rounds, head_limit.as_ref())?;
     timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
@@ -407,21 +444,40 @@ fn feature(x: &Point3<f64>, n: &Vector3<f64>, beta: f64) -> [f64; 6] {
 /// ([`bone_transforms`]), with the head bone's roll chosen by the twist search, and the limit
 /// that holds the head's twist near the chest's pose ([`twist::MAX_HEAD_TWIST_DEG`]) in every
 /// later fit.
+/// From a warm start, the earlier transforms moved by their bones' motion instead (no twist
+/// search), the head held within the same limit.
 fn initial_transforms(
     al: &Alignment<'_>,
+    start: ArticulatedStart<'_>,
 ) -> Result<(BoneTransforms, Option<TwistLimit>), CorrespondError> {
-    let mut transforms = bone_transforms(al.template.joints, al.target.joints);
+    let from_skeletons = bone_transforms(al.template.joints, al.target.joints);
     let head = Bone::new(Joint::ShoulderCenter, Joint::Head);
     // Invariant: the neck → head bone is one of BONES.
     let head_bone = BONES.iter().position(|&b| b == head).unwrap_or(2);
     let limit = TwistLimit::new(
         al,
         head_bone,
-        transforms[head_bone],
+        from_skeletons[head_bone],
         twist::MAX_HEAD_TWIST_DEG,
     );
-    transforms[head_bone] =
-        twist::twist_search(al, head_bone, transforms[head_bone], limit.as_ref())?;
+    let transforms = match start {
+        ArticulatedStart::Skeletons => {
+            let mut t = from_skeletons;
+            t[head_bone] = twist::twist_search(al, head_bone, t[head_bone], limit.as_ref())?;
+            t
+        }
+        ArticulatedStart::Warm { transforms, joints } => {
+            let motion = bone_transforms(joints, al.target.joints);
+            let mut t = *transforms;
+            for (b, tr) in t.iter_mut().enumerate() {
+                *tr = motion[b] * *tr;
+            }
+            if let Some(l) = &limit {
+                t[head_bone] = l.apply(t[head_bone]);
+            }
+            t
+        }
+    };
     Ok((transforms, limit))
 }
 
