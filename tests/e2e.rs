@@ -711,6 +711,109 @@ fn npy_rows(path: &Path, cols: usize) -> Vec<Vec<u8>> {
         .collect()
 }
 
+fn f32_rows(path: &Path, cols: usize) -> Vec<Vec<f32>> {
+    npy_rows(path, cols)
+        .iter()
+        .map(|r| {
+            r.chunks(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect()
+        })
+        .collect()
+}
+
+/// A track's animated template, checked as a file (split by hand, not by symcorr's reader):
+/// a GLB of a JSON and a BIN chunk, POSITION accessors with their data's min/max, an animation
+/// input strictly increasing. Returns per morph target its name, its time and the positions it
+/// shows (rest + target).
+fn template_track(out: &Path, n: usize) -> Vec<(String, f32, Vec<f32>)> {
+    let glb = std::fs::read(out.join("template_track.glb")).unwrap();
+    // symcorr's own glTF reader (through the gltf crate's validation) sees the template.
+    let rest = symcorr_mesh::io::read(out.join("template_track.glb")).unwrap();
+    assert_eq!(rest.mesh.num_vertices(), n);
+    let u32_at = |i: usize| u32::from_le_bytes(glb[i..i + 4].try_into().unwrap()) as usize;
+    assert_eq!(&glb[..4], b"glTF");
+    assert_eq!(u32_at(8), glb.len());
+    assert_eq!(&glb[16..20], b"JSON");
+    let json_len = u32_at(12);
+    let doc: Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    assert_eq!(&glb[20 + json_len + 4..20 + json_len + 8], b"BIN\0");
+    let bin = &glb[20 + json_len + 8..];
+    assert_eq!(u32_at(20 + json_len), bin.len());
+    let floats = |a: &Value| -> Vec<f32> {
+        let acc = &doc["accessors"][a.as_u64().unwrap() as usize];
+        let view = &doc["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+        let off = view["byteOffset"].as_u64().unwrap() as usize;
+        let per = if acc["type"] == "VEC3" { 3 } else { 1 };
+        let len = acc["count"].as_u64().unwrap() as usize * per * 4;
+        let v: Vec<f32> = bin[off..off + len]
+            .chunks(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        if per == 3 {
+            for c in 0..3 {
+                let col = v.iter().skip(c).step_by(3);
+                let lo = col.clone().fold(f32::INFINITY, |m, &x| m.min(x));
+                let hi = col.fold(f32::NEG_INFINITY, |m, &x| m.max(x));
+                assert_eq!(acc["min"][c].as_f64().unwrap() as f32, lo);
+                assert_eq!(acc["max"][c].as_f64().unwrap() as f32, hi);
+            }
+        }
+        v
+    };
+    let prim = &doc["meshes"][0]["primitives"][0];
+    let rest = floats(&prim["attributes"]["POSITION"]);
+    let sampler = &doc["animations"][0]["samplers"][0];
+    let times = floats(&sampler["input"]);
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "{times:?}");
+    let targets = prim["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), times.len());
+    assert_eq!(floats(&sampler["output"]).len(), times.len() * times.len());
+    targets
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let d = floats(&t["POSITION"]);
+            let name = doc["meshes"][0]["extras"]["targetNames"][k]
+                .as_str()
+                .unwrap();
+            let shown = rest.iter().zip(&d).map(|(a, b)| a + b).collect();
+            (name.to_string(), times[k], shown)
+        })
+        .collect()
+}
+
+/// Every ok frame of track.json is a morph target of template_track.glb, at its time relative
+/// to the run's first frame, showing its row of posed.npy.
+fn assert_template_track_covers(out: &Path, doc: &Value, n: usize) {
+    let frames = doc["frames"].as_array().unwrap();
+    let posed = f32_rows(&out.join("posed.npy"), 3 * n);
+    let targets = template_track(out, n);
+    let ok: Vec<usize> = (0..frames.len())
+        .filter(|&k| frames[k]["status"] == "ok")
+        .collect();
+    assert_eq!(targets.len(), ok.len());
+    assert_eq!(doc["summary"]["template_track"]["targets"], ok.len());
+    let t0 = frames[0]["time_s"].as_f64().unwrap();
+    for ((name, time, shown), &k) in targets.iter().zip(&ok) {
+        let f = &frames[k];
+        assert_eq!(f["posed"], true);
+        assert_eq!(name, &format!("frame {:06}", f["frame"].as_u64().unwrap()));
+        assert!((f64::from(*time) - (f["time_s"].as_f64().unwrap() - t0)).abs() < 1e-5);
+        for (a, b) in shown.iter().zip(&posed[k]) {
+            assert!(
+                (a - b).abs() <= 4.0 * f32::EPSILON * b.abs().max(1.0),
+                "{a} {b}"
+            );
+        }
+    }
+    for (k, f) in frames.iter().enumerate() {
+        if f["status"] != "ok" {
+            assert!(posed[k].iter().all(|x| x.is_nan()), "skipped frame {k}");
+        }
+    }
+}
+
 #[test]
 fn track_streams_a_recording_and_resumes_after_an_interruption() {
     let dir = tempfile::tempdir().unwrap();
@@ -746,6 +849,8 @@ fn track_streams_a_recording_and_resumes_after_an_interruption() {
         );
         assert!(ids.iter().all(|&x| x >= -1 && i64::from(x) < scan_vertices));
     }
+    assert_template_track_covers(&out, &doc, n);
+    let posed_before = npy_rows(&out.join("posed.npy"), 3 * n);
     // The same folder again without --resume is refused; nothing is touched.
     let before = std::fs::read(out.join("track.json")).unwrap();
     let o = bin()
@@ -773,7 +878,12 @@ fn track_streams_a_recording_and_resumes_after_an_interruption() {
         let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
         f.set_len(len - (2 * n * 4 - 100) as u64).unwrap();
     }
+    let p = out.join("posed.npy");
+    let len = std::fs::metadata(&p).unwrap().len();
+    let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
+    f.set_len(len - (2 * n * 12 - 100) as u64).unwrap();
     std::fs::remove_file(out.join("track.json")).unwrap();
+    std::fs::remove_file(out.join("template_track.glb")).unwrap();
     let o = run(bin()
         .args(["track", rec.to_str().unwrap(), "--resume", "--joints"])
         .arg(&log)
@@ -790,6 +900,11 @@ fn track_streams_a_recording_and_resumes_after_an_interruption() {
         rows[..2],
         "the complete frames are kept as they were"
     );
+    assert_eq!(
+        npy_rows(&out.join("posed.npy"), 3 * n)[..2],
+        posed_before[..2]
+    );
+    assert_template_track_covers(&out, &doc, n);
 }
 
 #[test]
@@ -831,6 +946,9 @@ fn track_skips_frames_the_joint_log_does_not_cover() {
     let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
     let rows = npy_rows(&out.join("correspondence.npy"), n);
     assert!(rows[2].chunks(4).all(|b| b == (-1i32).to_le_bytes()));
+    // The skipped frame is left out of the animated template (its posed row is NaN).
+    assert_template_track_covers(&out, &doc, n);
+    assert_eq!(doc["summary"]["template_track"]["targets"], 2);
 }
 
 /// Ctrl-C stops after the frame in progress: track.json and track.svg cover the frames done,
@@ -890,10 +1008,14 @@ fn track_stops_cleanly_on_ctrl_c_and_resumes() {
     assert!((2..60).contains(&done), "{done}");
     assert_eq!(doc["summary"]["frames_in_run"], 60);
     assert!(out.join("track.svg").exists());
+    let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
+    // The animated template is written with track.json: the frames done so far.
+    assert_template_track_covers(&out, &doc, n);
     let o = run(&mut args(true));
     assert!(o.status.success());
     let doc = read_json(&out.join("track.json"));
     assert_eq!(doc["summary"]["frames"], 60);
+    assert_template_track_covers(&out, &doc, n);
     // The lost-body frames of the recording are skipped with their reason, never matched.
     let skipped: Vec<u64> = doc["frames"]
         .as_array()

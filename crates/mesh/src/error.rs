@@ -152,4 +152,23 @@ pub enum MeshError {
         /// The output path as given.
         file: String,
     },
+    /// A frame of a morph animation ([`crate::io::gltf::MorphAnimationWriter`]) cannot be
+    /// written: positions of another count than the rest mesh's vertices, a non-finite
+    /// coordinate, a time that is not finite or not after the previous frame's.
+    #[error("morph target {target}: {message}")]
+    MorphTarget {
+        /// The target (0-based, in the order pushed).
+        target: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A morph animation without a single frame: glTF has no empty animation.
+    #[error("a morph animation needs at least one frame")]
+    NoMorphTargets,
+    /// A GLB file would exceed 4 GiB, the most its 32-bit length field can say.
+    #[error("the GLB file would have {bytes} bytes, more than the format's 4 GiB")]
+    GlbTooLarge {
+        /// The size it would have.
+        bytes: u64,
+    },
 }

@@ -7,7 +7,9 @@
 //! row (an interrupted run). Format: the magic `\x93NUMPY`, version `1.0`, a little-endian `u16`
 //! header length, the header — a Python dict literal `{'descr': '<i4', 'fortran_order': False,
 //! 'shape': (R, C), }` padded with spaces and ended by `\n` so that the data starts at a multiple
-//! of 64 bytes — then the values in C order, little-endian.
+//! of 64 bytes — then the values in C order, little-endian. A row may itself be an array
+//! ([`NpyWriter::create_shaped`]: `posed.npy` is frames × vertices × 3), and [`NpyReader`] reads
+//! the rows of such a file back one at a time.
 
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write};
@@ -70,8 +72,32 @@ pub enum NpyError {
 /// assert!(String::from_utf8_lossy(&h).contains("'shape': (2, 3), }"));
 /// ```
 pub fn header(ty: NpyType, rows: usize, cols: usize) -> Vec<u8> {
+    header_shaped(ty, rows, &[cols])
+}
+
+/// The header bytes of an array of `rows` rows, each of shape `row_shape` (`&[]`: a 1-D array
+/// of `rows` values), of `ty`.
+///
+/// ```
+/// use symcorr::npy::{header_shaped, NpyType};
+/// let h = header_shaped(NpyType::F32, 4, &[13380, 3]);
+/// assert_eq!(h.len() % 64, 0);
+/// assert!(String::from_utf8_lossy(&h).contains("'shape': (4, 13380, 3), }"));
+/// assert!(String::from_utf8_lossy(&header_shaped(NpyType::F32, 4, &[])).contains("(4,)"));
+/// ```
+pub fn header_shaped(ty: NpyType, rows: usize, row_shape: &[usize]) -> Vec<u8> {
+    // A Python tuple: `(4,)` for one dimension, `(4, 5, 3)` for more.
+    let mut shape = rows.to_string();
+    match row_shape {
+        [] => shape.push(','),
+        dims => {
+            for d in dims {
+                shape.push_str(&format!(", {d}"));
+            }
+        }
+    }
     let dict = format!(
-        "{{'descr': '{}', 'fortran_order': False, 'shape': ({rows}, {cols}), }}",
+        "{{'descr': '{}', 'fortran_order': False, 'shape': ({shape}), }}",
         ty.descr()
     );
     // magic (6) + version (2) + length (2) + dict + padding + '\n' ≡ 0 (mod 64).
@@ -80,7 +106,7 @@ pub fn header(ty: NpyType, rows: usize, cols: usize) -> Vec<u8> {
     let len = dict.len() + pad + 1;
     let mut out = Vec::with_capacity(10 + len);
     out.extend_from_slice(b"\x93NUMPY\x01\x00");
-    // Invariant: the dict of two usize numbers is far below 65,535 bytes.
+    // Invariant: the dict of a few usize numbers is far below 65,535 bytes.
     out.extend_from_slice(&(len as u16).to_le_bytes());
     out.extend_from_slice(dict.as_bytes());
     out.extend(std::iter::repeat_n(b' ', pad));
@@ -88,13 +114,15 @@ pub fn header(ty: NpyType, rows: usize, cols: usize) -> Vec<u8> {
     out
 }
 
-/// A `.npy` file of a fixed `(rows, cols)` shape filled row by row.
+/// A `.npy` file of a fixed `(rows, cols)` shape (or `(rows, …row shape)`,
+/// [`NpyWriter::create_shaped`]) filled row by row.
 #[derive(Debug)]
 pub struct NpyWriter {
     file: File,
     path: PathBuf,
     ty: NpyType,
     rows: usize,
+    /// Values per row (the product of the row's shape).
     cols: usize,
     written: usize,
 }
@@ -119,13 +147,41 @@ impl NpyWriter {
         rows: usize,
         cols: usize,
     ) -> Result<NpyWriter, NpyError> {
+        NpyWriter::create_shaped(path, ty, rows, &[cols])
+    }
+
+    /// [`NpyWriter::create`] for rows that are arrays of shape `row_shape`, pushed flattened in
+    /// C order (`posed.npy`: rows of shape `[vertices, 3]`, each pushed as `3 × vertices`
+    /// values).
+    ///
+    /// ```
+    /// use symcorr::npy::{NpyType, NpyWriter};
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("p.npy");
+    /// let mut w = NpyWriter::create_shaped(&path, NpyType::F32, 1, &[2, 3]).unwrap();
+    /// w.push_f32([[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]].as_flattened()).unwrap();
+    /// assert_eq!(std::fs::metadata(&path).unwrap().len(), 128 + 24);
+    /// ```
+    pub fn create_shaped(
+        path: &Path,
+        ty: NpyType,
+        rows: usize,
+        row_shape: &[usize],
+    ) -> Result<NpyWriter, NpyError> {
         let io = |source| NpyError::Io {
             file: path.display().to_string(),
             source,
         };
         let mut file = File::create(path).map_err(io)?;
-        file.write_all(&header(ty, rows, cols)).map_err(io)?;
-        Ok(NpyWriter::at(file, path, ty, [rows, cols], 0))
+        file.write_all(&header_shaped(ty, rows, row_shape))
+            .map_err(io)?;
+        Ok(NpyWriter::at(
+            file,
+            path,
+            ty,
+            [rows, row_shape.iter().product()],
+            0,
+        ))
     }
 
     /// Reopens `path`, written by [`NpyWriter::create`] with the same type and shape, to continue
@@ -139,12 +195,24 @@ impl NpyWriter {
         cols: usize,
         rows_done: usize,
     ) -> Result<NpyWriter, NpyError> {
+        NpyWriter::resume_shaped(path, ty, rows, &[cols], rows_done)
+    }
+
+    /// [`NpyWriter::resume`] of a file written by [`NpyWriter::create_shaped`].
+    pub fn resume_shaped(
+        path: &Path,
+        ty: NpyType,
+        rows: usize,
+        row_shape: &[usize],
+        rows_done: usize,
+    ) -> Result<NpyWriter, NpyError> {
         let name = path.display().to_string();
         let io = |source| NpyError::Io {
             file: name.clone(),
             source,
         };
-        let want = header(ty, rows, cols);
+        let cols: usize = row_shape.iter().product();
+        let want = header_shaped(ty, rows, row_shape);
         let bytes_done = (want.len() + rows_done * cols * 4) as u64;
         let mut file = OpenOptions::new()
             .read(true)
@@ -158,7 +226,7 @@ impl NpyWriter {
             return Err(NpyError::Resume {
                 file: name,
                 message: format!(
-                    "its header is not that of a {rows} × {cols} {} array",
+                    "its header is not that of a {rows} × {row_shape:?} {} array",
                     ty.descr()
                 ),
             });
@@ -249,6 +317,104 @@ impl NpyWriter {
     }
 }
 
+/// Reads the rows of a `.npy` file written by [`NpyWriter`] one at a time (a long session's
+/// file is never read whole). Only the writer's own layout is accepted: the header must be
+/// exactly the one [`header_shaped`] gives for the expected type and shape.
+#[derive(Debug)]
+pub struct NpyReader {
+    file: File,
+    path: PathBuf,
+    ty: NpyType,
+    rows: usize,
+    cols: usize,
+    data_start: u64,
+}
+
+impl NpyReader {
+    /// Opens `path`, expected to hold a `ty` array of `rows` rows of shape `row_shape`.
+    ///
+    /// Errors: [`NpyError::Io`]; [`NpyError::Shape`] when the header is another one.
+    ///
+    /// ```
+    /// use symcorr::npy::{NpyReader, NpyType, NpyWriter};
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("p.npy");
+    /// let mut w = NpyWriter::create_shaped(&path, NpyType::F32, 2, &[1, 3]).unwrap();
+    /// w.push_f32(&[1.0, 2.0, 3.0]).unwrap();
+    /// w.push_f32(&[4.0, 5.0, 6.0]).unwrap();
+    /// let mut r = NpyReader::open(&path, NpyType::F32, 2, &[1, 3]).unwrap();
+    /// let mut row = Vec::new();
+    /// r.read_f32(1, &mut row).unwrap();
+    /// assert_eq!(row, [4.0, 5.0, 6.0]);
+    /// assert!(r.read_f32(2, &mut row).is_err());
+    /// ```
+    pub fn open(
+        path: &Path,
+        ty: NpyType,
+        rows: usize,
+        row_shape: &[usize],
+    ) -> Result<NpyReader, NpyError> {
+        use std::io::Read as _;
+        let name = path.display().to_string();
+        let mut file = File::open(path).map_err(|source| NpyError::Io {
+            file: name.clone(),
+            source,
+        })?;
+        let want = header_shaped(ty, rows, row_shape);
+        let mut head = vec![0u8; want.len()];
+        if file.read_exact(&mut head).is_err() || head != want {
+            return Err(NpyError::Shape {
+                file: name,
+                message: format!(
+                    "expected a {rows} × {row_shape:?} {} array written by symcorr",
+                    ty.descr()
+                ),
+            });
+        }
+        Ok(NpyReader {
+            file,
+            path: path.to_path_buf(),
+            ty,
+            rows,
+            cols: row_shape.iter().product(),
+            data_start: want.len() as u64,
+        })
+    }
+
+    /// Reads row `row` of an `F32` file into `out` (replacing its contents).
+    ///
+    /// Errors: [`NpyError::Shape`] for a row past the shape or another type, [`NpyError::Io`]
+    /// when the file ends before the row (not written yet).
+    pub fn read_f32(&mut self, row: usize, out: &mut Vec<f32>) -> Result<(), NpyError> {
+        use std::io::Read as _;
+        if self.ty != NpyType::F32 || row >= self.rows {
+            return Err(NpyError::Shape {
+                file: self.path.display().to_string(),
+                message: format!(
+                    "no f32 row {row} in a {} array of {} rows",
+                    self.ty.descr(),
+                    self.rows
+                ),
+            });
+        }
+        let io = |source| NpyError::Io {
+            file: self.path.display().to_string(),
+            source,
+        };
+        let at = self.data_start + (row * self.cols * 4) as u64;
+        self.file.seek(SeekFrom::Start(at)).map_err(io)?;
+        let mut bytes = vec![0u8; self.cols * 4];
+        self.file.read_exact(&mut bytes).map_err(io)?;
+        out.clear();
+        out.extend(
+            bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -301,5 +467,28 @@ mod tests {
         let short = dir.path().join("s.npy");
         NpyWriter::create(&short, NpyType::I32, 3, 2).unwrap();
         assert!(NpyWriter::resume(&short, NpyType::I32, 3, 2, 1).is_err());
+    }
+
+    #[test]
+    fn shaped_rows_resume_and_read_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.npy");
+        let mut w = NpyWriter::create_shaped(&path, NpyType::F32, 3, &[2, 3]).unwrap();
+        w.push_f32(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
+        assert!(w.push_f32(&[0.0; 3]).is_err(), "a row is 2 × 3 values");
+        drop(w);
+        let mut w = NpyWriter::resume_shaped(&path, NpyType::F32, 3, &[2, 3], 1).unwrap();
+        w.push_f32(&[f32::NAN; 6]).unwrap();
+        drop(w);
+        assert!(NpyWriter::resume_shaped(&path, NpyType::F32, 3, &[3, 2], 1).is_err());
+        let mut r = NpyReader::open(&path, NpyType::F32, 3, &[2, 3]).unwrap();
+        let mut row = Vec::new();
+        r.read_f32(0, &mut row).unwrap();
+        assert_eq!(row, [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+        r.read_f32(1, &mut row).unwrap();
+        assert!(row.iter().all(|x| x.is_nan()));
+        assert!(r.read_f32(2, &mut row).is_err(), "not written yet");
+        assert!(NpyReader::open(&path, NpyType::F32, 3, &[6]).is_err());
+        assert!(NpyReader::open(&path, NpyType::I32, 3, &[2, 3]).is_err());
     }
 }

@@ -28,6 +28,8 @@
 //! template input vertex the scan vertex it matches, or −1 where the frame does not show it —
 //! with a confidence, and what was corrected.
 
+pub mod animation;
+
 use crate::{
     ArticulatedStart, BoneTransforms, MethodReport, Pipeline, PipelineError, PreparedMesh,
 };

@@ -18,6 +18,10 @@
 //! linear values are stored as f32, not as normalised bytes, so that a write → read round trip
 //! gives the same bytes back (8-bit linear would merge dark shades). Positions are f32 in glTF: a write → read round trip is exact only
 //! for coordinates representable in f32.
+//!
+//! Public here: [`MorphAnimationWriter`], an animated GLB of a mesh moving through frames
+//! (morph targets and an animation of their weights), written frame by frame; the plain
+//! readers and writers are reached through [`crate::io::read`] and [`crate::io::write`].
 
 use std::borrow::Cow;
 use std::io::Read as _;
@@ -29,6 +33,10 @@ use gltf::mesh::Mode;
 use gltf::Semantic;
 use nalgebra::{Matrix4, Vector3};
 use serde_json::json;
+
+mod morph;
+
+pub use morph::{MorphAnimationWriter, MorphInterpolation};
 
 use super::{LoadedMesh, Source};
 use crate::{MeshError, TriMesh};

@@ -41,13 +41,14 @@
 //! for f32 values; beyond f32's range is [`MeshError::NotRepresentable`]). GLB output carries
 //! `asset.version` 2.0, 4-byte-aligned views, POSITION min/max, unit NORMALs and COLOR_0 as
 //! linear f32 RGB (converted from symcorr's sRGB bytes and back on reading, so the round trip
-//! is exact; see the `gltf` submodule's source docs).
+//! is exact; see the `gltf` submodule's source docs). An animated GLB — a mesh moving through
+//! frames as morph targets — is streamed by [`gltf::MorphAnimationWriter`].
 
 use std::path::{Path, PathBuf};
 
 use crate::{MeshError, TriMesh};
 
-mod gltf;
+pub mod gltf;
 mod obj;
 mod off;
 mod output;

@@ -9,6 +9,7 @@
 //! written in place, never replaced by a regular file; a directory is refused.
 
 use crate::MeshError;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Where an output path leads once symlinks are followed.
@@ -176,7 +177,34 @@ impl OutputBatch {
     /// [`MeshError::OutputIsDirectory`], [`MeshError::DuplicateOutput`] when the batch already
     /// writes that file.
     pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
-        use std::io::Write;
+        self.add_streamed(path, |w| w.write_all(bytes))
+    }
+
+    /// Stages what `write` writes for `path`, as [`OutputBatch::add`] but without the bytes in
+    /// memory: a large output (an animated GLB of hundreds of MB) is streamed into its
+    /// temporary file. Only a device or FIFO destination is collected in memory first (it is
+    /// written in place on commit).
+    ///
+    /// Errors: as [`OutputBatch::add`]; an error `write` returns is [`MeshError::Io`] naming
+    /// `path`, and nothing is staged.
+    ///
+    /// ```
+    /// use symcorr_mesh::io::OutputBatch;
+    /// use std::io::Write as _;
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("n.txt");
+    /// let mut batch = OutputBatch::new();
+    /// batch
+    ///     .add_streamed(&path, |w| (0..3).try_for_each(|i| write!(w, "{i}")))
+    ///     .unwrap();
+    /// batch.commit().unwrap();
+    /// assert_eq!(std::fs::read_to_string(&path).unwrap(), "012");
+    /// ```
+    pub fn add_streamed(
+        &mut self,
+        path: &Path,
+        write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    ) -> Result<(), MeshError> {
         let dest = resolve_output(path)?;
         if self.staged.iter().any(|(_, s)| match s {
             Staged::Temp(_, d) | Staged::InPlace(_, d) => d == dest.path(),
@@ -185,8 +213,13 @@ impl OutputBatch {
                 file: path.display().to_string(),
             });
         }
+        let err = |e| io_err(path, e);
         let staged = match dest {
-            Destination::Special(d) => Staged::InPlace(bytes.to_vec(), d),
+            Destination::Special(d) => {
+                let mut bytes = Vec::new();
+                write(&mut bytes).map_err(err)?;
+                Staged::InPlace(bytes, d)
+            }
             Destination::File(d) => {
                 let dir = match d.parent() {
                     Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -202,9 +235,12 @@ impl OutputBatch {
                     use std::os::unix::fs::PermissionsExt;
                     builder.permissions(std::fs::Permissions::from_mode(0o666));
                 }
-                let err = |e| io_err(path, e);
                 let mut tmp = builder.tempfile_in(&dir).map_err(err)?;
-                tmp.write_all(bytes).map_err(err)?;
+                {
+                    let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+                    write(&mut w).map_err(err)?;
+                    w.flush().map_err(err)?;
+                }
                 tmp.as_file().sync_all().map_err(err)?;
                 Staged::Temp(tmp, d)
             }
@@ -238,7 +274,6 @@ impl OutputBatch {
     /// Errors: [`MeshError::Io`] naming the file whose rename or write failed (the files
     /// before it are in place; the temporaries of those after it are removed).
     pub fn commit(self) -> Result<Vec<PathBuf>, MeshError> {
-        use std::io::Write;
         let (files, special): (Vec<_>, Vec<_>) = self
             .staged
             .into_iter()

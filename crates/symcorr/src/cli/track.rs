@@ -7,10 +7,15 @@
 //!   appended and synced after the frame's rows: the record `--resume` continues from;
 //! * `correspondence.npy` (int32, frames × template vertices: the scan vertex each template
 //!   vertex matches, −1 where the frame does not show it) and `confidence.npy` (float32);
+//! * `posed.npy` (float32, frames × template vertices × 3: the template posed onto the frame,
+//!   camera space in metres; NaN rows for frames without a pose);
 //! * with `--scans`, `scans/NNNNNN.ply` (the frame's scan in camera space, its vertex ids those
 //!   of `correspondence.npy`, segment colours);
 //! * `track.json` (`symcorr.track/1`) and `track.svg` (coverage, confidence and time per frame),
-//!   written when the run ends: every frame and a summary.
+//!   written when the run ends: every frame and a summary; with them `template_track.glb`,
+//!   the template following the recording (morph targets and their animation, `posed`).
+
+mod posed;
 
 use super::progress::Bar;
 use super::CliError;
@@ -229,7 +234,8 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         args.out.join("confidence.npy"),
     );
     let npy = |e: symcorr::npy::NpyError| CliError(e.to_string());
-    let (mut done, mut corr_npy, mut conf_npy) = if args.resume && journal_path.exists() {
+    let resuming = args.resume && journal_path.exists();
+    let (mut done, mut corr_npy, mut conf_npy) = if resuming {
         let done = read_journal(&journal_path, &header)?;
         let k = done.len();
         (
@@ -247,6 +253,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             NpyWriter::create(&conf_path, NpyType::F32, frames.len(), n).map_err(npy)?,
         )
     };
+    let mut posed_npy = posed::open(&args.out, frames.len(), n, resuming.then_some(done.len()))?;
     let mut journal = std::fs::OpenOptions::new()
         .append(true)
         .open(&journal_path)
@@ -299,6 +306,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             FrameOutcome::Matched(m) => {
                 corr_npy.push_i32(&m.target_of).map_err(npy)?;
                 conf_npy.push_f32(&m.confidence).map_err(npy)?;
+                posed::push(&mut posed_npy, m.posed.as_deref(), n)?;
                 if args.scans {
                     let colours: Vec<[u8; 3]> = m
                         .scan_labels
@@ -325,6 +333,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
                     "coverage": m.coverage,
                     "mean_confidence": m.mean_confidence,
                     "fit_score": m.fit_score,
+                    "posed": m.posed.is_some(),
                     "scan_vertices": m.scan.mesh.num_vertices(),
                     "timings_s": m.timings.iter().map(|(s, t)| (s.to_string(), json!(t))).collect::<serde_json::Map<_, _>>(),
                     "seconds": t0.elapsed().as_secs_f64(),
@@ -333,6 +342,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             FrameOutcome::Skipped(reason) => {
                 corr_npy.push_i32(&skipped_rows.0).map_err(npy)?;
                 conf_npy.push_f32(&skipped_rows.1).map_err(npy)?;
+                posed::push(&mut posed_npy, None, n)?;
                 json!({
                     "frame": i,
                     "time_s": time,
@@ -344,6 +354,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         // Rows first, then the journal line: a frame is done once its line is on disk.
         corr_npy.sync().map_err(npy)?;
         conf_npy.sync().map_err(npy)?;
+        posed_npy.sync().map_err(npy)?;
         writeln!(journal, "{entry}").map_err(|e| CliError::with(journal_path.display(), e))?;
         journal
             .sync_data()
@@ -374,7 +385,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             })
             .count()
     };
-    let summary = json!({
+    let mut summary = json!({
         "frames": done.len(),
         "frames_in_run": total,
         "ok": ok.len(),
@@ -386,6 +397,13 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         "mean_confidence": mean("mean_confidence"),
         "frames_per_second_this_run": if seconds > 0.0 { json!(((done.len() - done_before) as f64) / seconds) } else { Value::Null },
     });
+    // The animated template is committed with track.json; if it fails, track.json says why.
+    let mut batch = symcorr_mesh::io::OutputBatch::new();
+    let glb = posed::stage_glb(&mut batch, &args.out, template.input_mesh(), &done, total);
+    summary["template_track"] = match &glb {
+        Ok(v) => v.clone(),
+        Err(e) => json!({ "error": e.0 }),
+    };
     let doc = json!({
         "format": "symcorr.track/1",
         "run": header,
@@ -393,7 +411,6 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         "summary": summary,
     });
     let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    let mut batch = symcorr_mesh::io::OutputBatch::new();
     batch
         .add(&args.out.join("track.json"), text.as_bytes())
         .map_err(|e| CliError(e.to_string()))?;
@@ -411,6 +428,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         summary["skipped"],
         args.out.display()
     );
+    glb?;
     if done.len() < total {
         return Err(CliError(format!(
             "interrupted after {} of {total} frames; {} holds them, --resume continues",
