@@ -93,11 +93,11 @@ pub enum ComponentFilter {
 }
 
 impl Default for ComponentFilter {
-    /// [`ComponentFilter::NearBones`] within 0.2 m (a torso's surface lies about 0.15 m from
-    /// its spine) and at least 0.5 % of the largest component.
+    /// [`ComponentFilter::NearBones`] within 0.35 m (a slim torso's surface lies about 0.15 m
+    /// from its spine, a heavy one's belly 0.3 m) and at least 0.5 % of the largest component.
     fn default() -> Self {
         ComponentFilter::NearBones {
-            max_median_m: 0.2,
+            max_median_m: 0.35,
             min_share: 0.005,
         }
     }

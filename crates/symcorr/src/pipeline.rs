@@ -171,8 +171,9 @@ pub enum MethodReport {
         /// template vertex of its prepared mesh, in the target's frame and unit.
         posed: Vec<[f64; 3]>,
         /// The final bone transforms (template frame → target frame); a next frame of a
-        /// recording starts from them ([`Pipeline::run_from`]).
-        transforms: BoneTransforms,
+        /// recording starts from them ([`Pipeline::run_from`]). Boxed: one transform per bone
+        /// is large next to the other variants.
+        transforms: Box<BoneTransforms>,
     },
 }
 
@@ -441,7 +442,7 @@ fn run_articulated(
         coverage: coverage(&shown, target.num_vertices()),
         has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
         posed: out.posed.iter().map(|p| p.coords.into()).collect(),
-        transforms: out.transforms,
+        transforms: Box::new(out.transforms),
     };
     Ok((
         pick(mode, points, out.pairs),

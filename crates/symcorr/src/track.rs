@@ -260,7 +260,7 @@ impl<'a> Tracker<'a> {
             MethodReport::Articulated {
                 posed, transforms, ..
             } => {
-                self.previous_fit = Some((*transforms, target.attachment.joints.clone()));
+                self.previous_fit = Some((**transforms, target.attachment.joints.clone()));
                 let rest = &self.template.input_mesh().positions;
                 let mut out: Vec<[f32; 3]> = rest.iter().map(|p| p.map(|x| x as f32)).collect();
                 for (v, p) in posed.iter().enumerate() {

@@ -12,7 +12,10 @@
 //! vertex ids are the template's), a flip is `b` nearer `v`'s mirror twin (symcorr-eval's
 //! `evaluate`). One line per frame (status, corrections, coverage, mean error, flips, matches on
 //! pixels with no body vertex, seconds, and the share of scan vertices whose segment label is
-//! the template's label of the body vertex they show), then the totals.
+//! the template's label of the body vertex they show, and the matches that jumped: template
+//! vertices matched in this frame and the previous one whose matched body vertex moved more
+//! than 5 cm on the body at rest — the same material point stays the same body vertex however
+//! the body moves, so any such move is beyond the true motion), then the totals.
 
 use clap::Parser;
 use std::path::PathBuf;
@@ -52,6 +55,10 @@ struct Args {
     #[arg(long, value_name = "FRAME")]
     detail: Option<usize>,
 }
+
+/// A match that moves farther than this on the body between consecutive frames jumped (metres,
+/// on the body at rest).
+const JUMP_M: f64 = 0.05;
 
 fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let rec = Recording::open(&args.recording)?;
@@ -93,8 +100,15 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let (mut all_errors, mut flips, mut counted, mut off_body, mut matched_frames) =
         (Vec::new(), 0usize, 0usize, 0usize, 0usize);
     let mut seconds = 0.0;
+    // Temporal stability: per template vertex, the body vertex its match showed in the previous
+    // frame; a match that moves more than JUMP_M on the body between consecutive frames jumped
+    // (the same material point stays the same body vertex however the body moves).
+    let rest = template.input_mesh().positions.clone();
+    let mut previous: Option<Vec<Option<u32>>> = None;
+    let (mut jumps, mut followed) = (0usize, 0usize);
+    let mut jumps_per_segment = vec![0usize; symcorr_attach::Segment::ALL.len()];
     println!(
-        "frame status corrections coverage mean_error flips off_body seconds labels_agreement"
+        "frame status corrections coverage mean_error flips off_body seconds labels_agreement jumps"
     );
     for i in 0..rec.len() {
         let time = rec.time(i).unwrap_or(f64::NAN);
@@ -105,7 +119,10 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         let dt = t.elapsed().as_secs_f64();
         seconds += dt;
         match outcome {
-            FrameOutcome::Skipped(reason) => println!("{i} skipped: {reason}"),
+            FrameOutcome::Skipped(reason) => {
+                previous = None;
+                println!("{i} skipped: {reason}")
+            }
             FrameOutcome::Matched(m) => {
                 matched_frames += 1;
                 let mut pairs = Vec::new();
@@ -131,6 +148,30 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                         agree += usize::from(*l == template_labels[usize::from(b) - 1]);
                     }
                 }
+                let mut shows = vec![None; m.target_of.len()];
+                for &(v, b) in &pairs {
+                    shows[v as usize] = Some(b);
+                }
+                let (mut frame_jumps, mut frame_followed) = (0usize, 0usize);
+                if let Some(prev) = &previous {
+                    for (v, (a, b)) in prev.iter().zip(&shows).enumerate() {
+                        if let (Some(a), Some(b)) = (a, b) {
+                            frame_followed += 1;
+                            let (p, q) = (rest[*a as usize], rest[*b as usize]);
+                            let d = ((p[0] - q[0]).powi(2)
+                                + (p[1] - q[1]).powi(2)
+                                + (p[2] - q[2]).powi(2))
+                            .sqrt();
+                            if d > JUMP_M {
+                                frame_jumps += 1;
+                                jumps_per_segment[template_labels[v]] += 1;
+                            }
+                        }
+                    }
+                }
+                jumps += frame_jumps;
+                followed += frame_followed;
+                previous = Some(shows);
                 let e = evaluate(&graph, area, &pairs, |p| p, Some(&mirror));
                 if args.detail == Some(i) {
                     let segs = symcorr_attach::Segment::ALL;
@@ -163,6 +204,16 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                         s.2[template_labels[b as usize]] += 1;
                         s.3 += usize::from(*flip == Some(true));
                     }
+                    let rest = &template.input_mesh().positions;
+                    for ((&(v, b), flip), err) in pairs.iter().zip(&e.flips).zip(&e.errors) {
+                        if *flip == Some(true) {
+                            let (pv, pb) = (rest[v as usize], rest[b as usize]);
+                            println!(
+                                "  flip {v} ({:.3} {:.3} {:.3}) on {b} ({:.3} {:.3} {:.3}) error {err:.3} confidence {:.2}",
+                                pv[0], pv[1], pv[2], pb[0], pb[1], pb[2], m.confidence[v as usize]
+                            );
+                        }
+                    }
                     for (seg, (sum, n, on, flips)) in segs.iter().zip(per) {
                         if n > 0 {
                             let on: Vec<String> = segs
@@ -182,7 +233,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                 let (c, f) = e.flip_counts();
                 let names: Vec<&str> = m.corrections.iter().map(|c| c.name()).collect();
                 println!(
-                    "{i} ok {} {:.3} {:.4} {f}/{c} {off} {dt:.2} {:.3}",
+                    "{i} ok {} {:.3} {:.4} {f}/{c} {off} {dt:.2} {:.3} {frame_jumps}/{frame_followed}",
                     if names.is_empty() {
                         "-".to_string()
                     } else {
@@ -201,10 +252,18 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     }
     let mean = all_errors.iter().sum::<f64>() / all_errors.len().max(1) as f64;
     println!(
-        "ALL frames {} matched {matched_frames} mean_error {mean:.4} flips {flips}/{counted} off_body {off_body} frames/s {:.2}",
+        "ALL frames {} matched {matched_frames} mean_error {mean:.4} flips {flips}/{counted} off_body {off_body} jumps {jumps}/{followed} ({:.3} %) frames/s {:.2}",
         rec.len(),
+        100.0 * jumps as f64 / followed.max(1) as f64,
         rec.len() as f64 / seconds.max(f64::MIN_POSITIVE)
     );
+    let per: Vec<String> = symcorr_attach::Segment::ALL
+        .iter()
+        .zip(&jumps_per_segment)
+        .filter(|(_, &k)| k > 0)
+        .map(|(s, k)| format!("{s:?} {k}"))
+        .collect();
+    println!("jumps per template segment: {}", per.join(", "));
     Ok(())
 }
 

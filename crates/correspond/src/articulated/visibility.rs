@@ -8,20 +8,23 @@
 //! of a symmetric part. Self-occlusion is what the normal test cannot see; the z-buffer does.
 
 use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
 
-/// Cells of the z-buffer per median template edge (seen from the viewpoint): fine enough that
-/// every triangle covers cell centres, coarse enough to stay small.
-const CELLS_PER_EDGE: f64 = 1.5;
-/// The z-buffer has at most this many cells per side (a template far from the camera or with
-/// a few huge triangles would otherwise ask for an enormous one).
+/// Grid cells per median template edge (seen from the viewpoint): a triangle overlaps a few
+/// cells, a cell holds a few triangles.
+const CELLS_PER_EDGE: f64 = 1.0;
+/// The grid has at most this many cells per side (a template far from the camera or with a
+/// few huge triangles would otherwise ask for an enormous one).
 const MAX_CELLS_PER_SIDE: usize = 1024;
 
 /// Per posed template vertex: is it (within `tolerance`) the surface nearest the viewpoint
 /// `eye` along its line of sight? `positions` are the posed template's, `triangles` its faces.
-/// The template is projected through a pinhole at `eye` looking at the template's centroid,
-/// its triangles rasterised into a depth buffer (nearest depth per cell); a vertex is visible
-/// when its own depth is at most the buffer's depth at its cell plus `tolerance`. Vertices
-/// behind the eye are not visible; a degenerate view (every vertex at the eye) sees all.
+///
+/// Ray casting through a grid: the template is projected through a pinhole at `eye` looking
+/// at the template's centroid, each triangle listed in the grid cells its image overlaps; a
+/// vertex is hidden when a triangle not incident to it covers its image point at a depth
+/// (perspective-correct) more than `tolerance` nearer. Vertices behind the eye are not
+/// visible; a degenerate view (the eye at the centroid) sees all.
 pub(super) fn visible_from(
     eye: &Point3<f64>,
     positions: &[Point3<f64>],
@@ -52,11 +55,17 @@ pub(super) fn visible_from(
             (z > 1e-9).then(|| (d.dot(&right) / z, d.dot(&up) / z, z))
         })
         .collect();
-    // Cell size from the median projected edge length.
+    let corners = |t: &[u32; 3]| -> Option<[(f64, f64, f64); 3]> {
+        Some([
+            projected[t[0] as usize]?,
+            projected[t[1] as usize]?,
+            projected[t[2] as usize]?,
+        ])
+    };
     let mut edges: Vec<f64> = triangles
         .iter()
         .filter_map(|t| {
-            let (a, b) = (projected[t[0] as usize]?, projected[t[1] as usize]?);
+            let [a, b, _] = corners(t)?;
             Some(((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt())
         })
         .filter(|l| *l > 0.0 && l.is_finite())
@@ -84,52 +93,68 @@ pub(super) fn visible_from(
             (((v - v0) / cell) as usize).min(height - 1),
         )
     };
-    let mut depth = vec![f64::INFINITY; width * height];
-    // Each vertex marks its own cell (a triangle smaller than a cell covers no cell centre).
-    for &(u, v, z) in projected.iter().flatten() {
-        let (i, j) = to_cell(u, v);
-        let c = &mut depth[j * width + i];
-        *c = c.min(z);
-    }
-    for t in triangles {
-        let (Some(a), Some(b), Some(c)) = (
-            projected[t[0] as usize],
-            projected[t[1] as usize],
-            projected[t[2] as usize],
-        ) else {
-            continue;
-        };
-        let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
-        if area.abs() < 1e-18 {
-            continue;
+    // Triangles per cell (compressed rows: counts, offsets, then ids).
+    let cells_of = |c: &[(f64, f64, f64); 3]| {
+        let (i0, j0) = to_cell(
+            c[0].0.min(c[1].0).min(c[2].0),
+            c[0].1.min(c[1].1).min(c[2].1),
+        );
+        let (i1, j1) = to_cell(
+            c[0].0.max(c[1].0).max(c[2].0),
+            c[0].1.max(c[1].1).max(c[2].1),
+        );
+        (j0..=j1).flat_map(move |j| (i0..=i1).map(move |i| j * width + i))
+    };
+    let mut start = vec![0usize; width * height + 1];
+    for c in triangles.iter().filter_map(corners) {
+        for k in cells_of(&c) {
+            start[k + 1] += 1;
         }
-        let (i0, j0) = to_cell(a.0.min(b.0).min(c.0), a.1.min(b.1).min(c.1));
-        let (i1, j1) = to_cell(a.0.max(b.0).max(c.0), a.1.max(b.1).max(c.1));
-        for j in j0..=j1 {
-            let y = v0 + (j as f64 + 0.5) * cell;
-            for i in i0..=i1 {
-                let x = u0 + (i as f64 + 0.5) * cell;
-                // Barycentric coordinates of the cell centre.
+    }
+    for k in 0..width * height {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut members = vec![0u32; start[width * height]];
+    for (t, tri) in triangles.iter().enumerate() {
+        if let Some(c) = corners(tri) {
+            for k in cells_of(&c) {
+                members[fill[k]] = t as u32;
+                fill[k] += 1;
+            }
+        }
+    }
+    (0..n)
+        .into_par_iter()
+        .map(|v| {
+            let Some((x, y, z)) = projected[v] else {
+                return false;
+            };
+            let (i, j) = to_cell(x, y);
+            let k = j * width + i;
+            !members[start[k]..start[k + 1]].iter().any(|&t| {
+                let tri = &triangles[t as usize];
+                if tri.contains(&(v as u32)) {
+                    return false;
+                }
+                let Some([a, b, c]) = corners(tri) else {
+                    return false;
+                };
+                let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
+                if area.abs() < 1e-18 {
+                    return false;
+                }
+                // Barycentric coordinates of the vertex's image point.
                 let wa = ((b.0 - x) * (c.1 - y) - (c.0 - x) * (b.1 - y)) / area;
                 let wb = ((c.0 - x) * (a.1 - y) - (a.0 - x) * (c.1 - y)) / area;
                 let wc = 1.0 - wa - wb;
                 if wa < 0.0 || wb < 0.0 || wc < 0.0 {
-                    continue;
+                    return false;
                 }
-                let z = wa * a.2 + wb * b.2 + wc * c.2;
-                let d = &mut depth[j * width + i];
-                *d = d.min(z);
-            }
-        }
-    }
-    projected
-        .iter()
-        .map(|p| match p {
-            Some((u, v, z)) => {
-                let (i, j) = to_cell(*u, *v);
-                *z <= depth[j * width + i] + tolerance
-            }
-            None => false,
+                // Perspective-correct: 1/depth, not depth, is affine in image coordinates.
+                let depth = 1.0 / (wa / a.2 + wb / b.2 + wc / c.2);
+                depth < z - tolerance
+            })
         })
         .collect()
 }
@@ -176,7 +201,7 @@ mod tests {
         // Moved 2 m to the side, the back square is beside the front one: all seen.
         let (p, t) = two_squares(2.0);
         let vis = visible_from(&eye, &p, &t, 0.01);
-        assert!(vis.iter().all(|&v| v));
+        assert!(vis.iter().all(|&v| v), "{vis:?}");
     }
 
     #[test]
