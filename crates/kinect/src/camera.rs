@@ -118,6 +118,43 @@ impl From<Intrinsics> for IntrinsicsJson {
 }
 
 impl Intrinsics {
+    /// The intrinsics of a `width`×`height` depth camera with horizontal and vertical fields of
+    /// view `fov_rad` (radians, as OpenNI2 reports them): `fx = width / (2·tan(hfov/2))`,
+    /// `fy = height / (2·tan(vfov/2))`, principal point at the image centre. Without a usable
+    /// field of view (`None`, or an angle not in (0, π)), the nominal Kinect v1 focal length
+    /// scaled to the width ([`Intrinsics::kinect_v1`]: 571.26 px at 640 px), for both axes.
+    ///
+    /// ```
+    /// use symcorr_kinect::Intrinsics;
+    /// let k = Intrinsics::from_field_of_view(640, 480, Some((1.0, 0.8)));
+    /// assert!((k.fx - 320.0 / 0.5f64.tan()).abs() < 1e-9);
+    /// assert_eq!((k.cx, k.cy), (320.0, 240.0));
+    /// let dummy = Intrinsics::from_field_of_view(320, 240, None);
+    /// assert!((dummy.fx - 285.63).abs() < 1e-9 && dummy.fy == dummy.fx);
+    /// ```
+    pub fn from_field_of_view(width: u32, height: u32, fov_rad: Option<(f64, f64)>) -> Intrinsics {
+        let (w, h) = (f64::from(width), f64::from(height));
+        let usable = |a: f64| a > 0.0 && a < std::f64::consts::PI;
+        let (fx, fy) = match fov_rad {
+            Some((hf, vf)) if usable(hf) && usable(vf) => {
+                (0.5 * w / (hf / 2.0).tan(), 0.5 * h / (vf / 2.0).tan())
+            }
+            _ => {
+                let k = Intrinsics::kinect_v1();
+                let f = k.fx * w / f64::from(k.width);
+                (f, f)
+            }
+        };
+        Intrinsics {
+            width,
+            height,
+            fx,
+            fy,
+            cx: w / 2.0,
+            cy: h / 2.0,
+        }
+    }
+
     /// Nominal Kinect v1 (Xbox 360 / Kinect for Windows) depth camera at 640×480:
     /// fx = fy = 571.26 px, cx = 320, cy = 240.
     ///

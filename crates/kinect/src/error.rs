@@ -106,6 +106,16 @@ pub enum KinectError {
         /// What is wrong.
         message: String,
     },
+    /// The file is an OpenNI2 recording (`.oni`), but this build reads none: symcorr-kinect was
+    /// built without its `openni2` feature.
+    #[error(
+        "{file}: an OpenNI2 recording (.oni), but this build cannot read one: \
+         rebuild with `--features openni2` (needs libopenni2-dev)"
+    )]
+    OniNotBuilt {
+        /// The `.oni` file.
+        file: String,
+    },
     /// A joint log cannot be used as a track (empty, times not increasing, bad offset).
     #[error("joint track: {0}")]
     Track(String),

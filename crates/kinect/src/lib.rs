@@ -15,7 +15,10 @@
 //! * Recordings: a recording folder ([`Recording`]: intrinsics, numbered PNG-16 depth frames, their
 //!   times) → per depth frame, the joint log's skeleton at its time ([`JointTrack`], interpolated
 //!   or skipped), smoothed over time ([`SkeletonFilter`], one-euro) and checked for left/right
-//!   swaps between frames ([`swap_evidence`]; [`recording`]).
+//!   swaps between frames ([`swap_evidence`]; [`recording`]). A tracker reads either a folder
+//!   or (feature `openni2`) an OpenNI2 `.oni` file through one type, [`DepthSource`]
+//!   ([`source`]; the `.oni` side: `oni::OniRecording`, times from the file's frame timestamps,
+//!   intrinsics from the stream's field of view).
 //!
 //! ```
 //! use symcorr_skeleton::Joint;
@@ -58,12 +61,15 @@ pub mod joints;
 pub mod mapping;
 pub mod ntu;
 #[cfg(feature = "openni2")]
+pub mod oni;
+#[cfg(feature = "openni2")]
 #[allow(unsafe_code)] // the OpenNI2 C API: every call is wrapped and checked in this module
 pub mod openni2;
 pub mod recording;
 pub mod replay;
 pub mod scan;
 pub mod sdk_text;
+pub mod source;
 
 pub use camera::Intrinsics;
 pub use depth::{read_depth_png16, write_depth_png16, DepthFrame};
@@ -78,6 +84,7 @@ pub use recording::{
 };
 pub use replay::{BoneLengthReport, FrameSelect};
 pub use scan::{fuse_depth_frames, scan_mesh, ComponentFilter, ScanMesh, ScanOptions};
+pub use source::DepthSource;
 
 use std::path::Path;
 

@@ -253,6 +253,12 @@ impl Device<'_> {
 
     /// Creates the depth stream (not started).
     pub fn depth_stream(&self) -> Result<DepthStream<'_>, KinectError> {
+        self.depth_stream_unbound()
+    }
+
+    /// The depth stream with a lifetime of the caller's choosing: only for owners that keep the
+    /// stream and the device together and destroy the stream first ([`FilePlayback`]).
+    fn depth_stream_unbound<'dev>(&self) -> Result<DepthStream<'dev>, KinectError> {
         let mut h: sys::OniStreamHandle = std::ptr::null_mut();
         // SAFETY: valid device handle and out-pointer.
         check("oniDeviceCreateStream(DEPTH)", unsafe {
@@ -569,5 +575,48 @@ impl Drop for Recorder<'_> {
         self.stop();
         // SAFETY: valid handle; oniRecorderDestroy flushes the file and frees the recorder.
         unsafe { sys::oniRecorderDestroy(&mut self.handle) };
+    }
+}
+
+/// An `.oni` recording opened for reading its depth frames one after another: the device and its
+/// started depth stream in one owner, so that a reader can keep them in a struct (a
+/// [`DepthStream`] otherwise borrows its [`Device`]). Playback is manual (speed −1): OpenNI2's
+/// file player hands over the next frame only when [`FilePlayback::read_frame`] waits for one,
+/// so a slow reader loses no frame (at speed 0 or 1 the player overwrites unread frames). No
+/// repeat: the end of the file is a timeout, not frame 1 again.
+#[derive(Debug)]
+pub struct FilePlayback {
+    // Declared before `device`: dropped (stopped, destroyed) before the device is closed.
+    stream: DepthStream<'static>,
+    device: Device<'static>,
+}
+
+impl FilePlayback {
+    /// Opens `path` ([`OpenNi::open_file`]) and starts its depth stream in manual playback.
+    pub fn open(path: impl AsRef<Path>) -> Result<FilePlayback, KinectError> {
+        // The context is process-wide and never shut down (module docs), so a 'static handle
+        // on it is the truth; `OpenNi` has no data, so leaking it allocates nothing.
+        let ni: &'static OpenNi = Box::leak(Box::new(OpenNi::init()?));
+        let device = ni.open_file(path)?;
+        device.set_playback_speed(-1.0)?;
+        device.set_repeat(false)?;
+        let mut stream = device.depth_stream_unbound()?;
+        stream.start()?;
+        Ok(FilePlayback { stream, device })
+    }
+
+    /// The recording's device (for [`Device::uri`] and the playback properties).
+    pub fn device(&self) -> &Device<'static> {
+        &self.device
+    }
+
+    /// The depth stream (video mode, field of view, number of frames).
+    pub fn stream(&self) -> &DepthStream<'static> {
+        &self.stream
+    }
+
+    /// The next frame of the recording ([`DepthStream::read_frame`]).
+    pub fn read_frame(&mut self, timeout_ms: i32) -> Result<StampedDepth, KinectError> {
+        self.stream.read_frame(timeout_ms)
     }
 }

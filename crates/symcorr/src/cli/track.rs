@@ -27,7 +27,7 @@ use std::time::Instant;
 use symcorr::npy::{NpyType, NpyWriter};
 use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
 use symcorr::{Pipeline, PipelineOptions};
-use symcorr_kinect::{JointTrack, Recording};
+use symcorr_kinect::{DepthSource, JointTrack};
 
 const EXAMPLES: &str = "Examples:
   symcorr track fixtures/synth/recording --joints fixtures/synth/recording/joints.json --out track/
@@ -38,7 +38,8 @@ const EXAMPLES: &str = "Examples:
 #[derive(Args, Debug)]
 #[command(after_help = EXAMPLES)]
 pub struct TrackArgs {
-    /// The recording: a folder with intrinsics.json, depth/000000.png, … and depth_times.txt.
+    /// The recording: a folder with intrinsics.json, depth/000000.png, … and depth_times.txt,
+    /// or an OpenNI2 .oni file (needs the `openni2` feature).
     pub recording: PathBuf,
     /// The skeleton tracker's joint log (any joint format symcorr reads).
     #[arg(long)]
@@ -213,7 +214,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             args.out.display()
         )));
     }
-    let recording = Recording::open(&args.recording).map_err(|e| CliError(e.to_string()))?;
+    let mut recording = DepthSource::open(&args.recording).map_err(|e| CliError(e.to_string()))?;
     let frames = frame_list(args.frames.as_deref(), args.every, recording.len())?;
     let log = symcorr_kinect::read_joints(&args.joints).map_err(|e| CliError(e.to_string()))?;
     let joints = JointTrack::new(log, 0.0).map_err(|e| CliError::with(args.joints.display(), e))?;
