@@ -129,8 +129,9 @@ pub struct MatchedFrame {
     pub warm: bool,
     /// Per scan vertex, its segment label index (`None` where the attachment left it out).
     pub scan_labels: Vec<Option<usize>>,
-    /// Seconds per stage: `scan`, `prepare`, `match`.
-    pub timings: Vec<(&'static str, f64)>,
+    /// Seconds per stage: `scan`, `prepare`, `match`, then the sub-stages of the attachment
+    /// (`prepare.attach.…`) and of the matching method (`match.…`).
+    pub timings: Vec<(String, f64)>,
 }
 
 /// What happened to one frame.
@@ -271,6 +272,21 @@ impl<'a> Tracker<'a> {
             _ => None,
         };
         let d = &target.attachment.diagnostics;
+        let mut timings = vec![
+            ("scan".to_string(), t_scan),
+            ("prepare".to_string(), t_prepare),
+            ("match".to_string(), t_match),
+        ];
+        timings.extend(
+            d.timings_s
+                .iter()
+                .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
+        );
+        timings.extend(
+            corr.timings
+                .iter()
+                .map(|(stage, t)| (format!("match.{stage}"), *t)),
+        );
         if d.mirror.swapped {
             corrections.push(Correction::SidesSwapped);
         }
@@ -310,7 +326,7 @@ impl<'a> Tracker<'a> {
             scan_labels,
             posed,
             warm: was_warm,
-            timings: vec![("scan", t_scan), ("prepare", t_prepare), ("match", t_match)],
+            timings,
         })
     }
 }
