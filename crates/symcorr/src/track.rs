@@ -80,6 +80,9 @@ impl Default for TrackOptions {
 pub enum Correction {
     /// The joints were interpolated between two log frames.
     JointsInterpolated,
+    /// Joints the tracker lost in this frame were borrowed from the previous frame, moved with
+    /// the joints it did track.
+    JointsBorrowed,
     /// The legs' left and right were swapped back (continuity with the previous frame).
     LegsSwapped,
     /// The arms' left and right were swapped back (continuity with the previous frame).
@@ -95,6 +98,7 @@ impl Correction {
     pub fn name(self) -> &'static str {
         match self {
             Correction::JointsInterpolated => "joints_interpolated",
+            Correction::JointsBorrowed => "joints_borrowed",
             Correction::LegsSwapped => "legs_swap_fixed",
             Correction::ArmsSwapped => "arms_swap_fixed",
             Correction::SidesSwapped => "sides_swap_fixed",
@@ -226,6 +230,11 @@ impl<'a> Tracker<'a> {
                 }
             }
         }
+        if let Some(prev) = &self.previous {
+            if borrow_lost_joints(prev, &mut skeleton) {
+                corrections.push(Correction::JointsBorrowed);
+            }
+        }
         if let Some(f) = &mut self.filter {
             skeleton = f.filter(time_s, &skeleton);
         }
@@ -331,6 +340,38 @@ impl<'a> Tracker<'a> {
     }
 }
 
+/// Confidence given to a joint borrowed from the previous frame: usable, below a tracked one.
+const BORROWED_CONFIDENCE: f64 = 0.5;
+
+/// Fills the joints `current` has lost (confidence 0) but `previous` tracked with `previous`'s
+/// positions moved by the mean motion of the joints tracked in both — a tracker that drops a
+/// torso joint for a frame does not make the frame unusable. Borrowed joints get confidence
+/// [`BORROWED_CONFIDENCE`] and the `interpolated` flag. Nothing is borrowed when no joint is
+/// tracked in both frames. Returns whether a joint was borrowed.
+fn borrow_lost_joints(previous: &Skeleton, current: &mut Skeleton) -> bool {
+    let both: Vec<usize> = (0..current.positions.len())
+        .filter(|&j| previous.confidence[j] > 0.0 && current.confidence[j] > 0.0)
+        .collect();
+    if both.is_empty() {
+        return false;
+    }
+    let motion = both
+        .iter()
+        .map(|&j| current.positions[j] - previous.positions[j])
+        .sum::<nalgebra::Vector3<f64>>()
+        / both.len() as f64;
+    let mut borrowed = false;
+    for j in 0..current.positions.len() {
+        if current.confidence[j] <= 0.0 && previous.confidence[j] > 0.0 {
+            current.positions[j] = previous.positions[j] + motion;
+            current.confidence[j] = BORROWED_CONFIDENCE;
+            current.interpolated[j] = true;
+            borrowed = true;
+        }
+    }
+    borrowed
+}
+
 /// The largest distance a joint moved from `a` to `b` (joints tracked in both).
 fn largest_joint_motion(a: &Skeleton, b: &Skeleton) -> f64 {
     (0..a.positions.len())
@@ -355,6 +396,35 @@ fn swap_limbs(skeleton: &Skeleton, pair: LimbPair) -> Skeleton {
 mod tests {
     use super::*;
     use symcorr_skeleton::Joint;
+
+    #[test]
+    fn a_lost_joint_is_borrowed_from_the_previous_frame_moved_with_the_body() {
+        let prev = symcorr_attach::testbody::t_pose(1.0);
+        let mut cur = prev.clone();
+        let step = nalgebra::Vector3::new(0.05, 0.0, -0.02);
+        for p in cur.positions.iter_mut() {
+            *p += step;
+        }
+        let spine = Joint::Spine.index();
+        cur.confidence[spine] = 0.0;
+        cur.positions[spine] = nalgebra::Point3::origin();
+        assert!(borrow_lost_joints(&prev, &mut cur));
+        approx::assert_relative_eq!(
+            cur.positions[spine],
+            prev.positions[spine] + step,
+            epsilon = 1e-12
+        );
+        assert_eq!(cur.confidence[spine], BORROWED_CONFIDENCE);
+        assert!(cur.interpolated[spine]);
+        // Nothing lost, nothing borrowed; a previous frame without the joint lends nothing.
+        let mut again = cur.clone();
+        assert!(!borrow_lost_joints(&prev, &mut again));
+        let mut lost_both = prev.clone();
+        lost_both.confidence[spine] = 0.0;
+        let mut cur2 = lost_both.clone();
+        assert!(!borrow_lost_joints(&lost_both, &mut cur2));
+        assert_eq!(cur2.confidence[spine], 0.0);
+    }
 
     #[test]
     fn swapping_a_limb_pair_exchanges_only_its_joints_and_twice_is_identity() {

@@ -36,7 +36,7 @@
 use std::path::Path;
 
 use symcorr_attach::{AttachOptions, BoundaryConvention, MirrorCheck, Segment, Skeleton};
-use symcorr_kinect::scan::{scan_mesh, ScanOptions};
+use symcorr_kinect::scan::scan_mesh;
 use symcorr_mesh::TriMesh;
 
 use crate::dataset::resolve_pose;
@@ -184,8 +184,8 @@ impl GroundTruth {
             .ok_or_else(|| ctx(&"joints.json has no frame"))?
             .skeleton
             .clone();
-        let scan =
-            scan_mesh(&depth, &k, Some(&joints), &ScanOptions::default()).map_err(|e| ctx(&e))?;
+        let scan = scan_mesh(&depth, &k, Some(&joints), &crate::kinect::scan_options())
+            .map_err(|e| ctx(&e))?;
         let truth = scan
             .pixel_ids
             .iter()
