@@ -951,6 +951,45 @@ fn track_skips_frames_the_joint_log_does_not_cover() {
     assert_eq!(doc["summary"]["template_track"]["targets"], 2);
 }
 
+/// A tracker that drops the torso for a few frames (confidence 0 on five joints: more than the
+/// attachment can repair from their neighbours, so such a frame alone is refused) loses no
+/// frame: the joints are borrowed from the previous frame, and the frame says so.
+#[test]
+fn track_borrows_torso_joints_the_tracker_lost() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sequence_recording(dir.path());
+    let mut log = read_json(&fixtures().join("../sequence/joints.json"));
+    for f in &mut log["frames"].as_array_mut().unwrap()[2..] {
+        for j in ["hip_center", "spine", "shoulder_center", "head", "hip_left"] {
+            f["confidence"][j] = serde_json::json!(0.0);
+        }
+    }
+    let log_path = dir.path().join("lost_torso.json");
+    std::fs::write(&log_path, log.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let o = run(bin()
+        .args(["track", rec.to_str().unwrap(), "--joints"])
+        .arg(&log_path)
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc = read_json(&out.join("track.json"));
+    let frames = doc["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 4);
+    for f in frames {
+        assert_eq!(f["status"], "ok", "{f}");
+    }
+    let borrowed = |f: &Value| {
+        f["corrections"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|c| c == "joints_borrowed")
+    };
+    assert!(!borrowed(&frames[0]) && !borrowed(&frames[1]));
+    assert!(borrowed(&frames[2]) && borrowed(&frames[3]), "{frames:?}");
+}
+
 /// Ctrl-C stops after the frame in progress: track.json and track.svg cover the frames done,
 /// the exit status is 1 with one line saying how to continue, and --resume finishes the run.
 #[cfg(unix)]

@@ -11,6 +11,9 @@
 //!    right exchanged ([`symcorr_kinect::limb_swap_evidence`] above
 //!    [`symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD`]) it is swapped back, and the frame says so. The
 //!    attachment's handedness check against the scan then fixes a whole-body swap.
+//!    Joints the tracker lost in this frame (confidence 0) but tracked in the previous one are
+//!    borrowed from it, moved with the joints it did track (a torso joint dropped for a frame
+//!    would otherwise leave a skeleton the attachment refuses).
 //! 3. **Smoothing**: a one-euro filter per joint coordinate ([`symcorr_kinect::SkeletonFilter`],
 //!    Casiez et al. 2012: little jitter at rest, little lag in fast motion), reset after a
 //!    skipped frame.
