@@ -36,6 +36,8 @@ enum Command {
     Label(cli::label::LabelArgs),
     /// A recorded session (depth frames + joint log) matched frame by frame (symcorr.track/1).
     Track(cli::track::TrackArgs),
+    /// Merge the output folders of slices of one track run (`track --frames A..B`) into one.
+    TrackMerge(cli::track::merge::TrackMergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Scan(a) => cli::scan::run(a),
         Command::Label(a) => cli::label::run(a, limit),
         Command::Track(a) => cli::track::run(a, limit),
+        Command::TrackMerge(a) => cli::track::merge::run(a, limit),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

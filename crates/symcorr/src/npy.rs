@@ -12,7 +12,7 @@
 //! the rows of such a file back one at a time.
 
 use std::fs::{File, OpenOptions};
-use std::io::{Seek, SeekFrom, Write};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// Element types written.
@@ -115,16 +115,29 @@ pub fn header_shaped(ty: NpyType, rows: usize, row_shape: &[usize]) -> Vec<u8> {
 }
 
 /// A `.npy` file of a fixed `(rows, cols)` shape (or `(rows, …row shape)`,
-/// [`NpyWriter::create_shaped`]) filled row by row.
-#[derive(Debug)]
-pub struct NpyWriter {
-    file: File,
+/// [`NpyWriter::create_shaped`]) filled row by row: a file of its own (`W = File`: created,
+/// resumed, synced) or any writer ([`NpyWriter::streaming`]).
+pub struct NpyWriter<W = File> {
+    file: W,
+    /// The file's name, for errors.
     path: PathBuf,
     ty: NpyType,
     rows: usize,
     /// Values per row (the product of the row's shape).
     cols: usize,
     written: usize,
+}
+
+impl<W> std::fmt::Debug for NpyWriter<W> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NpyWriter")
+            .field("path", &self.path)
+            .field("ty", &self.ty)
+            .field("rows", &self.rows)
+            .field("cols", &self.cols)
+            .field("written", &self.written)
+            .finish_non_exhaustive()
+    }
 }
 
 impl NpyWriter {
@@ -220,7 +233,6 @@ impl NpyWriter {
             .open(path)
             .map_err(io)?;
         let mut head = vec![0u8; want.len()];
-        use std::io::Read as _;
         let same = file.read_exact(&mut head).is_ok() && head == want;
         if !same {
             return Err(NpyError::Resume {
@@ -242,8 +254,69 @@ impl NpyWriter {
         Ok(NpyWriter::at(file, path, ty, [rows, cols], rows_done))
     }
 
+    /// Flushes the rows to the disk (`fsync`): after it they survive a crash.
+    pub fn sync(&mut self) -> Result<(), NpyError> {
+        self.file.sync_data().map_err(|source| NpyError::Io {
+            file: self.path.display().to_string(),
+            source,
+        })
+    }
+}
+
+impl<W: Write> NpyWriter<W> {
+    /// Writes the header of a `ty` array of `rows` rows of shape `row_shape` into `out`, then
+    /// takes its rows as [`NpyWriter::create_shaped`]'s file does; `name` is the file the bytes
+    /// are for, named in errors. [`NpyWriter::finish`] checks that every row came.
+    ///
+    /// ```
+    /// use symcorr::npy::{header, NpyType, NpyWriter};
+    /// let mut bytes = Vec::new();
+    /// let mut w = NpyWriter::streaming(&mut bytes, "c.npy".as_ref(), NpyType::I32, 1, &[2]).unwrap();
+    /// w.push_i32(&[7, -1]).unwrap();
+    /// w.finish().unwrap();
+    /// assert_eq!(bytes.len(), header(NpyType::I32, 1, 2).len() + 8);
+    /// ```
+    pub fn streaming(
+        mut out: W,
+        name: &Path,
+        ty: NpyType,
+        rows: usize,
+        row_shape: &[usize],
+    ) -> Result<NpyWriter<W>, NpyError> {
+        out.write_all(&header_shaped(ty, rows, row_shape))
+            .map_err(|source| NpyError::Io {
+                file: name.display().to_string(),
+                source,
+            })?;
+        Ok(NpyWriter::at(
+            out,
+            name,
+            ty,
+            [rows, row_shape.iter().product()],
+            0,
+        ))
+    }
+
+    /// Flushes the writer and gives it back, once every row of the shape was written.
+    ///
+    /// Errors: [`NpyError::Shape`] when rows are missing (the bytes are not a whole array);
+    /// [`NpyError::Io`].
+    pub fn finish(mut self) -> Result<W, NpyError> {
+        if self.written != self.rows {
+            return Err(NpyError::Shape {
+                file: self.path.display().to_string(),
+                message: format!("{} of its {} rows written", self.written, self.rows),
+            });
+        }
+        self.file.flush().map_err(|source| NpyError::Io {
+            file: self.path.display().to_string(),
+            source,
+        })?;
+        Ok(self.file)
+    }
+
     /// A writer on `file`, positioned after `written` rows of a `shape` array.
-    fn at(file: File, path: &Path, ty: NpyType, shape: [usize; 2], written: usize) -> NpyWriter {
+    fn at(file: W, path: &Path, ty: NpyType, shape: [usize; 2], written: usize) -> NpyWriter<W> {
         NpyWriter {
             file,
             path: path.to_path_buf(),
@@ -307,14 +380,6 @@ impl NpyWriter {
     pub fn rows_written(&self) -> usize {
         self.written
     }
-
-    /// Flushes the rows to the disk (`fsync`): after it they survive a crash.
-    pub fn sync(&mut self) -> Result<(), NpyError> {
-        self.file.sync_data().map_err(|source| NpyError::Io {
-            file: self.path.display().to_string(),
-            source,
-        })
-    }
 }
 
 /// Reads the rows of a `.npy` file written by [`NpyWriter`] one at a time (a long session's
@@ -354,7 +419,6 @@ impl NpyReader {
         rows: usize,
         row_shape: &[usize],
     ) -> Result<NpyReader, NpyError> {
-        use std::io::Read as _;
         let name = path.display().to_string();
         let mut file = File::open(path).map_err(|source| NpyError::Io {
             file: name.clone(),
@@ -386,12 +450,38 @@ impl NpyReader {
     /// Errors: [`NpyError::Shape`] for a row past the shape or another type, [`NpyError::Io`]
     /// when the file ends before the row (not written yet).
     pub fn read_f32(&mut self, row: usize, out: &mut Vec<f32>) -> Result<(), NpyError> {
-        use std::io::Read as _;
-        if self.ty != NpyType::F32 || row >= self.rows {
+        let bytes = self.read_row(NpyType::F32, row)?;
+        out.clear();
+        out.extend(
+            bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
+        Ok(())
+    }
+
+    /// Reads row `row` of an `I32` file into `out` (replacing its contents).
+    ///
+    /// Errors: as [`NpyReader::read_f32`].
+    pub fn read_i32(&mut self, row: usize, out: &mut Vec<i32>) -> Result<(), NpyError> {
+        let bytes = self.read_row(NpyType::I32, row)?;
+        out.clear();
+        out.extend(
+            bytes
+                .chunks_exact(4)
+                .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
+        Ok(())
+    }
+
+    /// The bytes of row `row`, checked to be a `ty` row of the shape.
+    fn read_row(&mut self, ty: NpyType, row: usize) -> Result<Vec<u8>, NpyError> {
+        if self.ty != ty || row >= self.rows {
             return Err(NpyError::Shape {
                 file: self.path.display().to_string(),
                 message: format!(
-                    "no f32 row {row} in a {} array of {} rows",
+                    "no {} row {row} in a {} array of {} rows",
+                    ty.descr(),
                     self.ty.descr(),
                     self.rows
                 ),
@@ -405,13 +495,7 @@ impl NpyReader {
         self.file.seek(SeekFrom::Start(at)).map_err(io)?;
         let mut bytes = vec![0u8; self.cols * 4];
         self.file.read_exact(&mut bytes).map_err(io)?;
-        out.clear();
-        out.extend(
-            bytes
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-        );
-        Ok(())
+        Ok(bytes)
     }
 }
 
@@ -490,5 +574,32 @@ mod tests {
         assert!(r.read_f32(2, &mut row).is_err(), "not written yet");
         assert!(NpyReader::open(&path, NpyType::F32, 3, &[6]).is_err());
         assert!(NpyReader::open(&path, NpyType::I32, 3, &[2, 3]).is_err());
+    }
+
+    /// A streamed array is byte for byte the file [`NpyWriter::create`] writes, its rows read
+    /// back by type; a stream missing rows is refused at the end.
+    #[test]
+    fn streamed_rows_are_the_files_and_missing_rows_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.npy");
+        let rows = [[1, -1, 7], [i32::MIN, 0, i32::MAX]];
+        let mut w = NpyWriter::create(&path, NpyType::I32, 2, 3).unwrap();
+        let mut bytes = Vec::new();
+        let mut s = NpyWriter::streaming(&mut bytes, &path, NpyType::I32, 2, &[3]).unwrap();
+        for r in &rows {
+            w.push_i32(r).unwrap();
+            s.push_i32(r).unwrap();
+        }
+        drop(w);
+        s.finish().unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), bytes);
+        let mut r = NpyReader::open(&path, NpyType::I32, 2, &[3]).unwrap();
+        let mut row = Vec::new();
+        r.read_i32(1, &mut row).unwrap();
+        assert_eq!(row, rows[1]);
+        assert!(r.read_f32(0, &mut Vec::new()).is_err(), "an i32 file");
+        let mut short = NpyWriter::streaming(Vec::new(), &path, NpyType::F32, 2, &[1]).unwrap();
+        short.push_f32(&[1.0]).unwrap();
+        assert!(matches!(short.finish(), Err(NpyError::Shape { .. })));
     }
 }

@@ -249,6 +249,28 @@ impl OutputBatch {
         Ok(())
     }
 
+    /// The temporary file holding what is staged for `path` (as given to
+    /// [`OutputBatch::add`]), readable until the commit: an output derived from another one of
+    /// the same batch is built from its staged bytes, not from an older file at `path`. `None`
+    /// when `path` is not staged, or is a device or FIFO (its bytes wait in memory).
+    ///
+    /// ```
+    /// use symcorr_mesh::io::OutputBatch;
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("a.txt");
+    /// let mut batch = OutputBatch::new();
+    /// batch.add(&path, b"staged").unwrap();
+    /// let tmp = batch.staged_file(&path).unwrap();
+    /// assert_eq!(std::fs::read(tmp).unwrap(), b"staged");
+    /// assert!(batch.staged_file(&dir.path().join("b.txt")).is_none());
+    /// ```
+    pub fn staged_file(&self, path: &Path) -> Option<&Path> {
+        self.staged.iter().find_map(|(given, s)| match s {
+            Staged::Temp(tmp, _) if given == path => Some(tmp.path()),
+            _ => None,
+        })
+    }
+
     /// Stages a mesh (and optional per-vertex colours) for `path`, in the format its extension
     /// names (PLY binary little-endian), like [`crate::io::write`].
     ///

@@ -14,8 +14,14 @@
 //! * `track.json` (`symcorr.track/1`) and `track.svg` (coverage, confidence and time per frame),
 //!   written when the run ends: every frame and a summary; with them `template_track.glb`,
 //!   the template following the recording (morph targets and their animation, `posed`).
+//!
+//! The folders of slices of one run (`--frames A..B`, one per job of an array) are joined into
+//! one by `symcorr track-merge` ([`merge`]); both write track.json and track.svg through
+//! `report`.
 
+pub mod merge;
 mod posed;
+mod report;
 
 use super::progress::Bar;
 use super::CliError;
@@ -114,6 +120,18 @@ fn frame_list(spec: Option<&str>, every: usize, len: usize) -> Result<Vec<usize>
     Ok((a..b).step_by(every).collect())
 }
 
+/// The journal's name of the bundled template.
+const BUNDLED_TEMPLATE: &str = "bundled:s0_rest";
+
+/// The bundled template's mesh as read (the vertices of the arrays' columns).
+fn bundled_template_mesh() -> Result<symcorr_mesh::TriMesh, CliError> {
+    Ok(
+        symcorr_mesh::io::read_from_bytes(TEMPLATE_MESH, symcorr_mesh::io::Format::Ply)
+            .map_err(|e| CliError::with("bundled template", e))?
+            .mesh,
+    )
+}
+
 fn load_template(
     args: &TrackArgs,
     pipeline: &Pipeline,
@@ -125,10 +143,7 @@ fn load_template(
             Ok((p, m.display().to_string()))
         }
         _ => {
-            let mesh =
-                symcorr_mesh::io::read_from_bytes(TEMPLATE_MESH, symcorr_mesh::io::Format::Ply)
-                    .map_err(|e| CliError::with("bundled template", e))?
-                    .mesh;
+            let mesh = bundled_template_mesh()?;
             let (log, _) =
                 symcorr_kinect::joints::parse_joints(TEMPLATE_JOINTS, "bundled template joints")
                     .map_err(|e| CliError(e.to_string()))?;
@@ -141,7 +156,7 @@ fn load_template(
             let p = pipeline
                 .prepare(mesh, &sk)
                 .map_err(|e| CliError::with("bundled template", e))?;
-            Ok((p, "bundled:s0_rest".to_string()))
+            Ok((p, BUNDLED_TEMPLATE.to_string()))
         }
     }
 }
@@ -160,11 +175,12 @@ fn journal_header(args: &TrackArgs, frames: &[usize], template: &str, vertices: 
     })
 }
 
-/// The complete frame lines of an existing journal whose header is `header`; a last line cut
-/// short by an interruption is dropped (and cut from the file).
-fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
-    let err = |m: String| CliError(format!("{}: cannot resume: {m}", path.display()));
-    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+/// The journal's name in a run folder.
+pub(super) const JOURNAL: &str = "journal.jsonl";
+
+/// A journal's text → its header, its complete frame lines and the length of the text they
+/// span: a last line cut short by an interruption is left out.
+fn parse_journal(text: &str) -> Result<(Value, Vec<Value>, usize), String> {
     let complete = match text.rfind('\n') {
         Some(i) => &text[..=i],
         None => "",
@@ -173,22 +189,30 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
     let first: Value = lines
         .next()
         .and_then(|l| serde_json::from_str(l).ok())
-        .ok_or_else(|| err("no header line".into()))?;
+        .ok_or("no header line")?;
+    let frames = lines
+        .map(|l| serde_json::from_str(l).map_err(|e| format!("bad line: {e}")))
+        .collect::<Result<Vec<Value>, _>>()?;
+    Ok((first, frames, complete.len()))
+}
+
+/// The complete frame lines of an existing journal whose header is `header`; a last line cut
+/// short by an interruption is dropped (and cut from the file).
+fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
+    let err = |m: String| CliError(format!("{}: cannot resume: {m}", path.display()));
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let (first, frames, complete) = parse_journal(&text).map_err(err)?;
     if &first != header {
         return Err(err(
             "it was written for another recording, template, joints or frame list".into(),
         ));
     }
-    let frames = lines
-        .map(|l| serde_json::from_str(l).map_err(|e| err(format!("bad line: {e}"))))
-        .collect::<Result<Vec<Value>, _>>()?;
-    if complete.len() < text.len() {
+    if complete < text.len() {
         let f = std::fs::OpenOptions::new()
             .write(true)
             .open(path)
             .map_err(|e| err(e.to_string()))?;
-        f.set_len(complete.len() as u64)
-            .map_err(|e| err(e.to_string()))?;
+        f.set_len(complete as u64).map_err(|e| err(e.to_string()))?;
     }
     Ok(frames)
 }
@@ -207,7 +231,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             args.out.display()
         )));
     }
-    let journal_path = args.out.join("journal.jsonl");
+    let journal_path = args.out.join(JOURNAL);
     if journal_path.exists() && !args.resume {
         return Err(CliError(format!(
             "{}: holds a previous run; pass --resume to continue it or choose another folder",
@@ -364,63 +388,27 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     }
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
-    let ok: Vec<&Value> = done.iter().filter(|e| e["status"] == "ok").collect();
-    let mean = |key: &str| {
-        if ok.is_empty() {
-            Value::Null
-        } else {
-            json!(
-                ok.iter()
-                    .map(|e| e[key].as_f64().unwrap_or(0.0))
-                    .sum::<f64>()
-                    / ok.len() as f64
-            )
-        }
+    let mut summary = report::summary(&done, total);
+    summary["frames_per_second_this_run"] = if seconds > 0.0 {
+        json!(((done.len() - done_before) as f64) / seconds)
+    } else {
+        Value::Null
     };
-    let fixed = |name: &str| {
-        done.iter()
-            .filter(|e| {
-                e["corrections"]
-                    .as_array()
-                    .is_some_and(|c| c.iter().any(|x| x == name))
-            })
-            .count()
-    };
-    let mut summary = json!({
-        "frames": done.len(),
-        "frames_in_run": total,
-        "ok": ok.len(),
-        "skipped": done.len() - ok.len(),
-        "legs_swap_fixed": fixed("legs_swap_fixed"),
-        "arms_swap_fixed": fixed("arms_swap_fixed"),
-        "sides_swap_fixed": fixed("sides_swap_fixed"),
-        "mean_coverage": mean("coverage"),
-        "mean_confidence": mean("mean_confidence"),
-        "frames_per_second_this_run": if seconds > 0.0 { json!(((done.len() - done_before) as f64) / seconds) } else { Value::Null },
-    });
     // The animated template is committed with track.json; if it fails, track.json says why.
     let mut batch = symcorr_mesh::io::OutputBatch::new();
-    let glb = posed::stage_glb(&mut batch, &args.out, template.input_mesh(), &done, total);
+    let glb = posed::stage_glb(
+        &mut batch,
+        &args.out,
+        &args.out.join(posed::POSED_NPY),
+        template.input_mesh(),
+        &done,
+        total,
+    );
     summary["template_track"] = match &glb {
         Ok(v) => v.clone(),
         Err(e) => json!({ "error": e.0 }),
     };
-    let doc = json!({
-        "format": "symcorr.track/1",
-        "run": header,
-        "frames": done,
-        "summary": summary,
-    });
-    let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
-    batch
-        .add(&args.out.join("track.json"), text.as_bytes())
-        .map_err(|e| CliError(e.to_string()))?;
-    batch
-        .add(
-            &args.out.join("track.svg"),
-            track_svg(&done, total).as_bytes(),
-        )
-        .map_err(|e| CliError(e.to_string()))?;
+    report::stage(&mut batch, &args.out, &header, &done, total, &summary)?;
     batch.commit().map_err(|e| CliError(e.to_string()))?;
     println!(
         "tracked {} frames ({} matched, {} skipped) into {}",
@@ -438,47 +426,6 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         )));
     }
     Ok(())
-}
-
-/// Per processed frame (x: its position in the run): coverage, mean confidence and the time it
-/// took relative to the slowest frame; skipped frames are gaps.
-fn track_svg(frames: &[Value], total: usize) -> String {
-    let slowest = frames
-        .iter()
-        .filter_map(|f| f["seconds"].as_f64())
-        .fold(0.0f64, f64::max);
-    let series = |key: &str, scale: f64| -> Vec<(f64, f64)> {
-        frames
-            .iter()
-            .enumerate()
-            .filter(|(_, f)| f["status"] == "ok")
-            .filter_map(|(k, f)| {
-                f[key]
-                    .as_f64()
-                    .map(|v| (k as f64, (v / scale).clamp(0.0, 1.0)))
-            })
-            .collect()
-    };
-    let curves = vec![
-        ("coverage".to_string(), series("coverage", 1.0)),
-        (
-            "mean confidence".to_string(),
-            series("mean_confidence", 1.0),
-        ),
-        (
-            format!("seconds (100 % = {slowest:.2} s)"),
-            series("seconds", slowest.max(f64::MIN_POSITIVE)),
-        ),
-    ];
-    symcorr::output::line_plot_svg(
-        &symcorr::output::PlotAxes {
-            title: "symcorr track",
-            x_label: "frame of the run",
-            y_label: "% (coverage, confidence, time)",
-            max_x: total.max(1) as f64,
-        },
-        &curves,
-    )
 }
 
 #[cfg(test)]

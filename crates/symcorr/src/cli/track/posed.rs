@@ -58,11 +58,13 @@ pub(super) fn push(
     .map_err(npy_err)
 }
 
-/// Stages `template_track.glb` in `batch` from the `done` frames' rows of `posed.npy` (a file
-/// of `total` rows) and returns its entry of track.json's summary, or the error.
+/// Stages `out`'s `template_track.glb` in `batch` from the `done` frames' rows of `posed_npy`
+/// (a file of `total` rows: the run's posed.npy, or the one staged in `batch`) and returns its
+/// entry of track.json's summary, or the error.
 pub(super) fn stage_glb(
     batch: &mut OutputBatch,
     out: &Path,
+    posed_npy: &Path,
     template: &TriMesh,
     done: &[Value],
     total: usize,
@@ -80,7 +82,7 @@ pub(super) fn stage_glb(
         batch,
         &out.join(TEMPLATE_GLB),
         template,
-        &out.join(POSED_NPY),
+        posed_npy,
         total,
         &rows,
         cap,
