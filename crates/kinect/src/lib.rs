@@ -18,7 +18,8 @@
 //!   swaps between frames ([`swap_evidence`]; [`recording`]). A tracker reads either a folder
 //!   or (feature `openni2`) an OpenNI2 `.oni` file through one type, [`DepthSource`]
 //!   ([`source`]; the `.oni` side: `oni::OniRecording`, times from the file's frame timestamps,
-//!   intrinsics from the stream's field of view).
+//!   intrinsics from the stream's field of view). Listing an `.oni` file's depth frames and
+//!   their times needs no OpenNI2 ([`oni_index`], in every build).
 //!
 //! ```
 //! use symcorr_skeleton::Joint;
@@ -62,6 +63,7 @@ pub mod mapping;
 pub mod ntu;
 #[cfg(feature = "openni2")]
 pub mod oni;
+pub mod oni_index;
 #[cfg(feature = "openni2")]
 #[allow(unsafe_code)] // the OpenNI2 C API: every call is wrapped and checked in this module
 pub mod openni2;

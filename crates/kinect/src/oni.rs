@@ -5,8 +5,8 @@
 //! # Where each part comes from
 //!
 //! * **Frames and times** — [`OniRecording::open`] walks the file's records once (headers only,
-//!   in Rust, no frame is decoded) and keeps, for every depth frame in file order, its
-//!   timestamp: microseconds in the file, seconds here (`t_us / 10⁶`; OpenNI2's recorder writes
+//!   in Rust, no frame is decoded: [`crate::oni_index`]) and keeps, for every depth frame in
+//!   file order, its timestamp: microseconds in the file, seconds here (`t_us / 10⁶`; OpenNI2's recorder writes
 //!   the first frame at 0). The file's own index is used, not a playback pass, because playback
 //!   can deliver nothing at all (below) and a time is wanted for every frame, read or not.
 //! * **Intrinsics** — from the depth stream's video mode and field of view as OpenNI2 reports
@@ -37,8 +37,8 @@
 use crate::camera::Intrinsics;
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
+use crate::oni_index::{depth_frame_times_in, OniIndexError};
 use crate::openni2::{FilePlayback, StampedDepth, STATUS_TIME_OUT};
-use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 /// How long [`OniRecording::frame`] waits for OpenNI2's file player to hand over a frame.
@@ -247,208 +247,42 @@ fn rec_err(path: &Path, message: String) -> KinectError {
     }
 }
 
-/// `"NIR\0"`, the first four bytes of every record.
-const RECORD_MAGIC: u32 = 0x0052_494E;
-const RECORD_NODE_ADDED_1_0_0_4: u32 = 0x02;
-const RECORD_NODE_ADDED_1_0_0_5: u32 = 0x0C;
-const RECORD_NODE_ADDED: u32 = 0x0D;
-const RECORD_NEW_DATA: u32 = 0x0A;
-const RECORD_END: u32 = 0x0B;
-/// The node type of a depth stream in a `NODE_ADDED` record.
-const NODE_TYPE_DEPTH: u32 = 2;
-/// The file header: identity `NI10`, version (u8, u8, u16, u32), max timestamp u64, max node id u32.
-const FILE_HEADER_BYTES: u64 = 24;
-
-/// The timestamps (µs) of the depth frames of an `.oni` file, in file order: the `NEW_DATA`
-/// records of its first depth node, up to the `END` record (or the end of a file cut short).
-///
-/// The layout (OpenNI's `DataRecords.h`, all little-endian, packed): a record header of
-/// magic, type, node id, fields size (header included), payload size (u32 each) and the undo
-/// position (u64 from file version 1.0.1.0 on, u32 before); then the fields, then the payload.
-/// `NODE_ADDED` fields start with the node name (u32 length, bytes) and the node type (u32);
-/// `NEW_DATA` fields are the timestamp (u64) and the frame number (u32).
+/// The timestamps (µs) of the depth frames of an `.oni` file ([`crate::oni_index`]), errors
+/// naming the file.
 fn index_depth_frames(path: &Path) -> Result<Vec<u64>, KinectError> {
     let file_name = path.display().to_string();
-    let io = |e: std::io::Error| KinectError::io(&file_name, e);
-    let file = std::fs::File::open(path).map_err(io)?;
-    let file_len = file.metadata().map_err(io)?.len();
-    let mut r = BufReader::new(file);
-    let mut head = [0u8; FILE_HEADER_BYTES as usize];
-    if r.read_exact(&mut head).is_err() || &head[0..4] != b"NI10" {
-        return Err(rec_err(
-            path,
-            "not an OpenNI recording (expected an .oni file starting with \"NI10\")".into(),
-        ));
-    }
-    let version = (head[4], head[5], u16::from_le_bytes([head[6], head[7]]));
-    // Files before 1.0.1.0 (OpenNI 1.x) have a 32-bit undo position in every record header.
-    let header_bytes: u64 = if version < (1, 0, 1) { 24 } else { 28 };
-    let mut depth_node: Option<u32> = None;
-    let mut stamps: Vec<u64> = Vec::new();
-    let mut pos = FILE_HEADER_BYTES;
-    let mut buf = [0u8; 28];
-    while pos + header_bytes <= file_len {
-        r.seek(SeekFrom::Start(pos)).map_err(io)?;
-        r.read_exact(&mut buf[..header_bytes as usize])
-            .map_err(io)?;
-        let word = |k: usize| {
-            u32::from_le_bytes([buf[4 * k], buf[4 * k + 1], buf[4 * k + 2], buf[4 * k + 3]])
-        };
-        let (magic, kind, node, fields, payload) = (word(0), word(1), word(2), word(3), word(4));
-        if magic != RECORD_MAGIC || u64::from(fields) < header_bytes {
-            return Err(rec_err(
-                path,
-                format!("byte {pos}: not a record header (the file is damaged)"),
-            ));
-        }
-        let next = pos + u64::from(fields) + u64::from(payload);
-        if kind == RECORD_END || next > file_len {
-            break; // the end, or a record cut short by an interrupted recording
-        }
-        let field_bytes = u64::from(fields) - header_bytes;
-        match kind {
-            RECORD_NODE_ADDED | RECORD_NODE_ADDED_1_0_0_5 | RECORD_NODE_ADDED_1_0_0_4
-                if depth_node.is_none() && field_bytes >= 8 =>
-            {
-                let mut len = [0u8; 4];
-                r.read_exact(&mut len).map_err(io)?;
-                let name_len = u64::from(u32::from_le_bytes(len));
-                if name_len + 8 <= field_bytes {
-                    r.seek_relative(name_len as i64).map_err(io)?;
-                    let mut ty = [0u8; 4];
-                    r.read_exact(&mut ty).map_err(io)?;
-                    if u32::from_le_bytes(ty) == NODE_TYPE_DEPTH {
-                        depth_node = Some(node);
-                    }
-                }
-            }
-            RECORD_NEW_DATA if Some(node) == depth_node && field_bytes >= 12 => {
-                let mut ts = [0u8; 8];
-                r.read_exact(&mut ts).map_err(io)?;
-                let t = u64::from_le_bytes(ts);
-                if let Some(&prev) = stamps.last() {
-                    if t <= prev {
-                        return Err(rec_err(
-                            path,
-                            format!(
-                                "depth frame {} at {t} µs is not after the previous one's \
-                                 {prev} µs (times must increase strictly)",
-                                stamps.len()
-                            ),
-                        ));
-                    }
-                }
-                stamps.push(t);
-            }
-            _ => {}
-        }
-        pos = next;
-    }
-    if depth_node.is_none() {
-        return Err(rec_err(path, "no depth stream in the recording".into()));
-    }
-    if stamps.is_empty() {
-        return Err(rec_err(path, "no depth frames in the recording".into()));
-    }
-    Ok(stamps)
+    let file = std::fs::File::open(path).map_err(|e| KinectError::io(&file_name, e))?;
+    depth_frame_times_in(file).map_err(|e| match e {
+        OniIndexError::Io(source) => KinectError::io(&file_name, source),
+        e => rec_err(path, e.to_string()),
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A record: header (64-bit undo position), fields, payload.
-    fn record(kind: u32, node: u32, fields: &[u8], payload: &[u8]) -> Vec<u8> {
-        let mut out = Vec::new();
-        for w in [
-            RECORD_MAGIC,
-            kind,
-            node,
-            28 + fields.len() as u32,
-            payload.len() as u32,
-        ] {
-            out.extend(w.to_le_bytes());
-        }
-        out.extend(0u64.to_le_bytes());
-        out.extend(fields);
-        out.extend(payload);
-        out
-    }
-
-    fn file_header() -> Vec<u8> {
-        let mut out = b"NI10".to_vec();
-        out.extend([1, 0]);
-        out.extend(1u16.to_le_bytes());
-        out.extend(0u32.to_le_bytes());
-        out.extend(u64::MAX.to_le_bytes());
-        out.extend(1u32.to_le_bytes());
-        out
-    }
-
-    fn node_added(node: u32, name: &str, ty: u32) -> Vec<u8> {
-        let mut f = Vec::new();
-        f.extend((name.len() as u32 + 1).to_le_bytes());
-        f.extend(name.as_bytes());
-        f.push(0);
-        f.extend(ty.to_le_bytes());
-        f.extend([0u8; 28]); // codec, frames, min/max timestamp, seek table position
-        record(RECORD_NODE_ADDED, node, &f, &[])
-    }
-
-    fn new_data(node: u32, t: u64, frame: u32) -> Vec<u8> {
-        let mut f = t.to_le_bytes().to_vec();
-        f.extend(frame.to_le_bytes());
-        record(RECORD_NEW_DATA, node, &f, &[7u8; 10])
-    }
+    use crate::oni_index::build::*;
 
     #[test]
-    fn the_index_keeps_the_depth_nodes_frames_up_to_the_end_record() {
+    fn the_index_of_a_file_names_it_in_its_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.oni");
         let mut bytes = file_header();
-        bytes.extend(node_added(1, "Image", 3));
         bytes.extend(node_added(2, "Depth", NODE_TYPE_DEPTH));
-        bytes.extend(new_data(1, 5, 1)); // colour: not a depth frame
         bytes.extend(new_data(2, 0, 1));
         bytes.extend(new_data(2, 33_000, 2));
-        bytes.extend(record(RECORD_END, 0, &[], &[]));
-        bytes.extend(new_data(2, 66_000, 3)); // after END: not read
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("a.oni");
+        bytes.extend(end());
         std::fs::write(&p, &bytes).unwrap();
         assert_eq!(index_depth_frames(&p).unwrap(), vec![0, 33_000]);
 
-        // A recording cut short in its last frame keeps the complete ones.
-        let mut cut = bytes[..bytes.len() - 1].to_vec();
-        let end = record(RECORD_END, 0, &[], &[]);
-        let at = cut.windows(end.len()).position(|w| w == end).unwrap();
-        cut.truncate(at + 5);
-        std::fs::write(&p, &cut).unwrap();
-        assert_eq!(index_depth_frames(&p).unwrap(), vec![0, 33_000]);
-    }
-
-    #[test]
-    fn the_index_refuses_what_is_not_a_usable_recording() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("a.oni");
         std::fs::write(&p, b"PK\x03\x04 not an oni").unwrap();
-        let e = index_depth_frames(&p).unwrap_err().to_string();
+        let e = index_depth_frames(&p).unwrap_err();
+        assert!(matches!(e, KinectError::Recording { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.starts_with(&p.display().to_string()), "{e}");
         assert!(e.contains("not an OpenNI recording"), "{e}");
 
-        let mut bytes = file_header();
-        bytes.extend(node_added(2, "Depth", NODE_TYPE_DEPTH));
-        std::fs::write(&p, &bytes).unwrap();
-        let e = index_depth_frames(&p).unwrap_err().to_string();
-        assert!(e.ends_with("no depth frames in the recording"), "{e}");
-
-        bytes.extend(new_data(2, 33_000, 1));
-        bytes.extend(new_data(2, 33_000, 2));
-        std::fs::write(&p, &bytes).unwrap();
-        let e = index_depth_frames(&p).unwrap_err().to_string();
-        assert!(e.contains("depth frame 1 at 33000 µs is not after"), "{e}");
-
-        let mut bytes = file_header();
-        bytes.extend(b"garbage garbage garbage garbage!");
-        std::fs::write(&p, &bytes).unwrap();
-        let e = index_depth_frames(&p).unwrap_err().to_string();
-        assert!(e.contains("byte 24: not a record header"), "{e}");
+        let e = index_depth_frames(&dir.path().join("missing.oni")).unwrap_err();
+        assert!(matches!(e, KinectError::Io { .. }), "{e}");
     }
 }
