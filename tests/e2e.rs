@@ -1,37 +1,20 @@
 //! End-to-end tests of the `symcorr` binary on the generated fixtures (fixtures/synth/bodies):
-//! the demo, `match` and `bench` outputs, the accuracy thresholds of the pipeline issue on a
+//! the demo, `match` and `bench` outputs, the pipeline's accuracy thresholds on a
 //! fixture pair, and bad inputs (one-line error, exit status 1, no output file left).
 //!
 //! Kept quick for the dev profile: sparse mode with a few hundred samples.
 
+mod support;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use support::{bin, read_json, run};
 use symcorr::formats::CorrespondenceFile;
 use symcorr_eval::{evaluate, EvalGraph};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_symcorr"))
-}
-
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies")
-}
-
-fn run(cmd: &mut Command) -> Output {
-    let out = cmd.output().expect("symcorr runs");
-    if !out.status.success() {
-        eprintln!(
-            "stdout:\n{}\nstderr:\n{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    out
-}
-
-fn read_json(p: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
 }
 
 fn mesh(name: &str) -> PathBuf {

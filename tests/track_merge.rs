@@ -2,13 +2,12 @@
 //! fixtures/synth/recording (slices 0..2 and 2..4), and of the cluster script's slicing
 //! (tools/cluster/track_array.sbatch).
 
+mod support;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_symcorr"))
-}
+use support::{bin, read_json, run};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -16,18 +15,6 @@ fn root() -> PathBuf {
 
 fn recording() -> PathBuf {
     root().join("fixtures/synth/recording")
-}
-
-fn run(cmd: &mut Command) -> Output {
-    let out = cmd.output().expect("symcorr runs");
-    if !out.status.success() {
-        eprintln!(
-            "stdout:\n{}\nstderr:\n{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    out
 }
 
 /// `symcorr track` of the fixture recording's `frames` into `out`, with scans.
@@ -53,10 +40,6 @@ fn merge(slices: &[&Path], out: &Path, extra: &[&str]) -> Output {
         .arg("--out")
         .arg(out)
         .args(extra))
-}
-
-fn read_json(p: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
 }
 
 /// The journal's lines, parsed.
