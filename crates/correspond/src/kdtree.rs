@@ -52,15 +52,40 @@ impl<const K: usize> KdTree<K> {
 
     /// The id of the point nearest to `q` and the squared distance; `None` for an empty tree
     /// (or one whose points are all non-finite).
+    #[cfg(test)]
     pub(crate) fn nearest(&self, q: &[f64; K]) -> Option<(u32, f64)> {
-        let mut best = (u32::MAX, f64::INFINITY);
+        self.nearest_within(q, (u32::MAX, f64::INFINITY))
+    }
+
+    /// [`KdTree::nearest`] starting from a known candidate `start` (an id of this tree and its
+    /// squared distance to `q`): the same answer, found sooner when the candidate is near —
+    /// the previous round's match of an ICP point that moved a little. `start` must be one of
+    /// the tree's points at its true distance (or `(u32::MAX, ∞)` for none); a finite bound
+    /// from elsewhere could hide the true nearest point.
+    pub(crate) fn nearest_within(&self, q: &[f64; K], start: (u32, f64)) -> Option<(u32, f64)> {
+        let mut best = start;
         if !self.nodes.is_empty() {
-            self.search(0, q, &mut best);
+            let mut offsets = [0.0; K];
+            self.search(0, q, 0.0, &mut offsets, &mut best);
         }
         (best.0 != u32::MAX).then_some(best)
     }
 
-    fn search(&self, node: usize, q: &[f64; K], best: &mut (u32, f64)) {
+    /// Descends into `node`, whose cell lies at squared distance `cell_d2` from `q` with
+    /// per-axis offsets `offsets` (Arya & Mount's incremental distance, *SODA* 1993: a far
+    /// child is skipped when its whole cell, not only the splitting plane, is farther than the
+    /// best point so far).
+    fn search(
+        &self,
+        node: usize,
+        q: &[f64; K],
+        cell_d2: f64,
+        offsets: &mut [f64; K],
+        best: &mut (u32, f64),
+    ) {
+        if cell_d2 > best.1 {
+            return;
+        }
         match self.nodes[node] {
             Node::Leaf { start, end } => {
                 for i in start as usize..end as usize {
@@ -82,18 +107,26 @@ impl<const K: usize> KdTree<K> {
                 left,
                 right,
             } => {
-                let delta = q[axis as usize] - value;
+                let axis = axis as usize;
+                let delta = q[axis] - value;
                 let (near, far) = if delta < 0.0 {
                     (left, right)
                 } else {
                     (right, left)
                 };
-                self.search(near as usize, q, best);
+                self.search(near as usize, q, cell_d2, offsets, best);
+                let old = offsets[axis];
+                offsets[axis] = delta;
+                // Summed afresh in the leaves' axis order, not updated by `− old² + delta²`:
+                // every term is at most the matching term of any point of the far cell, and
+                // rounding is monotone, so the bound never exceeds a point's computed distance.
+                let far_d2: f64 = offsets.iter().map(|o| o * o).sum();
                 // `<=`: a point at exactly the best distance on the far side may hold a
                 // smaller id (ties are broken by id).
-                if delta * delta <= best.1 {
-                    self.search(far as usize, q, best);
+                if far_d2 <= best.1 {
+                    self.search(far as usize, q, far_d2, offsets, best);
                 }
+                offsets[axis] = old;
             }
         }
     }
@@ -171,6 +204,11 @@ fn build<const K: usize>(
 #[derive(Debug, Clone)]
 pub(crate) struct PoolTrees {
     trees: Vec<KdTree<6>>,
+    /// Per tree, which target vertices it holds (a bit per target vertex): a hint is used
+    /// only where it is one of the tree's points.
+    members: Vec<Vec<u64>>,
+    /// The target's features, to measure a hint's distance.
+    target: Vec<[f64; 6]>,
 }
 
 impl PoolTrees {
@@ -194,10 +232,19 @@ impl PoolTrees {
                     });
                 }
                 let pts = pool.iter().map(|&q| target[q as usize]).collect();
-                Ok(KdTree::new(pts, pool.clone()))
+                let mut bits = vec![0u64; target.len().div_ceil(64)];
+                for &q in pool {
+                    bits[q as usize / 64] |= 1 << (q % 64);
+                }
+                Ok((KdTree::new(pts, pool.clone()), bits))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(PoolTrees { trees })
+        let (trees, members) = trees.into_iter().unzip();
+        Ok(PoolTrees {
+            trees,
+            members,
+            target: target.to_vec(),
+        })
     }
 
     /// For every template vertex `p` (rows of `template`), the target vertex of `p`'s pool
@@ -206,13 +253,24 @@ impl PoolTrees {
     /// id. Only the members `subset` (per group) are searched when given; the others get
     /// `(0, ∞)`.
     ///
-    /// Errors: [`CorrespondError::LengthMismatch`] when `template` has another length than
-    /// the pools were built for, or the trees were built for other pools.
+    /// `hints`, an earlier answer (one entry per template vertex, as returned here), start
+    /// each search from the earlier match (its distance measured afresh) where that match is
+    /// finite and one of the pool's points: between ICP rounds a template point moves little,
+    /// so its last match bounds the search tightly. The answer is the same with or without.
+    ///
+    /// `within` bounds the search (squared distance; `f64::INFINITY` for none): a vertex
+    /// whose nearest pool point is farther gets `(0, ∞)`, found without visiting the far cells
+    /// — for the ICP rounds, where a pair beyond the gate is dropped anyway.
+    ///
+    /// Errors: [`CorrespondError::LengthMismatch`] when `template` (or `hints`) has another
+    /// length than the pools were built for, or the trees were built for other pools.
     pub(crate) fn nearest(
         &self,
         pools: &SegmentPools,
         template: &[[f64; 6]],
         subset: Option<&[Vec<u32>]>,
+        hints: Option<&[(u32, f64)]>,
+        within: f64,
     ) -> Result<Vec<(u32, f64)>, CorrespondError> {
         same_len(
             "template feature rows (one per vertex of the pools)",
@@ -220,6 +278,34 @@ impl PoolTrees {
             template.len(),
         )?;
         same_len("k-d trees (one per pool)", pools.len(), self.trees.len())?;
+        if let Some(h) = hints {
+            same_len("hints (one per template vertex)", template.len(), h.len())?;
+        }
+        let start = |g: usize, v: u32, q: &[f64; 6]| -> (u32, f64) {
+            let none = (u32::MAX, within);
+            let Some(&(hint, d)) = hints.and_then(|h| h.get(v as usize)) else {
+                return none;
+            };
+            let bits = &self.members[g];
+            let member = d.is_finite()
+                && bits
+                    .get(hint as usize / 64)
+                    .is_some_and(|w| w & (1 << (hint % 64)) != 0);
+            if !member {
+                return none;
+            }
+            let p = &self.target[hint as usize];
+            let mut d = 0.0;
+            for k in 0..6 {
+                let t = p[k] - q[k];
+                d += t * t;
+            }
+            if d <= within {
+                (hint, d)
+            } else {
+                none
+            }
+        };
         let members = subset.unwrap_or(pools.members());
         let mut out = vec![(0u32, f64::INFINITY); template.len()];
         let found: Vec<Vec<(u32, (u32, f64))>> = members
@@ -229,8 +315,9 @@ impl PoolTrees {
                 m.par_chunks(512)
                     .flat_map_iter(|chunk| {
                         chunk.iter().filter_map(move |&v| {
+                            let q = &template[v as usize];
                             self.trees[g]
-                                .nearest(&template[v as usize])
+                                .nearest_within(q, start(g, v, q))
                                 .map(|hit| (v, hit))
                         })
                     })
@@ -276,6 +363,22 @@ mod tests {
             }
         }
 
+        /// Starting from any point of the tree (at its true distance) changes nothing.
+        #[test]
+        fn a_start_candidate_does_not_change_the_answer(
+            pts in prop::collection::vec(prop::array::uniform3(-4i8..4), 1..200),
+            qs in prop::collection::vec((prop::array::uniform3(-5i8..5), any::<prop::sample::Index>()), 1..20),
+        ) {
+            let pts: Vec<[f64; 3]> = pts.iter().map(|p| p.map(|x| x as f64 * 0.5)).collect();
+            let tree = KdTree::new(pts.clone(), (0..pts.len() as u32).collect());
+            for (q, pick) in &qs {
+                let q = q.map(|x| x as f64 * 0.5 + 0.1);
+                let s = pick.index(pts.len());
+                let d: f64 = (0..3).map(|k| (pts[s][k] - q[k]).powi(2)).sum();
+                prop_assert_eq!(tree.nearest_within(&q, (s as u32, d)), brute(&pts, &q));
+            }
+        }
+
         #[test]
         fn six_dimensional_tree_matches_brute_force(
             pts in prop::collection::vec(prop::array::uniform6(-1.0f64..1.0), 1..400),
@@ -284,6 +387,77 @@ mod tests {
             let tree = KdTree::new(pts.clone(), (0..pts.len() as u32).collect());
             prop_assert_eq!(tree.nearest(&q), brute(&pts, &q));
         }
+    }
+
+    /// Pool trees answer the same with hints as without, whatever the hints hold: earlier
+    /// answers, vertices of another pool, ids out of range, infinite distances.
+    #[test]
+    fn pool_tree_hints_never_change_the_answer() {
+        use crate::SegmentPools;
+        use symcorr_skeleton::Segment;
+        let n = 402;
+        let feature = |i: usize, s: f64| -> [f64; 6] {
+            let t = i as f64 * 0.37 + s;
+            [
+                t.sin(),
+                t.cos(),
+                (2.0 * t).sin(),
+                0.1 * t.cos(),
+                0.2,
+                (3.0 * t).sin(),
+            ]
+        };
+        let target: Vec<[f64; 6]> = (0..n).map(|i| feature(i, 0.0)).collect();
+        let template: Vec<[f64; 6]> = (0..n).map(|i| feature(i, 0.05)).collect();
+        let labels: Vec<Segment> = (0..n).map(|i| Segment::ALL[i * 3 / n]).collect();
+        let mesh = symcorr_mesh::TriMesh::new(
+            target.iter().map(|f| [f[0], f[1], f[2]]).collect(),
+            (0..n as u32 / 3)
+                .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                .collect(),
+        )
+        .unwrap();
+        let graph = symcorr_spectral::EdgeGraph::new(&mesh);
+        let pools = SegmentPools::new((&labels, None), (&labels, None), &graph, 0.0).unwrap();
+        let trees = PoolTrees::new(&pools, &target).unwrap();
+        let plain = trees
+            .nearest(&pools, &template, None, None, f64::INFINITY)
+            .unwrap();
+        let shifted: Vec<[f64; 6]> = (0..n).map(|i| feature(i, 0.08)).collect();
+        let expected = trees
+            .nearest(&pools, &shifted, None, None, f64::INFINITY)
+            .unwrap();
+        let odd: Vec<(u32, f64)> = (0..n)
+            .map(|i| match i % 4 {
+                0 => ((i as u32 * 7) % n as u32, 0.0),
+                1 => (u32::MAX - 1, 1.0),
+                2 => (i as u32, f64::INFINITY),
+                _ => ((i as u32 + 201) % n as u32, f64::NAN),
+            })
+            .collect();
+        for hints in [&plain, &odd] {
+            let hinted = trees
+                .nearest(&pools, &shifted, None, Some(hints), f64::INFINITY)
+                .unwrap();
+            assert_eq!(hinted, expected);
+            // Bounded: the same answer where it is within the bound, none beyond.
+            let mut ds: Vec<f64> = expected.iter().map(|e| e.1).collect();
+            ds.sort_by(f64::total_cmp);
+            let bound = ds[n / 2];
+            let near = trees
+                .nearest(&pools, &shifted, None, Some(hints), bound)
+                .unwrap();
+            for (got, want) in near.iter().zip(&expected) {
+                if want.1 <= bound {
+                    assert_eq!(got, want);
+                } else {
+                    assert_eq!(*got, (0, f64::INFINITY));
+                }
+            }
+        }
+        assert!(trees
+            .nearest(&pools, &shifted, None, Some(&plain[1..]), f64::INFINITY)
+            .is_err());
     }
 
     #[test]

@@ -16,16 +16,22 @@
 //!    would otherwise leave a skeleton the attachment refuses).
 //! 3. **Smoothing**: a one-euro filter per joint coordinate ([`symcorr_kinect::SkeletonFilter`],
 //!    Casiez et al. 2012: little jitter at rest, little lag in fast motion), reset after a
-//!    skipped frame.
-//! 4. **Scan** ([`symcorr_kinect::scan_mesh`]) of the depth frame with those joints, **prepare**
-//!    it (skeleton attachment; joints and depth share the camera frame, so no alignment, and a
-//!    poor fit is recorded, not refused: a profile view's far-side joints lie behind the only
-//!    surface the camera sees; the camera at the origin is its viewpoint, for the occlusion
-//!    test) and **match** the template onto it with the pipeline's method — **warm-started**
-//!    from the previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by
-//!    the joints' motion, what the joints cannot say, a bone's roll and the head's twist,
-//!    carried over; fewer ICP rounds), and started afresh from the skeletons after a skipped
-//!    frame or when a joint jumped more than [`TrackOptions::max_warm_jump_m`].
+//!    frame the observer skipped.
+//! 4. **Scan** ([`symcorr_kinect::scan_mesh`]) of the depth frame with those joints and
+//!    **prepare** it (skeleton attachment; joints and depth share the camera frame, so no
+//!    alignment, and a poor fit is recorded, not refused: a profile view's far-side joints lie
+//!    behind the only surface the camera sees; the camera at the origin is its viewpoint, for
+//!    the occlusion test).
+//! 5. **Match** the template onto it with the pipeline's method — **warm-started** from the
+//!    previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by the
+//!    joints' motion, what the joints cannot say, a bone's roll and the head's twist, carried
+//!    over; fewer ICP rounds), and started afresh from the skeletons after a skipped frame or
+//!    when a joint jumped more than [`TrackOptions::max_warm_jump_m`].
+//!
+//! Steps 1–4 ([`Observer`]) follow the joint log and the depth frames only, never a match;
+//! step 5 ([`Fitter`]) follows the previous fit. The two can run on two threads, frame k + 1
+//! observed while frame k is matched ([`Tracker::parts`]; `symcorr track` does), with the same
+//! outcomes as one after the other ([`Tracker::frame`]).
 //!
 //! The result per frame ([`FrameOutcome`]) is the row of the correspondence — for every
 //! template input vertex the scan vertex it matches, or −1 where the frame does not show it —
@@ -151,17 +157,44 @@ pub enum FrameOutcome {
     Skipped(String),
 }
 
-/// Matches the frames of one recording, in time order, against one prepared template.
-pub struct Tracker<'a> {
+/// A frame observed and not yet matched ([`Observer::observe`]): the joints used at its time,
+/// what was corrected in them, and its scan, prepared.
+pub struct Observation {
+    corrections: Vec<Correction>,
+    scan: ScanMesh,
+    target: PreparedMesh,
+    timings: Vec<(String, f64)>,
+}
+
+/// Steps 1–4 of a frame (module docs): the joints at its time, corrected and smoothed, and its
+/// scan, prepared. It follows the joint log and the depth frames only — never a match — so it
+/// can run one frame ahead of the [`Fitter`], on another thread.
+pub struct Observer {
     pipeline: Pipeline,
-    template: &'a PreparedMesh,
     intrinsics: Intrinsics,
     joints: JointTrack,
     options: TrackOptions,
     filter: Option<SkeletonFilter>,
+    /// The previous observed frame's joints, as used (corrected and smoothed).
     previous: Option<Skeleton>,
+}
+
+/// Step 5 of a frame (module docs): the match against the template, warm-started from the
+/// previous frame's fit.
+pub struct Fitter<'a> {
+    pipeline: Pipeline,
+    template: &'a PreparedMesh,
+    options: TrackOptions,
     /// The previous frame's fit: its bone transforms and the refined joints they pose onto.
     previous_fit: Option<(BoneTransforms, Skeleton)>,
+}
+
+/// Matches the frames of one recording, in time order, against one prepared template: an
+/// [`Observer`] and a [`Fitter`], one after the other ([`Tracker::frame`]), or apart
+/// ([`Tracker::parts`]) so that the next frame is observed while this one is matched.
+pub struct Tracker<'a> {
+    observer: Observer,
+    fitter: Fitter<'a>,
 }
 
 impl<'a> Tracker<'a> {
@@ -181,38 +214,69 @@ impl<'a> Tracker<'a> {
         pipeline.options.prepare.attach.poor_fit = PoorFitPolicy::Accept;
         pipeline.options.prepare.cache = None;
         Tracker {
-            pipeline,
-            template,
-            intrinsics,
-            joints,
-            filter: options.smoothing.map(SkeletonFilter::new),
-            options,
-            previous: None,
-            previous_fit: None,
+            observer: Observer {
+                pipeline: pipeline.clone(),
+                intrinsics,
+                joints,
+                filter: options.smoothing.map(SkeletonFilter::new),
+                options: options.clone(),
+                previous: None,
+            },
+            fitter: Fitter {
+                pipeline,
+                template,
+                options,
+                previous_fit: None,
+            },
         }
     }
 
     /// Forgets the previous frame (after a skipped frame, or before a jump in time).
     pub fn reset(&mut self) {
-        self.previous = None;
-        self.previous_fit = None;
-        if let Some(f) = &mut self.filter {
-            f.reset();
-        }
+        self.observer.reset();
+        self.fitter.reset();
     }
 
-    /// Matches the depth frame taken at `time_s` (depth stream clock).
+    /// Observes and matches the depth frame taken at `time_s` (depth stream clock).
     pub fn frame(&mut self, time_s: f64, depth: &DepthFrame) -> FrameOutcome {
-        match self.frame_inner(time_s, depth) {
-            Ok(m) => FrameOutcome::Matched(Box::new(m)),
+        match self.observer.observe(time_s, depth) {
+            Ok(o) => self.fitter.fit(o),
             Err(reason) => {
-                self.reset();
+                self.fitter.reset();
                 FrameOutcome::Skipped(reason)
             }
         }
     }
 
-    fn frame_inner(&mut self, time_s: f64, depth: &DepthFrame) -> Result<MatchedFrame, String> {
+    /// The observer and the fitter, to run apart: observe frame k + 1 while frame k is
+    /// matched; give the fitter every observation in order and [`Fitter::reset`] it for every
+    /// frame the observer refused. The outcomes are those of [`Tracker::frame`].
+    pub fn parts(&mut self) -> (&mut Observer, &mut Fitter<'a>) {
+        (&mut self.observer, &mut self.fitter)
+    }
+}
+
+impl Observer {
+    /// Forgets the previous frame: no continuity check, no smoothing history.
+    pub fn reset(&mut self) {
+        self.previous = None;
+        if let Some(f) = &mut self.filter {
+            f.reset();
+        }
+    }
+
+    /// The joints at `time_s` (depth stream clock), corrected and smoothed, and the scan of
+    /// `depth` prepared with them. A frame that cannot be observed (no skeleton near its time,
+    /// no body in the scan) gives the reason and resets the observer.
+    pub fn observe(&mut self, time_s: f64, depth: &DepthFrame) -> Result<Observation, String> {
+        let observed = self.observe_inner(time_s, depth);
+        if observed.is_err() {
+            self.reset();
+        }
+        observed
+    }
+
+    fn observe_inner(&mut self, time_s: f64, depth: &DepthFrame) -> Result<Observation, String> {
         let mut corrections = Vec::new();
         let timed = self
             .joints
@@ -253,6 +317,60 @@ impl<'a> Tracker<'a> {
             // The scan is in camera space: its camera sits at the origin.
             .seen_from(nalgebra::Point3::origin());
         let t_prepare = t.elapsed().as_secs_f64();
+        let d = &target.attachment.diagnostics;
+        let mut timings = vec![
+            ("scan".to_string(), t_scan),
+            ("prepare".to_string(), t_prepare),
+        ];
+        timings.extend(
+            d.timings_s
+                .iter()
+                .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
+        );
+        if d.mirror.swapped {
+            corrections.push(Correction::SidesSwapped);
+        }
+        if d.fit.accepted_poor_fit {
+            corrections.push(Correction::PoorFitAccepted);
+        }
+        // Continuity is judged against what was used, the corrected and smoothed joints.
+        self.previous = Some(skeleton);
+        Ok(Observation {
+            corrections,
+            scan,
+            target,
+            timings,
+        })
+    }
+}
+
+impl Fitter<'_> {
+    /// Forgets the previous fit: the next frame starts from the skeletons.
+    pub fn reset(&mut self) {
+        self.previous_fit = None;
+    }
+
+    /// Matches the template onto an observed frame: warm-started from the previous fit unless
+    /// there is none or a joint jumped more than [`TrackOptions::max_warm_jump_m`]. A match
+    /// that fails skips the frame with its reason and resets the fitter (not the observer:
+    /// the joints it follows are still good).
+    pub fn fit(&mut self, observation: Observation) -> FrameOutcome {
+        match self.fit_inner(observation) {
+            Ok(m) => FrameOutcome::Matched(Box::new(m)),
+            Err(reason) => {
+                self.reset();
+                FrameOutcome::Skipped(reason)
+            }
+        }
+    }
+
+    fn fit_inner(&mut self, observation: Observation) -> Result<MatchedFrame, String> {
+        let Observation {
+            corrections,
+            scan,
+            target,
+            mut timings,
+        } = observation;
         let t = Instant::now();
         let warm = self.previous_fit.as_ref().filter(|(_, joints)| {
             self.options.warm_start
@@ -283,28 +401,13 @@ impl<'a> Tracker<'a> {
             }
             _ => None,
         };
-        let d = &target.attachment.diagnostics;
-        let mut timings = vec![
-            ("scan".to_string(), t_scan),
-            ("prepare".to_string(), t_prepare),
-            ("match".to_string(), t_match),
-        ];
-        timings.extend(
-            d.timings_s
-                .iter()
-                .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
-        );
+        // `scan`, `prepare`, then `match`, then the sub-stages.
+        timings.insert(2, ("match".to_string(), t_match));
         timings.extend(
             corr.timings
                 .iter()
                 .map(|(stage, t)| (format!("match.{stage}"), *t)),
         );
-        if d.mirror.swapped {
-            corrections.push(Correction::SidesSwapped);
-        }
-        if d.fit.accepted_poor_fit {
-            corrections.push(Correction::PoorFitAccepted);
-        }
         let n = self.template.input_mesh().num_vertices();
         let mut target_of = vec![-1i32; n];
         let mut confidence = vec![0f32; n];
@@ -325,12 +428,10 @@ impl<'a> Tracker<'a> {
         };
         let labels: Vec<Option<usize>> = target.labels().iter().map(|s| Some(s.index())).collect();
         let scan_labels = target.to_input(&labels, None);
-        // Continuity is judged against what was used, the corrected and smoothed joints.
-        self.previous = Some(skeleton);
         Ok(MatchedFrame {
             coverage: matched as f64 / n.max(1) as f64,
             mean_confidence,
-            fit_score: d.fit.score,
+            fit_score: target.attachment.diagnostics.fit.score,
             target_of,
             confidence,
             corrections,

@@ -54,6 +54,15 @@ struct Args {
     /// Also print, for this frame, the mean error and match count per template segment.
     #[arg(long, value_name = "FRAME")]
     detail: Option<usize>,
+    /// Template points driving the ICP fits (default: the method's).
+    #[arg(long)]
+    icp_points: Option<usize>,
+    /// ICP rounds from a warm start (default: the method's).
+    #[arg(long)]
+    warm_iterations: Option<usize>,
+    /// Rounds of the non-rigid step (default: the method's).
+    #[arg(long)]
+    nonrigid_rounds: Option<usize>,
 }
 
 /// A match that moves farther than this on the body between consecutive frames jumped (metres,
@@ -82,10 +91,15 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let mirror = read_mirror(&args.bodies.join("mirror.txt"))?;
     let graph = EvalGraph::new(&mesh);
     let area = mesh.total_area();
-    let pipeline = Pipeline::new(PipelineOptions {
+    let mut options = PipelineOptions {
         mode: symcorr::Mode::Dense,
         ..PipelineOptions::default()
-    });
+    };
+    let a = &mut options.articulated;
+    a.icp_points = args.icp_points.unwrap_or(a.icp_points);
+    a.warm_iterations = args.warm_iterations.unwrap_or(a.warm_iterations);
+    a.nonrigid_rounds = args.nonrigid_rounds.unwrap_or(a.nonrigid_rounds);
+    let pipeline = Pipeline::new(options);
     let template = pipeline.prepare(mesh, &sk)?;
     let index: Vec<usize> = template.labels().iter().map(|l| l.index()).collect();
     let template_labels: Vec<usize> = template.to_input(&index, usize::MAX);

@@ -9,8 +9,9 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use symcorr_skeleton::{Bone, BONES};
 
-/// Posed template positions and unit normals.
-type Posed = (Vec<Point3<f64>>, Vec<Vector3<f64>>);
+/// Posed template positions and unit normals, and the last round's nearest pool vertices
+/// (sampled vertices only; the others `(0, ∞)`).
+type Posed = (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<(u32, f64)>);
 
 /// A bone is re-fitted only with at least this many pairs.
 const MIN_BONE_PAIRS: usize = 20;
@@ -32,7 +33,7 @@ pub(super) struct Rounds {
 /// geometrically from the rounds' `gate_start` to `gate_end`), the template vertices the
 /// target's viewpoint cannot see excluded, re-fits each bone with enough pairs by weighted Kabsch plus its two joints as
 /// anchors (held within `limit` for its bone), and re-skins. Returns the final posed positions
-/// and normals.
+/// and normals, and the last round's matches (hints for the searches after it).
 pub(super) fn articulated_icp(
     al: &Alignment<'_>,
     transforms: &mut BoneTransforms,
@@ -45,6 +46,7 @@ pub(super) fn articulated_icp(
         skin(template.positions, template.normals, al.weights, transforms);
     let iterations = rounds.iterations.max(1);
     let gate_start = rounds.gate_start.max(options.gate_end);
+    let mut last: Option<Vec<(u32, f64)>> = None;
     for it in 0..iterations {
         let frac = if iterations > 1 {
             it as f64 / (iterations - 1) as f64
@@ -52,18 +54,20 @@ pub(super) fn articulated_icp(
             1.0
         };
         let gate = al.unit_len * (gate_start * (options.gate_end / gate_start).powf(frac));
-        let near = al.nearest(&posed, &posed_normals, Some(sample))?;
         let visible = al.visibility(&posed);
+        let near = al.candidates(
+            &posed,
+            &posed_normals,
+            Some(sample),
+            visible.as_deref(),
+            gate,
+            last.as_deref(),
+        )?;
         // Pairs per bone: (rest position, target position, weight).
         let mut per_bone: Vec<Vec<FitPair>> = vec![Vec::new(); Bone::COUNT];
         for (v, &(q, d2)) in near.iter().enumerate() {
-            if !d2.is_finite() {
-                continue; // not in the sample
-            }
-            if visible.as_ref().is_some_and(|s| !s[v])
-                || !al.holds(&posed[v], &posed_normals[v], q, gate)
-            {
-                continue;
+            if !d2.is_finite() || !al.holds(&posed[v], &posed_normals[v], q, gate) {
+                continue; // not in the sample, hidden, or nothing near
             }
             let y = al.target_positions[q as usize];
             for &(b, w) in al.weights.row(v) {
@@ -99,6 +103,8 @@ pub(super) fn articulated_icp(
                 }
             });
         (posed, posed_normals) = skin(template.positions, template.normals, al.weights, transforms);
+        last = Some(near);
     }
-    Ok((posed, posed_normals))
+    let last = last.unwrap_or_else(|| vec![(0, f64::INFINITY); posed.len()]);
+    Ok((posed, posed_normals, last))
 }

@@ -235,16 +235,16 @@ pub fn articulated_match(
             gate_start: options.warm_gate_start,
         },
     };
-    let (mut posed, posed_normals) =
+    let (mut posed, posed_normals, near) =
         icp::articulated_icp(&al, &mut transforms, &sample, rounds, head_limit.as_ref())?;
     timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    nonrigid::nonrigid_step(&al, &mut posed, &posed_normals)?;
+    let near = nonrigid::nonrigid_step(&al, &mut posed, &posed_normals, near)?;
     timings.push(("nonrigid", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let map = final_map(&al, &posed, &posed_normals)?;
+    let map = final_map(&al, &posed, &posed_normals, &near)?;
     timings.push(("map", t.elapsed().as_secs_f64()));
     Ok(ArticulatedMatches {
         pairs: map.pairs,
@@ -336,6 +336,8 @@ pub(super) struct Alignment<'a> {
     beta: f64,
     /// [`ArticulatedOptions::boundary_gate`] in length units.
     boundary_gate: f64,
+    /// The largest squared length of a target normal (1 for unit normals).
+    longest_target_normal2: f64,
 }
 
 impl<'a> Alignment<'a> {
@@ -365,6 +367,10 @@ impl<'a> Alignment<'a> {
             pools,
             options,
             trees: PoolTrees::new(pools, &target_features)?,
+            longest_target_normal2: target_normals
+                .iter()
+                .map(|n| n.norm_squared())
+                .fold(0.0, f64::max),
             template_positions: points(template.positions),
             template_normals: vectors(template.normals),
             target_positions,
@@ -384,19 +390,64 @@ impl<'a> Alignment<'a> {
     }
 
     /// For every posed template vertex (or only the members `subset` per group), the nearest
-    /// target vertex of its pool in feature space and the squared feature distance.
+    /// target vertex of its pool in feature space and the squared feature distance. `hints`,
+    /// an earlier answer of this alignment, only speed the search up (`PoolTrees::nearest`).
     fn nearest(
         &self,
         posed: &[Point3<f64>],
         normals: &[Vector3<f64>],
         subset: Option<&[Vec<u32>]>,
+        hints: Option<&[(u32, f64)]>,
     ) -> Result<Vec<(u32, f64)>, CorrespondError> {
         let f: Vec<[f64; 6]> = posed
             .iter()
             .zip(normals)
             .map(|(x, n)| self.feature(x, n))
             .collect();
-        self.trees.nearest(self.pools, &f, subset)
+        self.trees
+            .nearest(self.pools, &f, subset, hints, f64::INFINITY)
+    }
+
+    /// [`Alignment::nearest`] for the vertices that can pair at `gate` only: those of `subset`
+    /// (all when `None`) that `visible` allows, searched no farther than a pair that
+    /// [`Alignment::holds`] at `gate` can be. A vertex left out or with nothing that near
+    /// gets `(0, ∞)`; every other answer is the exact nearest, so the pairs that hold are the
+    /// same as from [`Alignment::nearest`] — found without searching the pools' far side for
+    /// the template's back, which a single view never shows.
+    fn candidates(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        subset: Option<&[Vec<u32>]>,
+        visible: Option<&[bool]>,
+        gate: f64,
+        hints: Option<&[(u32, f64)]>,
+    ) -> Result<Vec<(u32, f64)>, CorrespondError> {
+        let f: Vec<[f64; 6]> = posed
+            .iter()
+            .zip(normals)
+            .map(|(x, n)| self.feature(x, n))
+            .collect();
+        let members = subset.unwrap_or(self.pools.members());
+        let searched: Vec<Vec<u32>> = members
+            .iter()
+            .map(|m| {
+                m.iter()
+                    .copied()
+                    .filter(|&v| visible.is_none_or(|s| s.get(v as usize) == Some(&true)))
+                    .collect()
+            })
+            .collect();
+        // A pair that holds is within `gate` and its normals' dot product is at least
+        // `min_normal_cosine`, so its feature distance² = |x − y|² + β²(|n_x|² + |n_y|² −
+        // 2 n_x·n_y) is at most this (with the longest normals of either side; a hair more
+        // for rounding).
+        let longest = normals.iter().map(|n| n.norm_squared()).fold(0.0, f64::max);
+        let normal_part =
+            (longest + self.longest_target_normal2 - 2.0 * self.options.min_normal_cosine).max(0.0);
+        let within = (gate * gate + self.beta * self.beta * normal_part) * (1.0 + 1e-9);
+        self.trees
+            .nearest(self.pools, &f, Some(&searched), hints, within)
     }
 
     /// Per posed template vertex, can the target show it: `None` when every vertex may be
@@ -490,14 +541,16 @@ struct FinalMap {
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
 /// when that pair holds at the final gate (`gate_end`), and its confidence is
-/// `1/(1 + d/gate)` from the final distance `d`.
+/// `1/(1 + d/gate)` from the final distance `d`. `hints`: the last nearest-neighbour answer
+/// before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
     posed: &[Point3<f64>],
     posed_normals: &[Vector3<f64>],
+    hints: &[(u32, f64)],
 ) -> Result<FinalMap, CorrespondError> {
     let gate = al.options.gate_end * al.unit_len;
-    let near = al.nearest(posed, posed_normals, None)?;
+    let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed);
     let n = posed.len();
     let mut has_counterpart = Vec::with_capacity(n);

@@ -17,17 +17,21 @@ const NONRIGID_JACOBI: usize = 30;
 /// `nonrigid_gate_start` to `gate_end`, so a body part further off than the final gate — a
 /// heavier shape's belly — is pulled in by the early rounds), and spreads their offsets `d_v`
 /// by Jacobi iterations of `min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²` (`r_v` 1 for a
-/// held pair, else 0). The normals stay those of the skinning.
+/// held pair, else 0). The normals stay those of the skinning. `hints` (the matches before
+/// this step) start the first round's searches; returns the last round's matches, or `hints`
+/// when no round ran.
 pub(super) fn nonrigid_step(
     al: &Alignment<'_>,
     posed: &mut [Point3<f64>],
     posed_normals: &[Vector3<f64>],
-) -> Result<(), CorrespondError> {
+    hints: Vec<(u32, f64)>,
+) -> Result<Vec<(u32, f64)>, CorrespondError> {
     let options = al.options;
     let n = posed.len();
     let Some(nb) = al.template.neighbors.filter(|nb| nb.len() == n) else {
-        return Ok(());
+        return Ok(hints);
     };
+    let mut hints = hints;
     let rounds = options.nonrigid_rounds;
     let g0 = options.nonrigid_gate_start.max(options.gate_end);
     for round in 0..rounds {
@@ -37,14 +41,19 @@ pub(super) fn nonrigid_step(
             1.0
         };
         let round_gate = al.unit_len * g0 * (options.gate_end / g0).powf(frac);
-        let near = al.nearest(posed, posed_normals, None)?;
         let visible = al.visibility(posed);
+        let near = al.candidates(
+            posed,
+            posed_normals,
+            None,
+            visible.as_deref(),
+            round_gate,
+            Some(&hints),
+        )?;
         let mut d = vec![Vector3::zeros(); n];
         let mut r = vec![0.0; n];
-        for (v, &(q, _)) in near.iter().enumerate() {
-            if visible.as_ref().is_none_or(|s| s[v])
-                && al.holds(&posed[v], &posed_normals[v], q, round_gate)
-            {
+        for (v, &(q, d2)) in near.iter().enumerate() {
+            if d2.is_finite() && al.holds(&posed[v], &posed_normals[v], q, round_gate) {
                 d[v] = al.target_positions[q as usize] - posed[v];
                 r[v] = 1.0;
             }
@@ -71,6 +80,7 @@ pub(super) fn nonrigid_step(
         for (x, f) in posed.iter_mut().zip(&field) {
             *x += f;
         }
+        hints = near;
     }
-    Ok(())
+    Ok(hints)
 }

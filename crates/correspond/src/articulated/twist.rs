@@ -148,7 +148,9 @@ pub(super) fn twist_search(
                         )
                     })
                     .collect();
-                let near = al.trees.nearest(al.pools, &f, Some(&subset))?;
+                let near = al
+                    .trees
+                    .nearest(al.pools, &f, Some(&subset), None, f64::INFINITY)?;
                 let mut pairs = Vec::new();
                 let mut total = 0.0;
                 for v in (0..n).filter(|&v| on_bone[v]) {

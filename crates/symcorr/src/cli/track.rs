@@ -313,20 +313,14 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let done_before = done.len();
     let total = frames.len();
     let skipped_rows = (vec![-1i32; n], vec![0f32; n]);
-    for (k, &i) in frames.iter().enumerate().skip(done.len()) {
-        if stop.load(std::sync::atomic::Ordering::SeqCst) {
-            break;
-        }
-        bar.update("tracking", k, total);
-        let time = recording.time(i).unwrap_or(f64::NAN);
-        let t0 = Instant::now();
-        let outcome = match recording.frame(i) {
-            Ok(depth) => tracker.frame(time, &depth),
-            Err(e) => {
-                tracker.reset();
-                FrameOutcome::Skipped(e.to_string())
-            }
-        };
+    // One frame's rows, journal line and scan, written once it is matched (or skipped).
+    let mut write = |f: Finished| -> Result<(), CliError> {
+        let Finished {
+            frame: i,
+            time,
+            t0,
+            outcome,
+        } = f;
         let entry = match &outcome {
             FrameOutcome::Matched(m) => {
                 corr_npy.push_i32(&m.target_of).map_err(npy)?;
@@ -385,7 +379,69 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             .sync_data()
             .map_err(|e| CliError::with(journal_path.display(), e))?;
         done.push(entry);
-    }
+        bar.update("tracking", done.len(), total);
+        Ok(())
+    };
+    // Two threads: this one reads and observes frame k + 1 (joints, scan, attachment) while
+    // the other matches frame k; at most one observation waits between them. The outcomes
+    // are those of one frame after the other (`Tracker::parts`).
+    let (observer, fitter) = tracker.parts();
+    std::thread::scope(|scope| -> Result<(), CliError> {
+        let (to_fit, observed) = std::sync::mpsc::sync_channel::<Observed>(1);
+        let (to_write, finished) = std::sync::mpsc::channel::<Finished>();
+        scope.spawn(move || {
+            for o in observed {
+                let outcome = match o.observation {
+                    Ok(observation) => fitter.fit(observation),
+                    Err(reason) => {
+                        fitter.reset();
+                        FrameOutcome::Skipped(reason)
+                    }
+                };
+                let f = Finished {
+                    frame: o.frame,
+                    time: o.time,
+                    t0: o.t0,
+                    outcome,
+                };
+                if to_write.send(f).is_err() {
+                    break;
+                }
+            }
+        });
+        for &i in frames.iter().skip(done_before) {
+            if stop.load(std::sync::atomic::Ordering::SeqCst) {
+                break;
+            }
+            let time = recording.time(i).unwrap_or(f64::NAN);
+            let t0 = Instant::now();
+            let observation = match recording.frame(i) {
+                Ok(depth) => observer.observe(time, &depth),
+                Err(e) => {
+                    observer.reset();
+                    Err(e.to_string())
+                }
+            };
+            let o = Observed {
+                frame: i,
+                time,
+                t0,
+                observation,
+            };
+            if to_fit.send(o).is_err() {
+                break;
+            }
+            while let Ok(f) = finished.try_recv() {
+                write(f)?;
+            }
+        }
+        // The frames in flight are finished and written, Ctrl-C or not.
+        drop(to_fit);
+        for f in finished {
+            write(f)?;
+        }
+        Ok(())
+    })?;
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
     let mut summary = report::summary(&done, total);
@@ -426,6 +482,22 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// A frame observed (or refused by the observer), on its way to the fitter.
+struct Observed {
+    frame: usize,
+    time: f64,
+    t0: Instant,
+    observation: Result<symcorr::track::Observation, String>,
+}
+
+/// A frame's outcome, on its way to be written.
+struct Finished {
+    frame: usize,
+    time: f64,
+    t0: Instant,
+    outcome: FrameOutcome,
 }
 
 #[cfg(test)]
