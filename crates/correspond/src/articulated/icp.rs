@@ -25,15 +25,31 @@ pub(super) struct Rounds {
     pub iterations: usize,
     /// Gate of the first round (√area units); the last one's is `gate_end`.
     pub gate_start: f64,
+    /// When the occlusion test runs.
+    pub occlusion: OcclusionTest,
+}
+
+/// When the ICP rounds test which template vertices the target's viewpoint shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum OcclusionTest {
+    /// Every round, on the round's pose: from the skeletons, where the first rounds move
+    /// the template by centimetres.
+    EveryRound,
+    /// Once, on the pose the rounds start from: from a warm start, where the rounds move it
+    /// by millimetres and the test costs as much as a round's searches (testing every round
+    /// changed neither error nor flips there; from the skeletons it added flips:
+    /// docs/decisions/2026-12-03-track-throughput.md).
+    Once,
 }
 
 /// `rounds` of articulated ICP from `transforms` (updated in place), on the even stride
 /// `sample` of the template (per pool group). Each round pairs every sampled posed vertex
 /// with its nearest pool vertex, keeps the pairs that hold at the round's gate (shrinking
 /// geometrically from the rounds' `gate_start` to `gate_end`), the template vertices the
-/// target's viewpoint cannot see excluded, re-fits each bone with enough pairs by weighted Kabsch plus its two joints as
-/// anchors (held within `limit` for its bone), and re-skins. Returns the final posed positions
-/// and normals, and the last round's matches (hints for the searches after it).
+/// target's viewpoint cannot see excluded, re-fits each bone with enough pairs by weighted
+/// Kabsch plus its two joints as anchors (held within `limit` for its bone), and re-skins.
+/// Visibility is tested as `rounds.occlusion` says. Returns the final posed positions and normals, and the last round's matches (hints for the
+/// searches after it).
 pub(super) fn articulated_icp(
     al: &Alignment<'_>,
     transforms: &mut BoneTransforms,
@@ -47,14 +63,17 @@ pub(super) fn articulated_icp(
     let iterations = rounds.iterations.max(1);
     let gate_start = rounds.gate_start.max(options.gate_end);
     let mut last: Option<Vec<(u32, f64)>> = None;
+    let mut visible = al.visibility(&posed);
     for it in 0..iterations {
+        if it > 0 && rounds.occlusion == OcclusionTest::EveryRound {
+            visible = al.visibility(&posed);
+        }
         let frac = if iterations > 1 {
             it as f64 / (iterations - 1) as f64
         } else {
             1.0
         };
         let gate = al.unit_len * (gate_start * (options.gate_end / gate_start).powf(frac));
-        let visible = al.visibility(&posed);
         let near = al.candidates(
             &posed,
             &posed_normals,

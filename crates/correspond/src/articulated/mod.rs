@@ -229,10 +229,12 @@ pub fn articulated_match(
         ArticulatedStart::Skeletons => icp::Rounds {
             iterations: options.iterations,
             gate_start: options.gate_start,
+            occlusion: icp::OcclusionTest::EveryRound,
         },
         ArticulatedStart::Warm { .. } => icp::Rounds {
             iterations: options.warm_iterations,
             gate_start: options.warm_gate_start,
+            occlusion: icp::OcclusionTest::Once,
         },
     };
     let (mut posed, posed_normals, near) =
