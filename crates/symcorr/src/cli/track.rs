@@ -22,6 +22,7 @@
 pub mod merge;
 mod posed;
 mod report;
+use report::FrameDigest;
 
 use super::progress::Bar;
 use super::CliError;
@@ -260,8 +261,13 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     );
     let npy = |e: symcorr::npy::NpyError| CliError(e.to_string());
     let resuming = args.resume && journal_path.exists();
+    // What stays in memory of each frame done: a few numbers (the frame lines are on disk, in
+    // the journal), so that memory does not grow with the recording.
     let (mut done, mut corr_npy, mut conf_npy) = if resuming {
-        let done = read_journal(&journal_path, &header)?;
+        let done: Vec<FrameDigest> = read_journal(&journal_path, &header)?
+            .iter()
+            .map(FrameDigest::of)
+            .collect();
         let k = done.len();
         (
             done,
@@ -378,7 +384,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         journal
             .sync_data()
             .map_err(|e| CliError::with(journal_path.display(), e))?;
-        done.push(entry);
+        done.push(FrameDigest::of(&entry));
         bar.update("tracking", done.len(), total);
         Ok(())
     };
@@ -464,7 +470,23 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         Ok(v) => v.clone(),
         Err(e) => json!({ "error": e.0 }),
     };
-    report::stage(&mut batch, &args.out, &header, &done, total, &summary)?;
+    let journal_lines = |emit: &mut dyn FnMut(&str) -> std::io::Result<()>| {
+        let reader = std::io::BufReader::new(std::fs::File::open(&journal_path)?);
+        // The header first, then one line per frame done.
+        for line in std::io::BufRead::lines(reader).skip(1) {
+            emit(&line?)?;
+        }
+        Ok(())
+    };
+    report::stage(
+        &mut batch,
+        &args.out,
+        &header,
+        journal_lines,
+        &done,
+        total,
+        &summary,
+    )?;
     batch.commit().map_err(|e| CliError(e.to_string()))?;
     println!(
         "tracked {} frames ({} matched, {} skipped) into {}",

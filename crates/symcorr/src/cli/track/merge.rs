@@ -485,9 +485,10 @@ fn write(
         .staged_file(&posed_path)
         .map(Path::to_path_buf)
         .ok_or_else(|| MergeError::Output(format!("{}: not staged", posed_path.display())))?;
-    let glb = posed::stage_glb(&mut batch, out, &staged_posed, template, &lines, total)
+    let digests: Vec<report::FrameDigest> = lines.iter().map(report::FrameDigest::of).collect();
+    let glb = posed::stage_glb(&mut batch, out, &staged_posed, template, &digests, total)
         .map_err(|e| MergeError::Output(e.0))?;
-    let mut summary = report::summary(&lines, total);
+    let mut summary = report::summary(&digests, total);
     summary["frames_per_second_this_run"] = Value::Null;
     summary["template_track"] = glb;
     summary["merged_from"] = json!(slices
@@ -501,8 +502,19 @@ fn write(
         .iter()
         .map(|(a, b)| format!("{a}..{b}"))
         .collect::<Vec<_>>());
-    report::stage(&mut batch, out, &header, &lines, total, &summary)
-        .map_err(|e| MergeError::Output(e.0))?;
+    let frame_lines = |emit: &mut dyn FnMut(&str) -> std::io::Result<()>| {
+        lines.iter().try_for_each(|l| emit(&l.to_string()))
+    };
+    report::stage(
+        &mut batch,
+        out,
+        &header,
+        frame_lines,
+        &digests,
+        total,
+        &summary,
+    )
+    .map_err(|e| MergeError::Output(e.0))?;
     // The journal last: a folder with a journal is a complete run folder.
     let journal = out.join(JOURNAL);
     batch

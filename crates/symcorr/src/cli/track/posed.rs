@@ -2,6 +2,7 @@
 //! streamed row by row like the correspondence, and at the end of the run the animated
 //! template built from it ([`symcorr::track::animation`]).
 
+use super::report::FrameDigest;
 use super::CliError;
 use serde_json::{json, Value};
 use std::path::Path;
@@ -66,15 +67,15 @@ pub(super) fn stage_glb(
     out: &Path,
     posed_npy: &Path,
     template: &TriMesh,
-    done: &[Value],
+    done: &[FrameDigest],
     total: usize,
 ) -> Result<Value, CliError> {
     let rows: Vec<PosedRow> = done
         .iter()
         .map(|e| PosedRow {
-            frame: e["frame"].as_u64().unwrap_or(0) as usize,
-            time_s: e["time_s"].as_f64().unwrap_or(f64::NAN),
-            posed: e["posed"] == true,
+            frame: e.frame,
+            time_s: e.time_s,
+            posed: e.posed,
         })
         .collect();
     let cap = max_targets(template.num_vertices());
