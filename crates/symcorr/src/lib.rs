@@ -71,6 +71,7 @@ pub mod output;
 mod pipeline;
 mod prepare;
 pub mod track;
+pub mod view;
 
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{

@@ -38,6 +38,8 @@ enum Command {
     Track(cli::track::TrackArgs),
     /// Merge the output folders of slices of one track run (`track --frames A..B`) into one.
     TrackMerge(cli::track::merge::TrackMergeArgs),
+    /// A self-contained HTML page of a correspondence, labels or track result (three.js).
+    View(cli::view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Command::Label(a) => cli::label::run(a, limit),
         Command::Track(a) => cli::track::run(a, limit),
         Command::TrackMerge(a) => cli::track::merge::run(a, limit),
+        Command::View(a) => cli::view::run(a, limit),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

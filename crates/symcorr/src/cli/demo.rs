@@ -161,6 +161,17 @@ pub fn run(args: DemoArgs, max_input_bytes: u64) -> Result<(), CliError> {
         .add(&corr_path, doc.to_json().as_bytes())
         .map_err(cli)?;
     write_coloured(&mut batch, &args.out, &a, &b, &main.correspondence)?;
+    // The pair page, with the dataset's ground truth (`symcorr view`).
+    let page = super::view::pair_html(
+        &doc,
+        &corr_path.display().to_string(),
+        (&ds.meshes[&a_name], &ds.meshes[&b_name]),
+        Some(&fixtures),
+        max_input_bytes,
+    )?;
+    batch
+        .add(&args.out.join("view.html"), page.as_bytes())
+        .map_err(cli)?;
     let curves: Vec<(String, Vec<(f64, f64)>)> = results
         .iter()
         .zip(variants.iter().map(|v| v.3))

@@ -59,6 +59,9 @@ pub struct MatchArgs {
     /// (template_segments.ply, target_segments.ply), plus .glb copies.
     #[arg(long, value_name = "DIR")]
     pub ply_out: Option<PathBuf>,
+    /// Also write a self-contained HTML page of the result (as `symcorr view` makes it).
+    #[arg(long, value_name = "HTML")]
+    pub view: Option<PathBuf>,
     /// Explain one template point (an id of the template file), the paper's Fig. 2: writes
     /// OUT's name with `.explain-POINT.json` (`symcorr.explain/1`: its candidates before and
     /// after the skeleton filter and the selected match) and `.explain-POINT.ply` (both bodies
@@ -362,6 +365,7 @@ pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
         Some(&args.out),
         args.base_set_out.as_ref(),
         args.lines_out.as_ref(),
+        args.view.as_ref(),
     ]
     .into_iter()
     .flatten()
@@ -440,6 +444,12 @@ pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
     batch.add(&args.out, text.as_bytes()).map_err(cli)?;
     if let Some(dir) = &args.ply_out {
         write_coloured(&mut batch, dir, &a, &b, &corr)?;
+    }
+    if let Some(path) = &args.view {
+        let name = args.out.display().to_string();
+        let meshes = (args.template.as_path(), args.target.as_path());
+        let html = super::view::pair_html(&doc, &name, meshes, None, max_input_bytes)?;
+        batch.add(path, html.as_bytes()).map_err(cli)?;
     }
     if let (Some(point), Some(paths)) = (args.explain, &explain_paths) {
         write_explanation(&mut batch, &args, &pipeline, (&a, &b), point, paths)?;

@@ -8,6 +8,7 @@ pub mod progress;
 pub mod scan;
 pub mod spectrum;
 pub mod track;
+pub mod view;
 
 /// A user error: printed as one line on stderr, exit status 1.
 #[derive(Debug, thiserror::Error)]
