@@ -3,6 +3,8 @@
 //! before any page is written. The pages themselves are driven in Chromium by
 //! `tests/browser/` (`.ci/run`).
 
+// Shared with the other end-to-end tests; this one reads no JSON output (read_json).
+#[allow(dead_code)]
 mod support;
 
 use serde_json::{json, Value};
@@ -62,7 +64,9 @@ fn write(dir: &Path, name: &str, doc: &Value) -> PathBuf {
 
 /// The embedded data object of a page.
 fn page_data(html: &str) -> Value {
-    let start = html.find(r#"id="symcorr-data" type="application/json">"#).unwrap();
+    let start = html
+        .find(r#"id="symcorr-data" type="application/json">"#)
+        .unwrap();
     let rest = &html[start..];
     let open = rest.find('>').unwrap() + 1;
     let close = rest.find("</script>").unwrap();
@@ -80,7 +84,10 @@ fn assert_one_line_refusal(o: &std::process::Output, needle: &str, page: &Path) 
         .filter_map(|e| e.ok())
         .filter(|e| e.file_name().to_string_lossy().contains("view"))
         .collect();
-    assert!(leftovers.is_empty(), "no temporary files left: {leftovers:?}");
+    assert!(
+        leftovers.is_empty(),
+        "no temporary files left: {leftovers:?}"
+    );
 }
 
 #[test]
@@ -116,7 +123,11 @@ fn pair_page_embeds_both_meshes_and_the_matches_with_their_truth() {
     let errors = decode_f32(data["truth"]["error"].as_str().unwrap());
     assert_eq!(errors.len(), pairs.len());
     assert!(errors[..pairs.len() - 1].iter().all(|&e| e == 0.0));
-    assert!(errors[pairs.len() - 1] > 0.05, "{}", errors[pairs.len() - 1]);
+    assert!(
+        errors[pairs.len() - 1] > 0.05,
+        "{}",
+        errors[pairs.len() - 1]
+    );
 }
 
 fn decode_f32(b64: &str) -> Vec<f32> {
@@ -195,13 +206,13 @@ fn a_labels_file_for_another_mesh_is_refused_before_writing() {
     let out = dir.path().join("view.html");
     let l = write(dir.path(), "labels.json", &labels(&mesh("s0_rest"), n + 1));
     let o = run(bin().arg("view").arg(&l).arg("--out").arg(&out));
-    assert_one_line_refusal(
-        &o,
-        &format!("made for a mesh of {} vertices", n + 1),
-        &out,
-    );
+    assert_one_line_refusal(&o, &format!("made for a mesh of {} vertices", n + 1), &out);
     // Not a result file at all, and a folder without track.json.
-    let o = run(bin().arg("view").arg(mesh("s0_rest")).arg("--out").arg(&out));
+    let o = run(bin()
+        .arg("view")
+        .arg(mesh("s0_rest"))
+        .arg("--out")
+        .arg(&out));
     assert_one_line_refusal(&o, "not a symcorr.correspondence/1", &out);
     let o = run(bin().arg("view").arg(dir.path()).arg("--out").arg(&out));
     assert_one_line_refusal(&o, "without track.json", &out);

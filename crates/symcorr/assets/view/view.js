@@ -104,10 +104,21 @@
       up = fallback.up; left = fallback.left;
     }
     var front = cross(left, up);
+    // Rotate, then put the centre of the rotated bounding box at the origin.
+    var axes = [left, up, front], lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    for (var v = 0; v < pos.length / 3; v++) {
+      var p = [pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]];
+      for (var k = 0; k < 3; k++) {
+        var x = dot(axes[k], p);
+        if (x < lo[k]) lo[k] = x;
+        if (x > hi[k]) hi[k] = x;
+      }
+    }
+    var t = [0, 1, 2].map(function (k) { return isFinite(lo[k]) ? -(lo[k] + hi[k]) / 2 : -dot(axes[k], c || [0, 0, 0]); });
     var m = new THREE.Matrix4();
-    m.set(left[0], left[1], left[2], -dot(left, c),
-          up[0], up[1], up[2], -dot(up, c),
-          front[0], front[1], front[2], -dot(front, c),
+    m.set(left[0], left[1], left[2], t[0],
+          up[0], up[1], up[2], t[1],
+          front[0], front[1], front[2], t[2],
           0, 0, 0, 1);
     return m;
   }
@@ -209,15 +220,18 @@
   function layout() {
     var w = window.innerWidth, h = window.innerHeight;
     renderer.setSize(w, h);
+    // The views leave the timeline's strip free at the bottom.
+    var timeline = document.getElementById('timeline');
+    var vh = timeline.style.display === 'block' ? Math.max(100, h - timeline.offsetHeight - 16) : h;
     var each = w / views.length;
-    views.forEach(function (view, i) { view.rect = { x: i * each, y: 0, w: each, h: h }; });
-    var aspect = each / h;
+    views.forEach(function (view, i) { view.rect = { x: i * each, y: 0, w: each, h: vh }; });
+    var aspect = each / vh;
     camera.aspect = aspect;
     camera.updateProjectionMatrix();
     // Fit the bodies: the radius that shows a sphere of radius size/2 in the narrower field.
     var half = THREE.MathUtils.degToRad(camera.fov / 2);
     var hHalf = Math.atan(Math.tan(half) * aspect);
-    orbit.radius = orbit.fit = 0.55 * orbit.size / Math.sin(Math.min(half, hHalf));
+    orbit.radius = orbit.fit = 0.66 * orbit.size / Math.sin(Math.min(half, hHalf));
     placeCaptions();
     redraw();
   }
@@ -399,10 +413,12 @@
     legend.style.columnCount = 1;
   }
   var captions = [];
-  function caption(text) {
+  function baseName(p) { return String(p).split(/[\\/]/).pop(); }
+  function caption(text, full) {
     var c = document.createElement('div');
     c.className = 'caption';
     c.textContent = text;
+    if (full) c.title = full;
     document.body.appendChild(c);
     captions.push(c);
   }
@@ -437,8 +453,8 @@
     var gv = makeView('target', gPos, decode(M.target.triangles, Uint32Array), gMatrix);
     setSize([tv, gv]);
     var field = fieldColours(tPos, tMatrix);
-    caption('template: ' + M.template.path + ' (' + M.template.vertices + ' vertices)');
-    caption('target: ' + M.target.path + ' (' + M.target.vertices + ' vertices)');
+    caption('template: ' + baseName(M.template.path) + ' (' + M.template.vertices + ' vertices)', M.template.path);
+    caption('target: ' + baseName(M.target.path) + ' (' + M.target.vertices + ' vertices)', M.target.path);
 
     var modes = {
       transfer: function () {
@@ -460,11 +476,17 @@
     };
     state.modes = ['transfer', 'segments', 'confidence'];
     if (err) {
+      // The ramp spans 0 to the errors' 95th percentile, rounded up to 1, 2 or 5 × 10^k.
+      var sorted = Array.prototype.filter.call(err, function (e) { return !isNaN(e); }).sort(function (a, b) { return a - b; });
+      var p95 = sorted.length ? sorted[Math.min(sorted.length - 1, Math.floor(0.95 * sorted.length))] : 0;
+      var top = Math.max(p95, 1e-4), mag = Math.pow(10, Math.floor(Math.log10(top)));
+      var scale = [1, 2, 5, 10].map(function (f) { return f * mag; }).filter(function (x) { return x >= top; })[0];
+      state.errorScale = scale;
       modes.error = function () {
-        var c = function (k) { return k < 0 || isNaN(err[k]) ? GREY : ramp(err[k] / 0.25); };
+        var c = function (k) { return k < 0 || isNaN(err[k]) ? GREY : ramp(err[k] / scale); };
         setColours(tv, function (v) { return blocked[v] ? GREY : c(tNear[v]); });
         setColours(gv, function (q) { return c(gNear[q]); });
-        heatLegend('geodesic error (' + truth.unit + ')', '0', '≥ 0.25');
+        heatLegend('geodesic error (' + truth.unit + ')', '0', '≥ ' + scale);
       };
       state.modes.push('error');
     }
@@ -543,7 +565,7 @@
     var matrix = bodyMatrix(pos, seg, DEFAULT_AXES);
     var view = makeView('mesh', pos, decode(M.triangles, Uint32Array), matrix);
     setSize([view]);
-    caption(M.path + ' (' + M.vertices + ' vertices)');
+    caption(baseName(M.path) + ' (' + M.vertices + ' vertices)', M.path);
     setColours(view, function (v) { return seg[v] === NO_SEGMENT ? DARK : SEGMENTS[seg[v]].colour; });
     segmentLegend();
     state.mode = 'segments';
@@ -620,10 +642,13 @@
     setColours(view, function (v) { return field[v]; });
     state.mode = 'colour field';
     state.modes = ['colour field'];
-    caption(data.title + ': the template following the recording (' + n + ' vertices)');
+    caption(baseName(data.title) + ': the template following the recording (' + n + ' vertices)', data.title);
 
     document.getElementById('timeline').style.display = 'block';
-    info.style.bottom = '110px';
+    info.style.bottom = 'auto';
+    info.style.top = '8px';
+    info.style.left = 'auto';
+    info.style.right = '8px';
     var scrub = document.getElementById('scrub');
     scrub.max = String(Math.max(0, frames.length - 1));
     var strip = document.getElementById('strip');
@@ -710,6 +735,7 @@
       return view ? pickAt(view, x, y) : null;
     };
     state.views = views.map(function (v) { return { name: v.name, rect: v.rect }; });
+    if (!controls.children.length) controls.style.display = 'none';
     layout();
     state.views = views.map(function (v) { return { name: v.name, rect: v.rect }; });
     requestAnimationFrame(loop);

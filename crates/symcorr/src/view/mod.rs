@@ -104,7 +104,13 @@ impl PairView<'_> {
         let corr = self.correspondence;
         let file = self.name;
         let (nt, ng) = (self.template.num_vertices(), self.target.num_vertices());
-        check_count(file, "template", corr.template.vertices, nt, &corr.template.path)?;
+        check_count(
+            file,
+            "template",
+            corr.template.vertices,
+            nt,
+            &corr.template.path,
+        )?;
         check_count(file, "target", corr.target.vertices, ng, &corr.target.path)?;
         for (k, &(p, q, _)) in corr.pairs.iter().enumerate() {
             if p as usize >= nt {
@@ -116,7 +122,9 @@ impl PairView<'_> {
             if q as usize >= ng {
                 return Err(mismatch(
                     file,
-                    format!("pair {k}: target vertex {q} out of range (the target has {ng} vertices)"),
+                    format!(
+                        "pair {k}: target vertex {q} out of range (the target has {ng} vertices)"
+                    ),
                 ));
             }
         }
@@ -185,7 +193,9 @@ impl PairTruth {
         let _template_name = name_of(&corr.template.path)?;
         let target_name = name_of(&corr.target.path)?;
         let table = match ds.truth.get(&target_name) {
-            Some(p) => Some(symcorr_eval::read_truth(p).map_err(|e| ViewError::Read(e.to_string()))?),
+            Some(p) => {
+                Some(symcorr_eval::read_truth(p).map_err(|e| ViewError::Read(e.to_string()))?)
+            }
             None => None,
         };
         if let Some(t) = &table {
@@ -266,7 +276,10 @@ impl PairTruth {
             area: pair.target.total_area(),
         };
         let (graph, unit) = match table {
-            None => (EvalGraph::new(pair.target), "geodesic distance on the target / √area"),
+            None => (
+                EvalGraph::new(pair.target),
+                "geodesic distance on the target / √area",
+            ),
             Some(_) => (
                 EvalGraph::new(pair.template),
                 "geodesic distance on the template / √area (partial target)",
@@ -419,7 +432,10 @@ fn segment_bytes(
     if labels.len() != n {
         return Err(mismatch(
             file,
-            format!("{} {what} segment labels for a {what} of {n} vertices", labels.len()),
+            format!(
+                "{} {what} segment labels for a {what} of {n} vertices",
+                labels.len()
+            ),
         ));
     }
     labels
@@ -430,7 +446,10 @@ fn segment_bytes(
             Some(s) if *s < Segment::COUNT => Ok(*s as u8),
             Some(s) => Err(mismatch(
                 file,
-                format!("{what} vertex {v}: segment {s} is not one of the {}", Segment::COUNT),
+                format!(
+                    "{what} vertex {v}: segment {s} is not one of the {}",
+                    Segment::COUNT
+                ),
             )),
         })
         .collect()
@@ -567,8 +586,7 @@ fn b64_u16(values: impl Iterator<Item = u16>) -> String {
 
 /// Standard base64 with padding (RFC 4648), what the page's `atob` reads.
 fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] =
-        b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {
         let b = [
@@ -647,8 +665,14 @@ mod tests {
                 removed: 0,
                 segment_missing: 0,
             },
-            target: crate::formats::MeshRef { path: "b.ply".into(), vertices: nb },
-            template: crate::formats::MeshRef { path: "a.ply".into(), vertices: na },
+            target: crate::formats::MeshRef {
+                path: "b.ply".into(),
+                vertices: nb,
+            },
+            template: crate::formats::MeshRef {
+                path: "a.ply".into(),
+                vertices: na,
+            },
             timings_s: BTreeMap::new(),
         };
         let mut view = PairView {
@@ -676,6 +700,9 @@ mod tests {
         for placeholder in ["{{TITLE}}", "{{DATA}}", "{{THREE}}", "{{VIEW_JS}}"] {
             assert!(!html.contains(placeholder), "{placeholder} filled");
         }
-        assert!(!html.contains("<script src"), "nothing loaded from elsewhere");
+        assert!(
+            !html.contains("<script src"),
+            "nothing loaded from elsewhere"
+        );
     }
 }

@@ -42,8 +42,7 @@ impl TrackView {
     pub fn read(dir: &Path, max_frames: usize) -> Result<TrackView, ViewError> {
         let track_json = dir.join("track.json");
         let text = std::fs::read_to_string(&track_json).map_err(|e| read_err(&track_json, e))?;
-        let doc: Value =
-            serde_json::from_str(&text).map_err(|e| read_err(&track_json, e))?;
+        let doc: Value = serde_json::from_str(&text).map_err(|e| read_err(&track_json, e))?;
         if doc["format"] != "symcorr.track/1" {
             return Err(read_err(
                 &track_json,
@@ -113,7 +112,9 @@ impl TrackView {
             pose.chunks_exact(3).flat_map(move |p| {
                 (0..3).map(move |k| {
                     let span = (hi[k] - lo[k]).max(f32::MIN_POSITIVE);
-                    ((p[k] - lo[k]) / span * 65535.0).round().clamp(0.0, 65535.0) as u16
+                    ((p[k] - lo[k]) / span * 65535.0)
+                        .round()
+                        .clamp(0.0, 65535.0) as u16
                 })
             })
         });
