@@ -56,9 +56,12 @@ before(async () => {
   pages.labels = path.join(out, 'labels.html');
   symcorr('view', path.join(out, 'labels.json'), mesh, '--out', pages.labels);
   // A track page of the first frames of the synthetic recording.
-  symcorr('track', recording, '--joints', path.join(recording, 'joints.json'), '--out', path.join(out, 'track'), '--frames', '0..4');
+  // `track --view` writes the same page as `view DIR`.
   pages.track = path.join(out, 'track.html');
-  symcorr('view', path.join(out, 'track'), '--out', pages.track);
+  symcorr('track', recording, '--joints', path.join(recording, 'joints.json'), '--out', path.join(out, 'track'), '--frames', '0..4',
+    '--view', pages.track);
+  symcorr('view', path.join(out, 'track'), '--out', path.join(out, 'track-again.html'));
+  assert.ok(fs.readFileSync(pages.track).equals(fs.readFileSync(path.join(out, 'track-again.html'))), 'track --view = view DIR');
 
   userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'symcorr-chromium-'));
   browser = await chromium.launchPersistentContext(userDir, {

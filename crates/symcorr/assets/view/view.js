@@ -486,7 +486,7 @@
         var c = function (k) { return k < 0 || isNaN(err[k]) ? GREY : ramp(err[k] / scale); };
         setColours(tv, function (v) { return blocked[v] ? GREY : c(tNear[v]); });
         setColours(gv, function (q) { return c(gNear[q]); });
-        heatLegend('geodesic error (' + truth.unit + ')', '0', '≥ ' + scale);
+        heatLegend('geodesic error / √area', '0', '≥ ' + scale);
       };
       state.modes.push('error');
     }

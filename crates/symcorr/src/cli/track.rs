@@ -84,6 +84,9 @@ pub struct TrackArgs {
     /// Also write each frame's scan as scans/NNNNNN.ply.
     #[arg(long)]
     pub scans: bool,
+    /// Also write a self-contained HTML page of the run (as `symcorr view DIR` makes it).
+    #[arg(long, value_name = "HTML")]
+    pub view: Option<PathBuf>,
 }
 
 /// The bundled template: the CC0 MakeHuman body in its rest pose and its exact joints.
@@ -496,6 +499,9 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         args.out.display()
     );
     glb?;
+    if let Some(page) = &args.view {
+        super::view::write_track_page(&args.out, page)?;
+    }
     if done.len() < total {
         return Err(CliError(format!(
             "interrupted after {} of {total} frames; {} holds them, --resume continues",

@@ -178,6 +178,18 @@ pub fn pair_html(
     pair_page(&view).map_err(err)
 }
 
+/// Writes the track page of the run folder `dir` to `page` (`track --view`).
+pub fn write_track_page(dir: &Path, page: &Path) -> Result<(), CliError> {
+    let track = TrackView::read(dir, DEFAULT_MAX_FRAMES).map_err(|e| CliError(e.to_string()))?;
+    let html = track_page(&track);
+    let mut batch = OutputBatch::new();
+    let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
+    batch.add(page, html.as_bytes()).map_err(cli)?;
+    batch.commit().map_err(cli)?;
+    println!("wrote {}", page.display());
+    Ok(())
+}
+
 pub fn run(args: ViewArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let html = build(&args, max_input_bytes)?;
     let mut batch = OutputBatch::new();
