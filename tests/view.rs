@@ -3,13 +3,11 @@
 //! before any page is written. The pages themselves are driven in Chromium by
 //! `tests/browser/` (`.ci/run`).
 
-// Shared with the other end-to-end tests; this one reads no JSON output (read_json).
-#[allow(dead_code)]
 mod support;
 
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
-use support::{bin, run};
+use support::{bin, read_json, run};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/bodies")
@@ -216,4 +214,36 @@ fn a_labels_file_for_another_mesh_is_refused_before_writing() {
     assert_one_line_refusal(&o, "not a symcorr.correspondence/1", &out);
     let o = run(bin().arg("view").arg(dir.path()).arg("--out").arg(&out));
     assert_one_line_refusal(&o, "without track.json", &out);
+}
+
+#[test]
+fn match_view_writes_the_pair_page_beside_the_correspondence() {
+    let dir = tempfile::tempdir().unwrap();
+    let (corr, page) = (dir.path().join("corr.json"), dir.path().join("pair.html"));
+    let joints = |n: &str| fixtures().join("joints").join(format!("{n}.json"));
+    let o = run(bin()
+        .arg("match")
+        .arg(mesh("s0_rest"))
+        .arg(mesh("s1_t-pose"))
+        .arg("--template-joints")
+        .arg(joints("s0_rest"))
+        .arg("--target-joints")
+        .arg(joints("s1_t-pose"))
+        .arg("--out")
+        .arg(&corr)
+        .arg("--view")
+        .arg(&page));
+    assert!(o.status.success());
+    let doc = read_json(&corr);
+    let data = page_data(&std::fs::read_to_string(&page).unwrap());
+    assert_eq!(data["kind"], "pair");
+    assert_eq!(
+        data["pairs"]["count"],
+        doc["pairs"].as_array().unwrap().len()
+    );
+    assert_eq!(
+        data["truth"],
+        Value::Null,
+        "no ground truth without a dataset"
+    );
 }
