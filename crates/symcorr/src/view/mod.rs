@@ -16,10 +16,11 @@
 //! which the caller writes with the atomic writer (`symcorr_mesh::io::OutputBatch`).
 //!
 //! # The page
-//! The page is `assets/view/page.html` with three things put in at build time: three.js
+//! The page is `assets/view/page.html` with three things put in: three.js
 //! (`assets/three/three.cjs`, the CommonJS build of a pinned release, wrapped into a classic
-//! script that defines `THREE`), the viewer's own script (`assets/view/view.js`: an orbit
-//! camera, picking, colour modes, the timeline) and the data as one JSON object in a
+//! script that defines `THREE`) and the viewer's own script (`assets/view/view.js`: an orbit
+//! camera, picking, colour modes, the timeline), both compiled into the binary with
+//! `include_str!`, and the data as one JSON object in a
 //! `<script type="application/json" id="symcorr-data">` element. Arrays are base64 of
 //! little-endian typed arrays: positions `Float32Array`, triangles `Uint32Array`, segment labels
 //! `Uint8Array` (255: none), posed track frames `Uint16Array` quantised over their bounding box.
@@ -190,7 +191,8 @@ impl PairTruth {
                 )))
             }
         };
-        let _template_name = name_of(&corr.template.path)?;
+        // The template must be one of the dataset's meshes (its ids are the common order).
+        name_of(&corr.template.path)?;
         let target_name = name_of(&corr.target.path)?;
         let table = match ds.truth.get(&target_name) {
             Some(p) => {
