@@ -63,6 +63,15 @@ before(async () => {
   symcorr('view', path.join(out, 'track'), '--out', path.join(out, 'track-again.html'));
   assert.ok(fs.readFileSync(pages.track).equals(fs.readFileSync(path.join(out, 'track-again.html'))), 'track --view = view DIR');
 
+  // A single-view scan of a body, matched densely, with `match --view`: a partial target.
+  const scan = path.join(repo, 'fixtures/synth/scan');
+  symcorr('scan', '--depth', path.join(scan, 'depth.png'), '--intrinsics', path.join(scan, 'intrinsics.json'),
+    '--joints', path.join(scan, 'joints.json'), '--out', path.join(out, 'scan.ply'));
+  pages.partial = path.join(out, 'partial.html');
+  symcorr('match', path.join(bodies, 'meshes', 's0_rest.ply'), path.join(out, 'scan.ply'),
+    '--template-joints', path.join(bodies, 'joints', 's0_rest.json'), '--target-joints', path.join(scan, 'joints.json'),
+    '--dense', '--out', path.join(out, 'partial.json'), '--view', pages.partial);
+
   userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'symcorr-chromium-'));
   browser = await chromium.launchPersistentContext(userDir, {
     executablePath: '/usr/bin/chromium',
@@ -165,6 +174,20 @@ function drawnFraction(img, region) {
     }
   }
   return drawn / all;
+}
+
+// Of the drawn pixels of a region, the fraction that are grey (no hue).
+function greyFraction(img, region) {
+  let grey = 0, drawn = 0;
+  for (let y = region.y0; y < region.y1; y++) {
+    for (let x = region.x0; x < region.x1; x++) {
+      const c = img.at(x, y);
+      if (Math.min(...c) >= 245) continue;
+      drawn++;
+      if (Math.max(...c) - Math.min(...c) <= 12) grey++;
+    }
+  }
+  return drawn ? grey / drawn : 0;
 }
 
 // Pixels of a region whose colour is `rgb` up to shading (white light scales all channels).
@@ -328,6 +351,33 @@ test('track view: the template follows the frames, with each frame\'s status', a
   await page.evaluate(() => { window.symcorrView.setFrame(0); window.symcorrView.play(); });
   await page.waitForFunction((last) => window.symcorrView.frame === last && !window.symcorrView.playing, frames.length - 1, { timeout: 60000 });
   await shot(page, 'track-played');
+  assert.deepEqual(errors, []);
+  assert.deepEqual(requests, []);
+  await page.close();
+});
+
+test('pair view of a partial scan: template points the scan does not show are grey', async () => {
+  const { page, errors, requests } = await open(pages.partial);
+  const corr = JSON.parse(fs.readFileSync(path.join(out, 'partial.json'), 'utf8'));
+  assert.ok(corr.no_counterpart.length > 100, `${corr.no_counterpart.length} unseen points`);
+  const front = await shot(page, 'partial-front');
+  const views = await page.evaluate(() => window.symcorrView.views);
+  assert.ok(drawnFraction(front, middle(views[1].rect)) > 0.03, 'the scan is drawn');
+  // From behind, the template's unseen back is in view.
+  await page.evaluate(() => window.symcorrView.setCamera(Math.PI, 0.1));
+  const unseen = corr.no_counterpart.filter((_, i) => i % 5 === 0).slice(0, 200);
+  const hit = await visibleVertex(page, 'template', unseen);
+  assert.ok(hit, 'an unseen point is in view from behind');
+  const back = await shot(page, 'partial-back');
+  const left = middle(views[0].rect);
+  const [greyFront, greyBack] = [greyFraction(front, left), greyFraction(back, left)];
+  assert.ok(greyFront < 0.2 && greyBack > 0.6, `the template grey from behind (${greyBack}), not in front (${greyFront})`);
+  await page.mouse.click(hit.x, hit.y);
+  const sel = await page.evaluate(() => window.symcorrView.selected);
+  assert.equal(sel.template, hit.v);
+  assert.equal(sel.noCounterpart, true);
+  assert.equal(sel.target, null, 'no match marked');
+  assert.match(await page.textContent('#info'), /does not show this point/);
   assert.deepEqual(errors, []);
   assert.deepEqual(requests, []);
   await page.close();

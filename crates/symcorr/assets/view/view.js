@@ -262,6 +262,11 @@
 
   function loop() {
     if (state.playing) stepPlayback();
+    if (pendingHover) {
+      var e = pendingHover;
+      pendingHover = null;
+      pickFromEvent(e, false);
+    }
     if (dirty) {
       dirty = false;
       render();
@@ -314,7 +319,7 @@
   }
 
   // ---- mouse: drag to turn, wheel to zoom, click (or hover) to pick -------------------------
-  var drag = null, onPick = null, hover = true;
+  var drag = null, onPick = null, hover = true, pendingHover = null;
   canvas.addEventListener('pointerdown', function (e) {
     drag = { x: e.clientX, y: e.clientY, moved: 0 };
     canvas.setPointerCapture(e.pointerId);
@@ -330,11 +335,14 @@
         redraw();
       }
     } else if (hover && onPick) {
-      pickFromEvent(e, false);
+      pendingHover = { clientX: e.clientX, clientY: e.clientY }; // picked once per frame
     }
   });
   canvas.addEventListener('pointerup', function (e) {
-    if (drag && drag.moved <= 4 && onPick) pickFromEvent(e, true);
+    if (drag && drag.moved <= 4 && onPick) {
+      pendingHover = null;
+      pickFromEvent(e, true);
+    }
     drag = null;
   });
   canvas.addEventListener('wheel', function (e) {
@@ -730,6 +738,12 @@
     else throw new Error('unknown page kind ' + data.kind);
     document.title = data.title + ' — symcorr view';
     state.project = project;
+    // Turns the camera about the bodies (radians: around the vertical axis, then up).
+    state.setCamera = function (theta, phi) {
+      orbit.theta = theta;
+      orbit.phi = Math.max(-1.5, Math.min(1.5, phi));
+      redraw();
+    };
     state.pick = function (name, x, y) {
       var view = views.filter(function (w) { return w.name === name; })[0];
       return view ? pickAt(view, x, y) : null;
