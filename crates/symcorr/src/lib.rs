@@ -25,7 +25,8 @@
 //! * [`io`] reads the input meshes and joint files; [`bench`](mod@bench) runs a benchmark folder in
 //!   DESIGN.md's layout and scores it with symcorr-eval; [`output`] writes the
 //!   `symcorr.correspondence/1` JSON ([`formats`]), coloured meshes and the error-curve plot;
-//!   [`cache`] keeps eigenpairs on disk between runs.
+//!   [`cache`] keeps eigenpairs on disk between runs; [`view`] makes a self-contained HTML page of
+//!   a correspondence, a labels file or a track run (`symcorr view`).
 //!
 //! ```
 //! use symcorr::{Mode, Pipeline, PipelineOptions};
