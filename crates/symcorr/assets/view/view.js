@@ -232,6 +232,7 @@
     var half = THREE.MathUtils.degToRad(camera.fov / 2);
     var hHalf = Math.atan(Math.tan(half) * aspect);
     orbit.radius = orbit.fit = 0.66 * orbit.size / Math.sin(Math.min(half, hHalf));
+    state.views = views.map(function (v) { return { name: v.name, rect: v.rect }; });
     placeCaptions();
     redraw();
   }
@@ -660,10 +661,19 @@
     var scrub = document.getElementById('scrub');
     scrub.max = String(Math.max(0, frames.length - 1));
     var strip = document.getElementById('strip');
+    // Strip colours: skipped grey, a left/right swap fixed orange, another notable correction
+    // (a poor fit accepted, joints borrowed from the previous frame) yellow, else green
+    // (reading joints between two log frames is routine).
+    function frameColour(f) {
+      var c = f.corrections || [];
+      if (f.status !== 'ok') return '#bbbbbb';
+      if (c.some(function (x) { return /swap_fixed$/.test(x); })) return '#ff9800';
+      if (c.some(function (x) { return x !== 'joints_interpolated'; })) return '#fdd835';
+      return '#43a047';
+    }
     frames.forEach(function (f, i) {
       var d = document.createElement('div');
-      var ok = f.status === 'ok';
-      d.style.background = !ok ? '#bbbbbb' : (f.corrections && f.corrections.length ? '#ff9800' : (f.pose === null ? '#a5d6a7' : '#43a047'));
+      d.style.background = frameColour(f);
       d.title = 'frame ' + f.frame + ': ' + f.status + (f.corrections && f.corrections.length ? ' (' + f.corrections.join(', ') + ')' : '');
       d.addEventListener('click', function () { state.setFrame(i); });
       strip.appendChild(d);
@@ -678,7 +688,7 @@
     setInfo(frames.length + ' frames: ' + (frames.length - skipped) + ' ok, ' + skipped + ' skipped' +
       (fixes ? '\ncorrections: ' + fixes : '') + (s.mean_coverage !== undefined ? '\nmean coverage ' + fmt(s.mean_coverage, 3) : '') +
       '\n' + poses.count + ' poses embedded' +
-      '\ngreen: ok · orange: ok with a correction · grey: skipped');
+      '\nstrip: green ok · orange left/right swap fixed\nyellow poor fit accepted or joints borrowed · grey skipped');
     var label = document.getElementById('frame-label');
     var status = document.getElementById('frame-status');
     state.frames = frames.length;
@@ -691,10 +701,24 @@
       status.textContent = f.status + (f.corrections && f.corrections.length ? ' · fixed: ' + f.corrections.join(', ') : '') +
         (f.coverage !== null && f.coverage !== undefined ? ' · coverage ' + fmt(f.coverage, 3) : '') +
         (f.mean_confidence !== null && f.mean_confidence !== undefined ? ' · mean confidence ' + fmt(f.mean_confidence, 3) : '') +
-        (f.pose === null ? ' · no pose shown' : '');
-      view.mesh.visible = f.pose !== null;
-      if (f.pose !== null) {
-        loadPose(f.pose);
+        (f.pose === null ? ' · no pose' : '');
+      // A frame without a pose shows the nearest one before it (else after it), faded.
+      var shown = i, j;
+      if (f.pose === null) {
+        shown = -1;
+        for (j = i - 1; j >= 0 && shown < 0; j--) if (frames[j].pose !== null) shown = j;
+        for (j = i + 1; j < frames.length && shown < 0; j++) if (frames[j].pose !== null) shown = j;
+        if (shown >= 0) status.textContent += ': showing frame ' + frames[shown].frame + ', faded';
+      }
+      var m = view.mesh.material;
+      m.transparent = shown !== i;
+      m.opacity = shown !== i ? 0.25 : 1;
+      m.depthWrite = shown === i;
+      m.needsUpdate = true;
+      view.mesh.visible = shown >= 0;
+      state.shownFrame = shown;
+      if (shown >= 0) {
+        loadPose(frames[shown].pose);
         var g = view.mesh.geometry;
         g.getAttribute('position').needsUpdate = true;
         g.computeVertexNormals();
@@ -748,10 +772,8 @@
       var view = views.filter(function (w) { return w.name === name; })[0];
       return view ? pickAt(view, x, y) : null;
     };
-    state.views = views.map(function (v) { return { name: v.name, rect: v.rect }; });
     if (!controls.children.length) controls.style.display = 'none';
     layout();
-    state.views = views.map(function (v) { return { name: v.name, rect: v.rect }; });
     requestAnimationFrame(loop);
   } catch (e) {
     fail(e.message);

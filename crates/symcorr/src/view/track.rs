@@ -7,7 +7,7 @@ use std::path::Path;
 
 /// Posed frames embedded by default: a longer run keeps this many, chosen evenly (first and
 /// last included); the timeline still lists every frame.
-pub const DEFAULT_MAX_FRAMES: usize = 120;
+pub const DEFAULT_MAX_FRAMES: usize = 50;
 
 /// A `symcorr track` run, as the page shows it.
 #[derive(Debug, Clone)]
