@@ -22,7 +22,8 @@
 //!   time, limb swaps fixed by continuity, smoothing, the frame's scan prepared and matched with
 //!   the pipeline's method against one prepared template; `symcorr track` streams the rows into
 //!   [`npy`] files.
-//! * [`io`] reads the input meshes and joint files; [`bench`](mod@bench) runs a benchmark folder in
+//! * [`io`] reads the input meshes and joint files; [`label::label_mesh`] labels one mesh as
+//!   `symcorr label` does; [`bench`](mod@bench) runs a benchmark folder in
 //!   DESIGN.md's layout and scores it with symcorr-eval; [`output`] writes the
 //!   `symcorr.correspondence/1` JSON ([`formats`]), coloured meshes and the error-curve plot;
 //!   [`cache`] keeps eigenpairs on disk between runs; [`view`] makes a self-contained HTML page of
@@ -66,6 +67,7 @@ pub mod cache;
 pub mod figures;
 pub mod formats;
 pub mod io;
+pub mod label;
 mod midline;
 pub mod npy;
 pub mod output;

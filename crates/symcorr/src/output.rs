@@ -210,13 +210,7 @@ pub fn labels_file(
         },
         format: LABELS_FORMAT.to_string(),
         joints,
-        labels: {
-            let mut l: Vec<Option<usize>> = att.labels.iter().map(|s| Some(s.index())).collect();
-            for &v in &d.fit.unreached {
-                l[v as usize] = None;
-            }
-            l
-        },
+        labels: crate::label::segment_labels(att),
         mesh: MeshRef {
             path: mesh_path.to_string(),
             vertices,

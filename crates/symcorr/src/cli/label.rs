@@ -6,7 +6,7 @@ use super::CliError;
 use std::path::PathBuf;
 use symcorr::io::{read_mesh, read_skeleton_as};
 use symcorr::output::labels_file;
-use symcorr_attach::{attach, palette, AttachOptions};
+use symcorr_attach::{palette, AttachOptions};
 use symcorr_mesh::io::{check_output, OutputBatch};
 
 /// Arguments of `symcorr label`.
@@ -91,25 +91,11 @@ pub fn run(a: LabelArgs, max_input_bytes: u64) -> Result<(), CliError> {
             .then(symcorr_attach::BoundaryConvention::makehuman),
         ..AttachOptions::default()
     };
-    // Bone heat and the handedness check read the surface's orientation: turn inconsistently
-    // oriented triangles first (nothing else is repaired, so vertex ids stay the input's).
-    let only_orientation = symcorr_mesh::RepairOptions {
-        remove_degenerate: false,
-        remove_duplicates: false,
-        remove_non_manifold_edge_triangles: false,
-        split_non_manifold_vertices: false,
-        keep_largest_component: false,
-        min_component_triangles: 0,
-        remove_unreferenced: false,
-        orient_consistently: true,
-        ..symcorr_mesh::RepairOptions::default()
-    };
-    let oriented = symcorr_mesh::repair(&mesh, &only_orientation)
-        .map_err(|e| CliError::with(a.mesh.display(), e))?;
-    let turned = oriented.report.turned_triangles;
-    let mesh = oriented.mesh;
-    let att = attach(&mesh, &skeleton, &options)
-        .map_err(|e| super::match_cmd::blame(&a.mesh, &a.joints, e.into()))?;
+    // Triangles turned to a consistent orientation first (vertex ids stay the input's).
+    let labelled = symcorr::label::label_mesh(&mesh, &skeleton, &options)
+        .map_err(|e| super::match_cmd::blame(&a.mesh, &a.joints, e))?;
+    let turned = labelled.turned_triangles;
+    let (mesh, att) = (labelled.mesh, labelled.attachment);
     let boundaries = match a.boundaries {
         Boundaries::JointPlanes => "joint-planes",
         Boundaries::Makehuman => "makehuman",
