@@ -129,6 +129,9 @@ def read_mesh(path: Path) -> Tuple[Vertices, Faces]:
 def read_joints(path: Path, frame: Optional[int] = None) -> Dict[str, Tuple[float, float, float]]:
     """One frame of a joint file (any format symcorr reads) as the 20 Kinect v1 joints."""
 
+def read_depth(path: Path) -> npt.NDArray[np.uint16]:
+    """A 16-bit PNG depth image (mm) as ``(h, w)``."""
+
 def label(
     vertices: npt.ArrayLike,
     faces: npt.ArrayLike,

@@ -749,6 +749,7 @@ fn label<'py>(
 /// a farthest-point sample of ``samples`` template points. A single-view scan as the target
 /// lists the template points it does not show under ``no_counterpart``. Both meshes are
 /// prepared in the call; to match one template against many targets use ``symcorr.Prepared``.
+/// Returns a ``symcorr.Correspondence`` (pairs, confidence, no_counterpart, timings).
 ///
 /// Example::
 ///
@@ -907,8 +908,7 @@ impl Prepared {
 ///
 /// Example::
 ///
-///     import imageio.v3 as iio   # or any 16-bit PNG reader
-///     depth = iio.imread("fixtures/synth/scan/depth.png")
+///     depth = symcorr.read_depth("fixtures/synth/scan/depth.png")
 ///     V, F, px = symcorr.scan(depth, "fixtures/synth/scan/intrinsics.json",
 ///                             symcorr.read_joints("fixtures/synth/scan/joints.json"))
 #[pyfunction]
@@ -948,6 +948,22 @@ fn scan<'py>(
         faces_out(py, &s.mesh)?,
         PyArray1::from_vec(py, ids),
     ))
+}
+
+/// Reads a 16-bit greyscale PNG depth image (millimetres, 0 = no depth) as ``uint16 (h, w)``,
+/// the input of ``scan``.
+///
+/// Example::
+///
+///     depth = symcorr.read_depth("fixtures/synth/scan/depth.png")
+#[pyfunction]
+fn read_depth<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyArray2<u16>>> {
+    let f = py
+        .detach(|| symcorr_kinect::read_depth_png16(&path))
+        .map_err(kinect_err)?;
+    let a = Array2::from_shape_vec((f.height as usize, f.width as usize), f.data_mm)
+        .map_err(|e| value_err(e.to_string()))?;
+    Ok(a.into_pyarray(py))
 }
 
 fn depth_in(obj: &Bound<'_, PyAny>) -> PyResult<DepthFrame> {
@@ -1359,7 +1375,7 @@ fn track(
 /// Skeleton-aware human shape correspondence: dense matches between body meshes and depth
 /// scans that never map a left limb onto a right one.
 ///
-/// Functions: read_mesh, read_joints, label, match, scan, track; classes: Body, Prepared,
+/// Functions: read_mesh, read_joints, read_depth, label, match, scan, track; classes: Body, Prepared,
 /// Correspondence, Labels, Frame. Arrays are numpy arrays (vertices float64 (n, 3), faces
 /// int (m, 3), joints a dict name → xyz or a (20, 3) array in Kinect v1 order, JOINT_NAMES).
 /// Errors: OSError for files, ValueError for bad input, with the messages of the symcorr
@@ -1372,6 +1388,7 @@ fn symcorr_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(label, m)?)?;
     m.add_function(wrap_pyfunction!(match_, m)?)?;
     m.add_function(wrap_pyfunction!(scan, m)?)?;
+    m.add_function(wrap_pyfunction!(read_depth, m)?)?;
     m.add_function(wrap_pyfunction!(track, m)?)?;
     m.add_class::<Body>()?;
     m.add_class::<Prepared>()?;
@@ -1398,6 +1415,7 @@ fn symcorr_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
                 "label",
                 "match",
                 "scan",
+                "read_depth",
                 "track",
                 "Body",
                 "Prepared",

@@ -428,6 +428,22 @@ def print_table(rows, info, header):
         print("  ".join(v.ljust(w[i]) for i, v in enumerate(l)))
 
 
+def add_peer_arguments(ap):
+    """The peer's parameters (pyFM README's quickstart: K=30, WKS, subsample_step=2, ZoomOut
+    nit=16 step=5) on an argparse parser; `python/examples/compare_pyfm.py` uses them too."""
+    ap.add_argument("--descr", choices=["WKS", "HKS"], default="WKS")
+    ap.add_argument("--n-descr", type=int, default=100)
+    ap.add_argument("--subsample-step", type=int, default=2)
+    ap.add_argument("--k-descr", type=int, default=128, help="eigenpairs behind the descriptors")
+    ap.add_argument("--k-process", type=int, default=128, help="eigenpairs computed per mesh")
+    ap.add_argument("--k-fit", type=int, default=30, help="functional map size before ZoomOut")
+    ap.add_argument("--zo-nit", type=int, default=16)
+    ap.add_argument("--zo-step", type=int, default=5)
+    ap.add_argument("--w-orient", type=float, default=1.0)
+    ap.add_argument("--peer-plain", action="store_true",
+                    help="also run the peer without the orientation term (classic pipeline)")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dataset", type=Path)
@@ -449,18 +465,7 @@ def main():
     ap.add_argument("--peer-cache", type=Path,
                     help="reuse peer maps (and their measured seconds) for identical meshes and "
                          "parameters, e.g. a dataset that differs from another only in its joints")
-    # Peer parameters: pyFM README's quickstart (K=30, WKS, subsample_step=2, ZoomOut nit=16 step=5).
-    ap.add_argument("--descr", choices=["WKS", "HKS"], default="WKS")
-    ap.add_argument("--n-descr", type=int, default=100)
-    ap.add_argument("--subsample-step", type=int, default=2)
-    ap.add_argument("--k-descr", type=int, default=128, help="eigenpairs behind the descriptors")
-    ap.add_argument("--k-process", type=int, default=128, help="eigenpairs computed per mesh")
-    ap.add_argument("--k-fit", type=int, default=30, help="functional map size before ZoomOut")
-    ap.add_argument("--zo-nit", type=int, default=16)
-    ap.add_argument("--zo-step", type=int, default=5)
-    ap.add_argument("--w-orient", type=float, default=1.0)
-    ap.add_argument("--peer-plain", action="store_true",
-                    help="also run the peer without the orientation term (classic pipeline)")
+    add_peer_arguments(ap)
     args = ap.parse_args()
 
     dataset = args.dataset.resolve()
