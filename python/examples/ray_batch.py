@@ -15,6 +15,7 @@ map them, and all three return the same `{target: (pairs, confidence)}`.
 """
 
 import argparse
+import multiprocessing
 import os
 import sys
 import time
@@ -74,8 +75,11 @@ def run_serial(dataset, template, targets):
 
 
 def run_executor(dataset, template, targets, workers=2):
-    """The same with a ProcessPoolExecutor (each process prepares the template once)."""
-    with ProcessPoolExecutor(max_workers=workers, initializer=init_worker,
+    """The same with a ProcessPoolExecutor (each process prepares the template once). Worker
+    processes are spawned, not forked: a fork of a process whose thread pool (symcorr's rayon
+    workers) is running would inherit the pool without its threads."""
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=init_worker,
                              initargs=(str(dataset), template)) as ex:
         return {t: (p, c) for t, p, c in ex.map(match_target, targets)}
 

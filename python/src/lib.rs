@@ -425,9 +425,11 @@ fn method_name(m: Method) -> &'static str {
 fn pipeline_for(
     method: &str,
     dense: bool,
-    samples: usize,
+    samples: i64,
     accept_poor_fit: bool,
 ) -> PyResult<Pipeline> {
+    let samples = usize::try_from(samples)
+        .map_err(|_| value_err(format!("samples {samples}: must be at least 1")))?;
     let mut o = PipelineOptions {
         method: method_in(method)?,
         mode: if dense {
@@ -765,7 +767,7 @@ fn match_<'py>(
     target: &Bound<'py, PyAny>,
     method: &str,
     dense: bool,
-    samples: usize,
+    samples: i64,
     accept_poor_fit: bool,
 ) -> PyResult<Correspondence> {
     let start = Instant::now();
@@ -812,7 +814,7 @@ impl Prepared {
         template: &Bound<'_, PyAny>,
         method: &str,
         dense: bool,
-        samples: usize,
+        samples: i64,
         accept_poor_fit: bool,
     ) -> PyResult<Prepared> {
         let pipeline = pipeline_for(method, dense, samples, accept_poor_fit)?;

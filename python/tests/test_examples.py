@@ -1,8 +1,9 @@
 """The examples: ray_batch.py's worker code on a ProcessPoolExecutor equals the serial run;
 compare_pyfm.py compiles (it needs pyfmaps, not a test dependency)."""
 
-import importlib.util
+import importlib
 import py_compile
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,10 +12,10 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def load(name):
-    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """An example as a module, importable by name (spawned worker processes import it)."""
+    if str(EXAMPLES) not in sys.path:
+        sys.path.insert(0, str(EXAMPLES))
+    return importlib.import_module(name)
 
 
 def test_ray_batch_code_path_on_a_process_pool_equals_the_serial_run():
