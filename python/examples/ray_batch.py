@@ -6,12 +6,12 @@ Usage:
 
 DATASET is a folder in symcorr's benchmark layout (default: fixtures/synth/bodies): meshes/NAME.ply
 and joints/NAME.json. Every target of DATASET/pairs.txt whose template is NAME (default s0_rest)
-is matched onto by NAME; each worker prepares the template once (an actor for Ray, a process
-initializer for `concurrent.futures`) and matches its share of the targets against it. With
+is matched onto by NAME; each worker prepares the template once (a Ray actor, or one per
+process of a `concurrent.futures.ProcessPoolExecutor`) and matches its share of the targets against it. With
 `--local` the same code runs on a `ProcessPoolExecutor` instead of Ray (what the tests run).
 
-The worker side is `init_worker` + `match_target`; `run_serial`, `run_executor` and `run_ray`
-map them, and all three return the same `{target: (pairs, confidence)}`.
+The worker side is the class `Worker` (prepare in `__init__`, `match(target)`); `run_serial`,
+`run_executor` and `run_ray` map it, and all three return the same `{target: (pairs, confidence)}`.
 """
 
 import argparse
@@ -47,55 +47,57 @@ def targets_of(dataset, template):
     return out
 
 
-# --- worker side: one prepared template per process -------------------------------------------
-
-_PREPARED = None
-_DATASET = None
+# --- worker side: one prepared template per worker --------------------------------------------
 
 
-def init_worker(dataset, template):
-    """Prepares the template once in this worker process."""
-    global _PREPARED, _DATASET
-    _DATASET = str(dataset)
-    _PREPARED = symcorr.Prepared(load_body(dataset, template))
+class Worker:
+    """The template prepared once; matches targets against it."""
+
+    def __init__(self, dataset, template):
+        self.dataset = str(dataset)
+        self.prepared = symcorr.Prepared(load_body(dataset, template))
+
+    def match(self, target):
+        """(target, pairs, confidence) of the prepared template matched onto `target`."""
+        c = self.prepared.match(load_body(self.dataset, target))
+        return target, c.pairs, c.confidence
 
 
-def match_target(target):
-    """(target, pairs, confidence) of the prepared template matched onto `target`."""
-    c = _PREPARED.match(load_body(_DATASET, target))
-    return target, c.pairs, c.confidence
+_WORKER = None  # the process's Worker (ProcessPoolExecutor)
+
+
+def _init_process(dataset, template):
+    global _WORKER
+    _WORKER = Worker(dataset, template)
+
+
+def _match_in_process(target):
+    return _WORKER.match(target)
 
 
 # --- three ways to map it ---------------------------------------------------------------------
 
 
 def run_serial(dataset, template, targets):
-    init_worker(dataset, template)
-    return {t: (p, c) for t, p, c in map(match_target, targets)}
+    w = Worker(dataset, template)
+    return {t: (p, c) for t, p, c in map(w.match, targets)}
 
 
 def run_executor(dataset, template, targets, workers=2):
-    """The same with a ProcessPoolExecutor (each process prepares the template once). Worker
-    processes are spawned, not forked: a fork of a process whose thread pool (symcorr's rayon
-    workers) is running would inherit the pool without its threads."""
+    """The same with a ProcessPoolExecutor: each process holds one Worker. Worker processes
+    are spawned, not forked: a fork of a process whose thread pool (symcorr's rayon workers)
+    is running would inherit the pool without its threads."""
     ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=init_worker,
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_process,
                              initargs=(str(dataset), template)) as ex:
-        return {t: (p, c) for t, p, c in ex.map(match_target, targets)}
+        return {t: (p, c) for t, p, c in ex.map(_match_in_process, targets)}
 
 
 def run_ray(dataset, template, targets, workers=2):
-    """The same on Ray: one actor per worker holds the prepared template."""
+    """The same on Ray: one actor per worker holds one Worker."""
     import ray
 
-    @ray.remote(num_cpus=1)
-    class Matcher:
-        def __init__(self, dataset, template):
-            init_worker(dataset, template)
-
-        def match(self, target):
-            return match_target(target)
-
+    Matcher = ray.remote(num_cpus=1)(Worker)
     actors = [Matcher.remote(str(dataset), template) for _ in range(workers)]
     pool = ray.util.ActorPool(actors)
     return {t: (p, c) for t, p, c in pool.map(lambda a, t: a.match.remote(t), targets)}
