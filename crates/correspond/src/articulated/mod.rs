@@ -401,13 +401,18 @@ impl<'a> Alignment<'a> {
         subset: Option<&[Vec<u32>]>,
         hints: Option<&[(u32, f64)]>,
     ) -> Result<Vec<(u32, f64)>, CorrespondError> {
-        let f: Vec<[f64; 6]> = posed
+        let f = self.features(posed, normals);
+        self.trees
+            .nearest(self.pools, &f, subset, hints, f64::INFINITY)
+    }
+
+    /// The nearest-neighbour features of posed points and their normals.
+    fn features(&self, posed: &[Point3<f64>], normals: &[Vector3<f64>]) -> Vec<[f64; 6]> {
+        posed
             .iter()
             .zip(normals)
             .map(|(x, n)| self.feature(x, n))
-            .collect();
-        self.trees
-            .nearest(self.pools, &f, subset, hints, f64::INFINITY)
+            .collect()
     }
 
     /// [`Alignment::nearest`] for the vertices that can pair at `gate` only: those of `subset`
@@ -425,11 +430,7 @@ impl<'a> Alignment<'a> {
         gate: f64,
         hints: Option<&[(u32, f64)]>,
     ) -> Result<Vec<(u32, f64)>, CorrespondError> {
-        let f: Vec<[f64; 6]> = posed
-            .iter()
-            .zip(normals)
-            .map(|(x, n)| self.feature(x, n))
-            .collect();
+        let f = self.features(posed, normals);
         let members = subset.unwrap_or(self.pools.members());
         let searched: Vec<Vec<u32>> = members
             .iter()
