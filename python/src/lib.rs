@@ -7,8 +7,9 @@
 //! * `match`, `Prepared`: `symcorr::Pipeline` (prepare both meshes, then `Pipeline::run`);
 //!   `Prepared` keeps one prepared template for many targets.
 //! * `scan`: `symcorr_kinect::scan_mesh` on a depth image.
-//! * `track`: `symcorr::track::Tracker` over a recording, one frame per iteration, run on a
-//!   worker thread that owns the prepared template.
+//! * `track`: `symcorr::track::Tracker::run` over a recording, one frame per iteration, run on
+//!   a worker thread that owns the prepared template (observing the next frame while this one
+//!   is matched, as `symcorr track` does).
 //!
 //! Every heavy call releases the GIL. Errors: `OSError` (or `FileNotFoundError`) for files that
 //! cannot be read, `ValueError` for everything else, with the library's one-line message; a
@@ -20,10 +21,11 @@ use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyStopIteration, PyValueE
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::{sync_channel, Receiver};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
+use symcorr::track::{FrameOutcome, TrackOptions, TrackedFrame, Tracker};
 use symcorr::{Method, Mode, Pipeline, PipelineError, PipelineOptions, PreparedMesh};
 use symcorr_attach::{BoundaryConvention, PoorFitPolicy, Segment};
 use symcorr_kinect::{DepthFrame, DepthSource, Intrinsics, JointTrack, KinectError, ScanOptions};
@@ -1153,18 +1155,11 @@ impl Frame {
     }
 }
 
-/// What the tracking thread sends per frame.
-struct FrameResult {
-    index: usize,
-    time_s: f64,
-    outcome: Result<FrameOutcome, String>,
-}
-
 /// The iterator ``symcorr.track`` returns; frames are computed on a worker thread one ahead of
 /// the consumer, and the thread stops when the iterator is dropped.
 #[pyclass(module = "symcorr")]
 struct FrameIterator {
-    rx: Mutex<Option<Receiver<FrameResult>>>,
+    rx: Mutex<Option<Receiver<TrackedFrame>>>,
     len: usize,
 }
 
@@ -1207,7 +1202,7 @@ impl FrameIterator {
     }
 }
 
-fn frame_out(py: Python<'_>, r: FrameResult) -> PyResult<Frame> {
+fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
     let skipped = |reason: String| Frame {
         index: r.index,
         time_s: r.time_s,
@@ -1225,8 +1220,8 @@ fn frame_out(py: Python<'_>, r: FrameResult) -> PyResult<Frame> {
         timings: py.None(),
     };
     let m = match r.outcome {
-        Err(reason) | Ok(FrameOutcome::Skipped(reason)) => return Ok(skipped(reason)),
-        Ok(FrameOutcome::Matched(m)) => m,
+        FrameOutcome::Skipped(reason) => return Ok(skipped(reason)),
+        FrameOutcome::Matched(m) => m,
     };
     let timings = PyDict::new(py);
     for (name, s) in &m.timings {
@@ -1338,30 +1333,15 @@ fn track(
         ..TrackOptions::default()
     };
     let n = list.len();
-    let (tx, rx) = sync_channel::<FrameResult>(1);
+    let (tx, rx) = sync_channel::<TrackedFrame>(1);
     let intrinsics = *source.intrinsics();
     std::thread::Builder::new()
         .name("symcorr-track".into())
         .spawn(move || {
             let mut tracker = Tracker::new(&pipeline, &prepared, intrinsics, track, options);
-            for i in list {
-                let time_s = source.time(i).unwrap_or(f64::NAN);
-                let outcome = match source.frame(i) {
-                    Ok(depth) => Ok(tracker.frame(time_s, &depth)),
-                    Err(e) => {
-                        tracker.reset();
-                        Err(e.to_string())
-                    }
-                };
-                let r = FrameResult {
-                    index: i,
-                    time_s,
-                    outcome,
-                };
-                if tx.send(r).is_err() {
-                    break; // the iterator was dropped
-                }
-            }
+            // Observed one frame ahead of the match, as `symcorr track` runs; a send fails
+            // once the iterator is dropped, which ends the run.
+            let _ = tracker.run(&mut source, &list, &AtomicBool::new(false), |f| tx.send(f));
         })
         .map_err(|e| PyOSError::new_err(format!("cannot start the tracking thread: {e}")))?;
     Ok(FrameIterator {

@@ -795,8 +795,14 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
         report.turned_triangles = orient_consistently(&positions, &mut triangles);
     }
     let repaired = TriMesh::new(positions, triangles)?;
+    // Nothing removed, split or turned: the repaired mesh is the input, and so is its report
+    // (a scan's mesh usually is; validating it again would cost as much as the first time).
+    report.after = if report.unchanged() {
+        before.clone()
+    } else {
+        validate_with(&repaired, options.zero_area_rel)
+    };
     report.before = before;
-    report.after = validate_with(&repaired, options.zero_area_rel);
     Ok(Repaired {
         mesh: repaired,
         report,
@@ -911,15 +917,27 @@ impl TriMesh {
     pub fn boundary_length(&self) -> f64 {
         self.boundary_loops()
             .iter()
-            .map(|l| {
-                (0..l.len())
-                    .map(|i| {
-                        let a = self.positions[l[i] as usize];
-                        let b = self.positions[l[(i + 1) % l.len()] as usize];
-                        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
-                            .sqrt()
-                    })
-                    .sum::<f64>()
+            .map(|l| self.loop_length(l))
+            .sum()
+    }
+
+    /// Length of the closed polyline through the vertices `l` (the last joined to the first),
+    /// e.g. one of [`TriMesh::boundary_loops`] or of a [`ValidationReport`]'s.
+    ///
+    /// ```
+    /// let m = symcorr_mesh::TriMesh::new(
+    ///     vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+    ///     vec![[0, 1, 2]],
+    /// )?;
+    /// assert!((m.loop_length(&[0, 1, 2]) - (2.0 + 2f64.sqrt())).abs() < 1e-12);
+    /// # Ok::<(), symcorr_mesh::MeshError>(())
+    /// ```
+    pub fn loop_length(&self, l: &[u32]) -> f64 {
+        (0..l.len())
+            .map(|i| {
+                let a = self.positions[l[i] as usize];
+                let b = self.positions[l[(i + 1) % l.len()] as usize];
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
             })
             .sum()
     }

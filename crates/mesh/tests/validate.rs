@@ -280,6 +280,13 @@ proptest! {
                 if trim { prop_assert!(after.non_manifold_edges.is_empty()); }
                 if split && !trim { prop_assert!(after.non_manifold_vertices.is_empty()); }
                 prop_assert_eq!(&fixed.report.before, &before);
+                // The report after is the repaired mesh's, whether it was validated again or
+                // (nothing changed) carried over, and the boundary length read from it is the
+                // mesh's.
+                prop_assert_eq!(after, &validate(&fixed.mesh));
+                let from_report: f64 =
+                    after.boundary_loops.iter().map(|l| fixed.mesh.loop_length(l)).sum();
+                prop_assert!((from_report - fixed.mesh.boundary_length()).abs() <= 1e-9);
             }
             Err(MeshError::NothingLeft { .. }) => {
                 prop_assert_eq!(

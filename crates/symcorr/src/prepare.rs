@@ -151,6 +151,13 @@ impl PreparedMesh {
             return Err(PipelineError::NothingLeftAfterRepair);
         }
         let (mesh, vertex_map, report) = (repaired.mesh, repaired.vertex_map, repaired.report);
+        // The repair's report already traced the boundary of the mesh it returned.
+        let boundary_length: f64 = report
+            .after
+            .boundary_loops
+            .iter()
+            .map(|l| mesh.loop_length(l))
+            .sum();
         let input = if report.unchanged() {
             None
         } else {
@@ -208,7 +215,6 @@ impl PreparedMesh {
             Some(r) => Some(RefineData::new(&mesh, &attachment, r, &mut timings)?),
             None => None,
         };
-        let boundary_length = mesh.boundary_length();
         Ok(PreparedMesh {
             unreached: 0,
             viewpoint: None,

@@ -42,12 +42,14 @@ pub mod animation;
 use crate::{
     ArticulatedStart, BoneTransforms, MethodReport, Pipeline, PipelineError, PreparedMesh,
 };
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, sync_channel};
 use std::time::Instant;
 use symcorr_attach::PoorFitPolicy;
 use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
 use symcorr_kinect::{
-    limb_swap_evidence, scan_mesh, DepthFrame, Intrinsics, JointTrack, LimbPair, ScanMesh,
-    ScanOptions, SkeletonFilter, SkipReason,
+    limb_swap_evidence, scan_mesh, DepthFrame, DepthSource, Intrinsics, JointTrack, LimbPair,
+    ScanMesh, ScanOptions, SkeletonFilter, SkipReason,
 };
 use symcorr_skeleton::Skeleton;
 
@@ -254,6 +256,125 @@ impl<'a> Tracker<'a> {
     pub fn parts(&mut self) -> (&mut Observer, &mut Fitter<'a>) {
         (&mut self.observer, &mut self.fitter)
     }
+
+    /// Tracks `frames` (indices into `source`, in the order given) on two threads — this one
+    /// reads and observes frame k + 1 while another matches frame k ([`Tracker::parts`]) — and
+    /// hands every finished frame to `sink`, on this thread, in the order of `frames`. The
+    /// outcomes are those of [`Tracker::frame`] one after the other; a frame the source cannot
+    /// read is skipped with the reason and resets the tracker.
+    ///
+    /// `stop` is checked before each frame is read: once it is set no further frame is
+    /// read, and the frames in flight (at most two) are finished and handed to `sink`. An error
+    /// from `sink` stops the run the same way and is returned once those frames are done (they
+    /// are not handed over). Returns the number of frames handed to `sink`.
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use std::sync::atomic::AtomicBool;
+    /// use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
+    /// use symcorr_kinect::{DepthSource, JointTrack};
+    /// # let (pipeline, template): (symcorr::Pipeline, symcorr::PreparedMesh) = unimplemented!();
+    /// let mut source = DepthSource::open("session")?;
+    /// let joints = JointTrack::new(symcorr_kinect::read_joints("session/joints.json")?, 0.0)?;
+    /// let mut tracker =
+    ///     Tracker::new(&pipeline, &template, *source.intrinsics(), joints, TrackOptions::default());
+    /// let frames: Vec<usize> = (0..source.len()).collect();
+    /// tracker.run(&mut source, &frames, &AtomicBool::new(false), |f| {
+    ///     if let FrameOutcome::Matched(m) = &f.outcome {
+    ///         println!("frame {}: coverage {:.2}", f.index, m.coverage);
+    ///     }
+    ///     Ok::<(), std::io::Error>(())
+    /// })?;
+    /// # Ok(()) }
+    /// ```
+    pub fn run<E>(
+        &mut self,
+        source: &mut DepthSource,
+        frames: &[usize],
+        stop: &AtomicBool,
+        mut sink: impl FnMut(TrackedFrame) -> Result<(), E>,
+    ) -> Result<usize, E> {
+        let (observer, fitter) = self.parts();
+        let mut handed = 0;
+        let mut failed: Option<E> = None;
+        let mut hand = |f: TrackedFrame, failed: &mut Option<E>| {
+            if failed.is_none() {
+                match sink(f) {
+                    Ok(()) => handed += 1,
+                    Err(e) => *failed = Some(e),
+                }
+            }
+        };
+        std::thread::scope(|scope| {
+            // A frame read and observed (or refused by the observer), on its way to the fitter.
+            type Observed = (usize, f64, Instant, Result<Observation, String>);
+            let (to_fit, observed) = sync_channel::<Observed>(1);
+            let (to_hand, finished) = channel::<TrackedFrame>();
+            scope.spawn(move || {
+                for (index, time_s, started, observation) in observed {
+                    let outcome = match observation {
+                        Ok(o) => fitter.fit(o),
+                        Err(reason) => {
+                            fitter.reset();
+                            FrameOutcome::Skipped(reason)
+                        }
+                    };
+                    let f = TrackedFrame {
+                        index,
+                        time_s,
+                        started,
+                        outcome,
+                    };
+                    if to_hand.send(f).is_err() {
+                        break;
+                    }
+                }
+            });
+            for &i in frames {
+                if stop.load(Ordering::SeqCst) || failed.is_some() {
+                    break;
+                }
+                let time_s = source.time(i).unwrap_or(f64::NAN);
+                let started = Instant::now();
+                let observation = match source.frame(i) {
+                    Ok(depth) => observer.observe(time_s, &depth),
+                    Err(e) => {
+                        observer.reset();
+                        Err(e.to_string())
+                    }
+                };
+                if to_fit.send((i, time_s, started, observation)).is_err() {
+                    break;
+                }
+                while let Ok(f) = finished.try_recv() {
+                    hand(f, &mut failed);
+                }
+            }
+            // The frames in flight are finished and handed over, stopped or not.
+            drop(to_fit);
+            for f in finished {
+                hand(f, &mut failed);
+            }
+        });
+        match failed {
+            Some(e) => Err(e),
+            None => Ok(handed),
+        }
+    }
+}
+
+/// One frame of [`Tracker::run`]: its index in the recording, its time (depth stream clock,
+/// NaN where the source has none), when it was read, and what happened to it.
+#[derive(Debug, Clone)]
+pub struct TrackedFrame {
+    /// Index of the frame in the recording.
+    pub index: usize,
+    /// Its time, seconds.
+    pub time_s: f64,
+    /// When its reading began (the frame's wall time is `started.elapsed()` when handed over).
+    pub started: Instant,
+    /// Matched or skipped.
+    pub outcome: FrameOutcome,
 }
 
 impl Observer {

@@ -32,7 +32,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr::npy::{NpyType, NpyWriter};
-use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
+use symcorr::track::{FrameOutcome, TrackOptions, TrackedFrame, Tracker};
 use symcorr::{Pipeline, PipelineOptions};
 use symcorr_kinect::{DepthSource, JointTrack};
 
@@ -323,11 +323,11 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let total = frames.len();
     let skipped_rows = (vec![-1i32; n], vec![0f32; n]);
     // One frame's rows, journal line and scan, written once it is matched (or skipped).
-    let mut write = |f: Finished| -> Result<(), CliError> {
-        let Finished {
-            frame: i,
-            time,
-            t0,
+    let mut write = |f: TrackedFrame| -> Result<(), CliError> {
+        let TrackedFrame {
+            index: i,
+            time_s: time,
+            started: t0,
             outcome,
         } = f;
         let entry = match &outcome {
@@ -391,66 +391,9 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         bar.update("tracking", done.len(), total);
         Ok(())
     };
-    // Two threads: this one reads and observes frame k + 1 (joints, scan, attachment) while
-    // the other matches frame k; at most one observation waits between them. The outcomes
-    // are those of one frame after the other (`Tracker::parts`).
-    let (observer, fitter) = tracker.parts();
-    std::thread::scope(|scope| -> Result<(), CliError> {
-        let (to_fit, observed) = std::sync::mpsc::sync_channel::<Observed>(1);
-        let (to_write, finished) = std::sync::mpsc::channel::<Finished>();
-        scope.spawn(move || {
-            for o in observed {
-                let outcome = match o.observation {
-                    Ok(observation) => fitter.fit(observation),
-                    Err(reason) => {
-                        fitter.reset();
-                        FrameOutcome::Skipped(reason)
-                    }
-                };
-                let f = Finished {
-                    frame: o.frame,
-                    time: o.time,
-                    t0: o.t0,
-                    outcome,
-                };
-                if to_write.send(f).is_err() {
-                    break;
-                }
-            }
-        });
-        for &i in frames.iter().skip(done_before) {
-            if stop.load(std::sync::atomic::Ordering::SeqCst) {
-                break;
-            }
-            let time = recording.time(i).unwrap_or(f64::NAN);
-            let t0 = Instant::now();
-            let observation = match recording.frame(i) {
-                Ok(depth) => observer.observe(time, &depth),
-                Err(e) => {
-                    observer.reset();
-                    Err(e.to_string())
-                }
-            };
-            let o = Observed {
-                frame: i,
-                time,
-                t0,
-                observation,
-            };
-            if to_fit.send(o).is_err() {
-                break;
-            }
-            while let Ok(f) = finished.try_recv() {
-                write(f)?;
-            }
-        }
-        // The frames in flight are finished and written, Ctrl-C or not.
-        drop(to_fit);
-        for f in finished {
-            write(f)?;
-        }
-        Ok(())
-    })?;
+    // Two threads, frame k + 1 observed while frame k is matched (`Tracker::run`).
+    let todo: Vec<usize> = frames.iter().skip(done_before).copied().collect();
+    tracker.run(&mut recording, &todo, &stop, &mut write)?;
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
     let mut summary = report::summary(&done, total);
@@ -510,22 +453,6 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         )));
     }
     Ok(())
-}
-
-/// A frame observed (or refused by the observer), on its way to the fitter.
-struct Observed {
-    frame: usize,
-    time: f64,
-    t0: Instant,
-    observation: Result<symcorr::track::Observation, String>,
-}
-
-/// A frame's outcome, on its way to be written.
-struct Finished {
-    frame: usize,
-    time: f64,
-    t0: Instant,
-    outcome: FrameOutcome,
 }
 
 #[cfg(test)]
