@@ -529,7 +529,9 @@ pub fn oni_bytes(
 pub fn timestamp_us(time_s: f64) -> Option<u64> {
     let us = (time_s * 1e6).round();
     // 2⁶⁴ is exactly representable; anything at or above it does not fit.
-    (us.is_finite() && us >= 0.0 && us < 18_446_744_073_709_551_616.0).then_some(us as u64)
+    (0.0..18_446_744_073_709_551_616.0)
+        .contains(&us)
+        .then_some(us as u64)
 }
 
 /// Writes frames `frames` of a recording folder as an `.oni` file at `path` ([`write_oni`]):
