@@ -19,7 +19,8 @@
 //!   or (feature `openni2`) an OpenNI2 `.oni` file through one type, [`DepthSource`]
 //!   ([`source`]; the `.oni` side: `oni::OniRecording`, times from the file's frame timestamps,
 //!   intrinsics from the stream's field of view). Listing an `.oni` file's depth frames and
-//!   their times needs no OpenNI2 ([`oni_index`], in every build).
+//!   their times needs no OpenNI2 ([`oni_index`], in every build), and neither does writing one
+//!   that OpenNI2's player plays ([`oni_write`]: from timed depth frames or a recording folder).
 //!
 //! ```
 //! use symcorr_skeleton::Joint;
@@ -64,6 +65,7 @@ pub mod ntu;
 #[cfg(feature = "openni2")]
 pub mod oni;
 pub mod oni_index;
+pub mod oni_write;
 #[cfg(feature = "openni2")]
 #[allow(unsafe_code)] // the OpenNI2 C API: every call is wrapped and checked in this module
 pub mod openni2;

@@ -23,7 +23,9 @@
 //! player drops every frame of a recording without a cropping property; see
 //! [`crate::openni2`]). Such a recording still opens, with its frame count, times and
 //! intrinsics; reading a frame waits [`FRAME_TIMEOUT_MS`] once, then every frame is refused
-//! at once with [`KinectError::Recording`] saying that the player delivers no frame.
+//! at once with [`KinectError::Recording`] saying that the player delivers no frame. A
+//! recording of a real sensor, or one written by [`crate::oni_write`] (which records the
+//! cropping property and the field of view), plays every frame.
 //!
 //! ```no_run
 //! # fn main() -> Result<(), symcorr_kinect::KinectError> {

@@ -30,7 +30,9 @@
 //!   seek blocks forever because the player thread never returns to its command loop. This
 //!   wrapper therefore always waits with a timeout ([`DepthStream::read_frame`]) and reports
 //!   [`KinectError::OpenNi`] with status `TIME_OUT` instead of hanging, and [`Device::seek`]
-//!   refuses to seek a stream that has not produced a frame yet.
+//!   refuses to seek a stream that has not produced a frame yet. This applies to recordings
+//!   of the Dummy device only: a file with the cropping property (a real sensor's, or one of
+//!   [`crate::oni_write`]) plays every frame, pixels and timestamps as written.
 //! * `oniShutdown` crashes (SIGSEGV in a driver thread executing code of an already unloaded
 //!   driver library) in a process that has used a recorder, whatever the teardown order, and
 //!   also, racily, right after a Dummy stream was destroyed (`symcorr scan --device --uri Dummy`

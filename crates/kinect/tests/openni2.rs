@@ -1,10 +1,12 @@
 //! Real OpenNI2 behaviour (feature `openni2`): the built-in Dummy device, OpenNI2's own recorder
-//! and the OniFile playback driver. OpenNI2's context is process-global, so everything runs in
-//! one test, in order.
+//! and the OniFile playback driver, and files of the crate's own `.oni` writer played by it.
+//! OpenNI2's context is process-global, so everything runs in one test, in order.
 #![cfg(feature = "openni2")]
 
-use symcorr_kinect::openni2::{OpenNi, Recorder, STATUS_TIME_OUT};
-use symcorr_kinect::KinectError;
+use symcorr_kinect::oni::OniRecording;
+use symcorr_kinect::oni_write::write_oni;
+use symcorr_kinect::openni2::{FilePlayback, OpenNi, Recorder, STATUS_TIME_OUT};
+use symcorr_kinect::{DepthFrame, Intrinsics, KinectError};
 
 #[test]
 fn dummy_device_recording_and_oni_playback() {
@@ -87,5 +89,77 @@ fn dummy_device_recording_and_oni_playback() {
             assert!(recorded.iter().any(|r| r.depth == first.depth));
         }
         Err(e) => panic!("unexpected error {e}"),
+    }
+    drop(depth);
+    drop(dev);
+
+    written_oni_plays_every_frame(&dir.path().join("written.oni"));
+}
+
+/// A file of `oni_write` played by OpenNI2's own file player: every frame, with the pixels and
+/// timestamps written, the video mode and the field of view; then through `OniRecording`.
+fn written_oni_plays_every_frame(path: &std::path::Path) {
+    let (w, h) = (64u32, 48u32);
+    let k = Intrinsics::from_field_of_view(w, h, Some((1.02, 0.80)));
+    // Irregular times (as a recording's jitter), the first not at 0; pixels that differ per
+    // frame and per pixel, with holes (0) and the largest millimetre value.
+    let times = [683u64, 32_591, 67_916, 99_999, 133_400, 168_000];
+    let frames: Vec<DepthFrame> = (0..times.len())
+        .map(|i| {
+            let data = (0..w * h)
+                .map(|p| match (p as usize + i) % 97 {
+                    0 => 0,
+                    1 => u16::MAX,
+                    r => 500 + (r * 31 + i * 7) as u16,
+                })
+                .collect();
+            DepthFrame::new(w, h, data).unwrap()
+        })
+        .collect();
+    let size = write_oni(path, &k, &times, |i| Ok(frames[i].clone())).unwrap();
+    assert_eq!(std::fs::metadata(path).unwrap().len(), size);
+
+    let mut playback = FilePlayback::open(path).unwrap();
+    let vm = playback.stream().video_mode().unwrap();
+    assert_eq!((vm.width, vm.height, vm.pixel_format), (64, 48, 100));
+    assert_eq!((vm.fps), 30, "{vm:?}");
+    assert_eq!(
+        playback.stream().number_of_frames(),
+        Some(times.len() as i32)
+    );
+    let (hf, vf) = playback.stream().field_of_view().unwrap();
+    assert!((f64::from(hf) - 1.02).abs() < 1e-6 && (f64::from(vf) - 0.80).abs() < 1e-6);
+    for (i, (t, f)) in times.iter().zip(&frames).enumerate() {
+        let got = playback.read_frame(2000).unwrap();
+        assert_eq!(got.timestamp_us, *t, "frame {i}");
+        assert_eq!(got.frame_index, i as i32 + 1);
+        assert!(got.depth == *f, "frame {i}: other pixels");
+    }
+    // The end of the file (no repeat): nothing more.
+    let e = playback.read_frame(300).unwrap_err();
+    assert!(
+        matches!(e, KinectError::OpenNi { status, .. } if status == STATUS_TIME_OUT),
+        "{e}"
+    );
+    drop(playback);
+
+    // The same file as a depth source: times in seconds, intrinsics from the field of view,
+    // frames in any order (an earlier one reopens the file).
+    let mut rec = OniRecording::open(path).unwrap();
+    assert_eq!(rec.len(), times.len());
+    for (got, t) in rec.times().iter().zip(times) {
+        assert_eq!(*got, t as f64 / 1e6);
+    }
+    let back = rec.intrinsics();
+    assert_eq!(
+        (back.width, back.height, back.cx, back.cy),
+        (w, h, k.cx, k.cy)
+    );
+    assert!(
+        (back.fx - k.fx).abs() < 1e-5 && (back.fy - k.fy).abs() < 1e-5,
+        "{back:?} {k:?}"
+    );
+    for i in [0, 1, 4, 2, 5] {
+        assert!(rec.frame(i).unwrap() == frames[i], "frame {i}");
     }
 }

@@ -35,6 +35,9 @@ pub enum SynthError {
     /// The generated mesh failed validation.
     #[error(transparent)]
     Mesh(#[from] symcorr_mesh::MeshError),
+    /// An OpenNI2 recording (.oni) could not be written.
+    #[error(transparent)]
+    Oni(#[from] symcorr_kinect::oni_write::OniWriteError),
 }
 
 impl SynthError {

@@ -186,6 +186,18 @@ enum Cmd {
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
+        /// Also write the depth frames as an OpenNI2 recording (.oni) at this path.
+        #[arg(long, value_name = "FILE")]
+        oni: Option<PathBuf>,
+    },
+    /// Write a recording folder's depth frames, times and intrinsics as an OpenNI2 recording
+    /// (.oni) that OpenNI2's file player plays (`symcorr track` reads either).
+    Oni {
+        /// The recording folder (intrinsics.json, depth/, depth_times.txt).
+        recording: PathBuf,
+        /// The .oni file to write.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Regenerate the committed fixture set (fixtures/synth) bit for bit.
     Fixtures {
@@ -265,9 +277,28 @@ fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
 }
 
+/// Writes recording folder `dir` as an `.oni` file at `out`, and says so.
+fn write_oni(dir: &Path, out: &Path) -> Result<()> {
+    let rec =
+        symcorr_kinect::Recording::open(dir).map_err(|e| SynthError::Invalid(e.to_string()))?;
+    let bytes = symcorr_kinect::oni_write::write_recording_oni(&rec, 0..rec.len(), out)?;
+    eprintln!(
+        "{}: {} depth frames of {}, {bytes} bytes",
+        out.display(),
+        rec.len(),
+        dir.display()
+    );
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<()> {
+    // Converting a recording needs no body model.
+    let cmd = match cli.cmd {
+        Cmd::Oni { recording, out } => return write_oni(&recording, &out),
+        cmd => cmd,
+    };
     let model = load_model(&cli.assets)?;
-    match cli.cmd {
+    match cmd {
         Cmd::Dataset {
             out,
             shapes,
@@ -418,6 +449,7 @@ fn run(cli: Cli) -> Result<()> {
             height,
             max_turn_deg,
             out,
+            oni,
         } => {
             let camera = Camera {
                 intrinsics: kinect_v1_intrinsics(width, height)?,
@@ -450,7 +482,11 @@ fn run(cli: Cli) -> Result<()> {
                 s.swaps,
                 s.lost_body_frames
             );
+            if let Some(oni) = oni {
+                write_oni(&out, &oni)?;
+            }
         }
+        Cmd::Oni { recording, out } => write_oni(&recording, &out)?,
         Cmd::Fixtures { out } => fixtures::write_fixtures(&model, Path::new(&out))?,
         Cmd::Convention { out } => {
             let c = symcorr_synth::convention::fit_makehuman(&model)?;

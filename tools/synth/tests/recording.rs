@@ -307,3 +307,44 @@ fn committed_recording_regenerates_bit_for_bit() {
     }
     assert_eq!(files, 2 * frames() + 6);
 }
+
+/// `symcorr-synth oni` writes the recording as an `.oni` file whose depth frames are the
+/// folder's, at the folder's times (read back from the file's records, no OpenNI2 needed).
+#[test]
+fn the_recording_converts_to_an_oni_file_with_its_times() {
+    let out = tempfile::tempdir().unwrap();
+    let oni = out.path().join("fixture.oni");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_symcorr-synth"))
+        .arg("oni")
+        .arg(dir())
+        .arg("--out")
+        .arg(&oni)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(&oni).unwrap();
+    let stamps = symcorr_kinect::oni_index::depth_frame_times(&bytes).unwrap();
+    let times: Vec<f64> = stamps.iter().map(|&t| t as f64 / 1e6).collect();
+    assert_eq!(times, depth_times());
+    // Uncompressed: each frame's 16-bit pixels follow its record's 40-byte header and fields.
+    let first = read_depth_png16(dir().join("depth/000000.png")).unwrap();
+    let pixels: Vec<u8> = first.data_mm.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let at = bytes
+        .windows(pixels.len())
+        .position(|w| w == pixels)
+        .expect("frame 0's pixels are in the file");
+    assert_eq!(&bytes[at - 40..at - 36], b"NIR\0");
+
+    // A folder that is not a recording: exit 1, one line naming the file, nothing written.
+    let bad = out.path().join("bad.oni");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_symcorr-synth"))
+        .arg("oni")
+        .arg(out.path())
+        .arg("--out")
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("intrinsics.json"));
+    assert!(!bad.exists());
+}
