@@ -5,6 +5,12 @@
 #   bodies20/        20 poses x 2 shapes, exact joints            (58 pairs)
 #   bodies20_noisy/  the same meshes, joints with sigma = 3 cm and 10 % on the surface
 #   bodies20_scans/  the same templates, each target a single-view virtual-Kinect scan
+#   bodies20_kinect/         templates as bodies20 (random-7 replaced by arms-tight), each target a
+#                            scan as harsh as a real Kinect v1 (--scan-realism kinect-v1) from a
+#                            camera drawn per body: 2.5-3.2 m, azimuth +-35 deg, 0.6-1.6 m high
+#   bodies20_kinect_noisy/   the same views, tracker joints (sigma 2.5 cm, 4.5 cm at hands and
+#                            feet, unseen joints inferred)
+#   bodies20_kinect_profile/ the same with profile views (|azimuth| 60-90 deg, both sides)
 #   bodies50k/       4 poses x 2 shapes, Loop-subdivided once (53,514 vertices)
 #   bodies20_fine/   13,380-vertex templates, targets one Loop level finer (another triangulation)
 #   recording/       a 10 s synthetic Kinect recording (300 frames, 640x480, turn to profile and
@@ -31,6 +37,19 @@ done
 # of the target body, with truth/NAME_scan.txt (body vertex per scan vertex).
 "$synth" dataset --out "$out/bodies20_scans" "${common[@]}" --scans --scan-realism kinect
 echo "$out/bodies20_scans: $(wc -l < "$out/bodies20_scans/pairs.txt") scan pairs"
+# Scans as harsh as a real Kinect v1 (tools/synth/README.md, "kinect-v1"): one camera drawn
+# per body, cameras/NAME_scan.json records it. Arms against the torso: arms-tight, arms-down.
+kposes="rest,t-pose,arms-down,arms-tight"
+for w in 0 10 20 30 40 50 60 70 80 90; do kposes+=",walk-$w"; done
+for s in 1 2 3 4 5 6; do kposes+=",random-$s"; done
+kinect=(--shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" --poses "$kposes"
+  --scans --scan-realism kinect-v1 --scan-seed 2026)
+"$synth" dataset --out "$out/bodies20_kinect" "${kinect[@]}" --scan-cameras frontal
+"$synth" dataset --out "$out/bodies20_kinect_noisy" "${kinect[@]}" --scan-cameras frontal --scan-joints tracker
+"$synth" dataset --out "$out/bodies20_kinect_profile" "${kinect[@]}" --scan-cameras profile
+for d in bodies20_kinect bodies20_kinect_noisy bodies20_kinect_profile; do
+  echo "$out/$d: $(wc -l < "$out/$d/pairs.txt") scan pairs"
+done
 # Larger meshes ("50k <-> 50k"): the same bodies Loop-subdivided once (53,514 vertices),
 # 4 poses x 2 shapes, for timing and for accuracy at a finer triangulation.
 "$synth" dataset --out "$out/bodies50k" --shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" \

@@ -127,12 +127,43 @@ pub fn subdivided_tables(
 /// `joints/NAME_scan.json` (camera space, the same joint noise as the body's) and
 /// `truth/NAME_scan.txt` (the body vertex seen at each scan vertex's pixel, `-1` for none);
 /// `pairs.txt` then lists `template NAME_scan`. Templates stay full bodies in the common order.
+///
+/// With `cameras`, `tracker` or `near_bones` set, every scan's camera is also written as
+/// `cameras/NAME_scan.json` ([`crate::kinect::camera_json`] plus `intrinsics`, the drawn
+/// `view` and the `inferred_joints`), so that a method may render into the scan's camera.
 #[derive(Debug, Clone, Copy)]
 pub struct ScanSpec {
-    /// The camera (body frame).
+    /// The camera (body frame), unless `cameras` draws one per body.
     pub camera: crate::render::Camera,
     /// Sensor realism.
     pub realism: crate::render::Realism,
+    /// Draw each body's camera (seeded per body) instead of using `camera`.
+    pub cameras: Option<crate::kinect::CameraSampling>,
+    /// Tracker joints for the scans ([`crate::tracker`]) instead of the body's joints.
+    pub tracker: Option<crate::tracker::TrackerNoise>,
+    /// Build the scan meshes with `symcorr_kinect::ScanOptions::default()` (components near
+    /// the bones kept, as `symcorr` does) instead of [`crate::kinect::scan_options`] (the
+    /// largest only).
+    pub near_bones: bool,
+}
+
+impl ScanSpec {
+    /// A scan spec as the first scan datasets were made: one camera, exact joints, the largest
+    /// component.
+    pub fn fixed(camera: crate::render::Camera, realism: crate::render::Realism) -> ScanSpec {
+        ScanSpec {
+            camera,
+            realism,
+            cameras: None,
+            tracker: None,
+            near_bones: false,
+        }
+    }
+
+    /// Whether the scans' cameras are written (`cameras/`).
+    fn writes_cameras(&self) -> bool {
+        self.cameras.is_some() || self.tracker.is_some() || self.near_bones
+    }
 }
 
 /// Joint positions as a single-frame symcorr.joints/1 log.
@@ -340,12 +371,21 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
             }
             write_joints(&out.join("joints").join(format!("{name}.json")), &skel)?;
             if let Some(sc) = &spec.scans {
-                let t = crate::kinect::scan_target(
+                let view = sc.cameras.map(|c| c.draw(&posed.mesh, stream));
+                let camera = view.map_or(sc.camera, |v| v.camera);
+                let options = if sc.near_bones {
+                    symcorr_kinect::ScanOptions::default()
+                } else {
+                    crate::kinect::scan_options()
+                };
+                let t = crate::kinect::scan_target_with(
                     &posed.mesh,
                     &skel,
-                    &sc.camera,
+                    &camera,
                     &sc.realism,
                     stream,
+                    &options,
+                    sc.tracker.as_ref().map(|n| (n, labels.as_slice())),
                 )?;
                 let scan_name = format!("{name}_scan");
                 symcorr_mesh::io::write(
@@ -368,6 +408,34 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
                     })
                     .collect();
                 write_text(&out.join("truth").join(format!("{scan_name}.txt")), &truth)?;
+                if sc.writes_cameras() {
+                    let mut cam = crate::kinect::camera_json(
+                        &camera,
+                        &format!("meshes/{name}.{}", spec.format.ext()),
+                        &sc.realism,
+                    );
+                    cam["intrinsics"] = json!(camera.intrinsics);
+                    if let Some(v) = view {
+                        cam["view"] = json!({
+                            "distance_m": v.distance_m,
+                            "azimuth_deg": v.azimuth_deg,
+                            "height_m": v.height_m,
+                        });
+                    }
+                    cam["inferred_joints"] = json!(symcorr_skeleton::Joint::ALL
+                        .iter()
+                        .zip(t.inferred)
+                        .filter(|(_, inf)| *inf)
+                        .map(|(j, _)| j.name())
+                        .collect::<Vec<_>>());
+                    mkdir(&out.join("cameras"))?;
+                    let text = serde_json::to_string_pretty(&cam)
+                        .map_err(|e| SynthError::Invalid(e.to_string()))?;
+                    write_text(
+                        &out.join("cameras").join(format!("{scan_name}.json")),
+                        &(text + "\n"),
+                    )?;
+                }
             }
             if spec.finer_targets > 0 {
                 let n = posed.mesh.num_vertices();
@@ -445,6 +513,22 @@ pub fn write_dataset(model: &Model, spec: &DatasetSpec, out: &Path) -> Result<Da
         "bodies": manifest_bodies,
     });
     let mut manifest = manifest;
+    if let Some(sc) = spec.scans.filter(|sc| sc.writes_cameras()) {
+        // Only when used, so that the earlier scan datasets' manifests stay as they were.
+        let r = &sc.realism;
+        manifest["scans"] = json!({
+            "realism": crate::kinect::camera_json(&sc.camera, "", r)["realism"],
+            "cameras": sc.cameras.map(|c| json!({
+                "distance_m": [c.distance_m.0, c.distance_m.1],
+                "abs_azimuth_deg": [c.abs_azimuth_deg.0, c.abs_azimuth_deg.1],
+                "height_m": [c.height_m.0, c.height_m.1],
+                "seed": c.seed})),
+            "tracker": sc.tracker.map(|n| json!({
+                "sigma_cm": n.sigma_cm, "extremity_sigma_cm": n.extremity_sigma_cm,
+                "inferred_depth_m": n.inferred_depth_m, "seed": n.seed})),
+            "components": if sc.near_bones { "near_bones" } else { "largest" },
+        });
+    }
     if spec.subdivide > 0 {
         // Only when used, so the committed fixtures' manifests stay as they were.
         manifest["subdivide"] = json!(spec.subdivide);

@@ -66,6 +66,7 @@ pub mod noise;
 pub mod poses;
 pub mod recording;
 pub mod render;
+pub mod tracker;
 
 pub use assets::Assets;
 pub use body::{Body, Model, Pose, Posed, Shape};

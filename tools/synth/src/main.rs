@@ -7,12 +7,13 @@ use clap::{Args, Parser, Subcommand};
 use symcorr_synth::dataset::resolve_pose;
 use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat, ScanSpec};
 use symcorr_synth::fixtures::WALK_PERIOD_S;
-use symcorr_synth::kinect::{write_scan, write_sequence};
+use symcorr_synth::kinect::{write_scan, write_sequence, CameraSampling};
 use symcorr_synth::mapping::{kinect_joints, reference_labels, SelfIntersectionCheck};
 use symcorr_synth::noise::JointNoise;
 use symcorr_synth::poses::{interpolate, walk_pose};
 use symcorr_synth::recording::{kinect_v1_intrinsics, write_recording, RecordingSpec};
 use symcorr_synth::render::{Camera, Realism};
+use symcorr_synth::tracker::TrackerNoise;
 use symcorr_synth::{fixtures, Assets, Model, Pose, Result, Shape, SynthError};
 
 #[derive(Parser)]
@@ -84,7 +85,7 @@ enum Cmd {
         /// A shape as `NAME:target=w,target=w` (repeat; `NAME:` alone is the base shape).
         #[arg(long = "shape", required = true)]
         shapes: Vec<String>,
-        /// Comma-separated poses: rest, t-pose, arms-down, walk-PP, random-SEED, file:PATH.
+        /// Comma-separated poses: rest, t-pose, arms-down, arms-tight, walk-PP, random-SEED, file:PATH.
         #[arg(long, value_delimiter = ',', required = true)]
         poses: Vec<String>,
         /// Mesh format: ply (binary) or off.
@@ -94,15 +95,25 @@ enum Cmd {
         noise: NoiseArgs,
         /// Make each pair's target a single-view virtual-Kinect scan (meshes/NAME_scan,
         /// joints in camera space, truth/NAME_scan.txt = body vertex per scan vertex), seen
-        /// from the default camera (0, 0, 2.6) looking at (0, -0.05, 0).
+        /// from the default camera (0, 0, 2.6) looking at (0, -0.05, 0) unless
+        /// --scan-cameras draws one per body.
         #[arg(long)]
         scans: bool,
-        /// Sensor realism of the scans: `ideal` or `kinect`.
+        /// Sensor realism of the scans: `ideal`, `kinect` or `kinect-v1`.
         #[arg(long, default_value = "kinect")]
         scan_realism: String,
         /// Seed of the scans' sensor noise.
         #[arg(long, default_value_t = 1)]
         scan_seed: u64,
+        /// Draw each scan's camera (seeded per body by --scan-seed; written to cameras/):
+        /// `frontal` (2.5–3.2 m, azimuth ±35°, 0.6–1.6 m high) or `profile` (|azimuth| 60–90°).
+        /// Scan meshes then keep every component near the bones, as `symcorr` does.
+        #[arg(long)]
+        scan_cameras: Option<String>,
+        /// Joints of the scans: `exact` (the rig's) or `tracker` (σ 2.5 cm, 4.5 cm at hands and
+        /// feet, unseen joints inferred; seeded by --scan-seed).
+        #[arg(long, default_value = "exact")]
+        scan_joints: String,
         /// Loop-subdivide every mesh this many times (13,380 → 53,258 → 212,… vertices; the
         /// mirror map and labels are extended, the vertex order stays shared).
         #[arg(long, default_value_t = 0)]
@@ -117,7 +128,7 @@ enum Cmd {
         /// Shape as `target=w,target=w` (empty: base shape).
         #[arg(long, default_value = "")]
         shape: String,
-        /// Pose: rest, t-pose, arms-down, walk-PP, random-SEED, file:PATH.
+        /// Pose: rest, t-pose, arms-down, arms-tight, walk-PP, random-SEED, file:PATH.
         #[arg(long, default_value = "rest")]
         pose: String,
         /// Output mesh (.ply or .off).
@@ -136,7 +147,7 @@ enum Cmd {
     Scan {
         #[command(flatten)]
         view: ViewArgs,
-        /// Pose: rest, t-pose, arms-down, walk-PP, random-SEED, file:PATH.
+        /// Pose: rest, t-pose, arms-down, arms-tight, walk-PP, random-SEED, file:PATH.
         #[arg(long, default_value = "rest")]
         pose: String,
         /// Output folder.
@@ -218,7 +229,8 @@ struct ViewArgs {
     /// Point the camera looks at, `x,y,z`.
     #[arg(long, value_delimiter = ',', default_values_t = [0.0, -0.05, 0.0])]
     look_at: Vec<f64>,
-    /// Sensor realism: `ideal` or `kinect` (noise, quantisation, dropout, floor, wall).
+    /// Sensor realism: `ideal`, `kinect` (noise, quantisation, dropout, floor, wall) or
+    /// `kinect-v1` (also IR shadow, flying pixels, random dropout; tools/synth/README.md).
     #[arg(long, default_value = "kinect")]
     realism: String,
     /// Seed of the sensor noise.
@@ -245,16 +257,12 @@ impl ViewArgs {
         Ok(Camera::kinect_v1(p, l))
     }
     fn realism(&self) -> Result<Realism> {
-        match self.realism.as_str() {
-            "ideal" => Ok(Realism {
-                seed: self.seed,
-                ..Realism::default()
-            }),
-            "kinect" => Ok(Realism::kinect(self.seed)),
-            r => Err(SynthError::Invalid(format!(
-                "--realism {r}: expected ideal or kinect"
-            ))),
-        }
+        Realism::preset(&self.realism, self.seed).ok_or_else(|| {
+            SynthError::Invalid(format!(
+                "--realism {}: expected ideal, kinect or kinect-v1",
+                self.realism
+            ))
+        })
     }
 }
 
@@ -308,25 +316,44 @@ fn run(cli: Cli) -> Result<()> {
             scans,
             scan_realism,
             scan_seed,
+            scan_cameras,
+            scan_joints,
             subdivide,
             finer_targets,
         } => {
             let scans = if scans {
-                let realism = match scan_realism.as_str() {
-                    "ideal" => Realism {
-                        seed: scan_seed,
-                        ..Realism::default()
-                    },
-                    "kinect" => Realism::kinect(scan_seed),
-                    r => {
+                let realism = Realism::preset(&scan_realism, scan_seed).ok_or_else(|| {
+                    SynthError::Invalid(format!(
+                        "--scan-realism {scan_realism}: expected ideal, kinect or kinect-v1"
+                    ))
+                })?;
+                let cameras = match scan_cameras.as_deref() {
+                    None => None,
+                    Some("frontal") => Some(CameraSampling::frontal(scan_seed)),
+                    Some("profile") => Some(CameraSampling::profile(scan_seed)),
+                    Some(c) => {
                         return Err(SynthError::Invalid(format!(
-                            "--scan-realism {r}: expected ideal or kinect"
+                            "--scan-cameras {c}: expected frontal or profile"
+                        )))
+                    }
+                };
+                let tracker = match scan_joints.as_str() {
+                    "exact" => None,
+                    "tracker" => Some(TrackerNoise::kinect_v1(scan_seed)),
+                    j => {
+                        return Err(SynthError::Invalid(format!(
+                            "--scan-joints {j}: expected exact or tracker"
                         )))
                     }
                 };
                 Some(ScanSpec {
-                    camera: Camera::kinect_v1([0.0, 0.0, 2.6], [0.0, -0.05, 0.0]),
-                    realism,
+                    near_bones: cameras.is_some(),
+                    cameras,
+                    tracker,
+                    ..ScanSpec::fixed(
+                        Camera::kinect_v1([0.0, 0.0, 2.6], [0.0, -0.05, 0.0]),
+                        realism,
+                    )
                 })
             } else {
                 None

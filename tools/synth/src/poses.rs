@@ -76,7 +76,7 @@ impl WalkCurves {
 }
 
 /// Names accepted by [`named_pose`] besides `walk-PP` (PP = percent of the cycle, 00–99).
-pub const NAMED_POSES: [&str; 3] = ["rest", "t-pose", "arms-down"];
+pub const NAMED_POSES: [&str; 4] = ["rest", "t-pose", "arms-down", "arms-tight"];
 
 fn mirror_euler(e: V3) -> V3 {
     // A left bone's rotation mirrored onto its right twin: the rig's left/right bone frames are
@@ -96,6 +96,17 @@ pub fn arms_down() -> Pose {
     let mut p = Pose::default();
     set_pair(&mut p, "upperarm_l", [0.05, 0.0, -0.55]);
     set_pair(&mut p, "lowerarm_l", [0.15, 0.0, 0.0]);
+    p
+}
+
+/// Arms against the torso: upper arms adducted until they touch the flanks (slightly forward,
+/// so that the forearms lie against the hips rather than in them: on the base shape the
+/// forearm comes within ~2.5 cm of the hip, on heavier shapes it presses against it), elbows
+/// nearly straight. Arm and torso then meet in a depth jump of a few centimetres.
+pub fn arms_tight() -> Pose {
+    let mut p = Pose::default();
+    set_pair(&mut p, "upperarm_l", [0.15, 0.0, -0.65]);
+    set_pair(&mut p, "lowerarm_l", [0.1, 0.0, 0.0]);
     p
 }
 
@@ -154,7 +165,8 @@ pub fn walk_pose(curves: Option<&WalkCurves>, phase: f64) -> Pose {
     p
 }
 
-/// A named pose: `rest`, `t-pose` (poses/t-pose.json), `arms-down`, or `walk-PP`.
+/// A named pose: `rest`, `t-pose` (poses/t-pose.json), `arms-down`, `arms-tight`
+/// or `walk-PP`.
 pub fn named_pose(assets: &Assets, name: &str) -> Result<Pose> {
     match name {
         "rest" => Ok(Pose::default()),
@@ -162,6 +174,7 @@ pub fn named_pose(assets: &Assets, name: &str) -> Result<Pose> {
             rotations: assets.t_pose.clone(),
         }),
         "arms-down" => Ok(arms_down()),
+        "arms-tight" => Ok(arms_tight()),
         n => {
             let pct = n
                 .strip_prefix("walk-")
@@ -169,7 +182,7 @@ pub fn named_pose(assets: &Assets, name: &str) -> Result<Pose> {
                 .filter(|&p| p < 100)
                 .ok_or_else(|| {
                     SynthError::Invalid(format!(
-                        "unknown pose `{n}` (known: rest, t-pose, arms-down, walk-00 … walk-99, random-SEED)"
+                        "unknown pose `{n}` (known: rest, t-pose, arms-down, arms-tight, walk-00 … walk-99, random-SEED)"
                     ))
                 })?;
             Ok(walk_pose(assets.walk.as_ref(), pct as f64 / 100.0))

@@ -360,10 +360,7 @@ fn scan_dataset_truth_names_the_vertex_seen() {
         noise: None,
         command: "test".into(),
         share_meshes_with: None,
-        scans: Some(ScanSpec {
-            camera,
-            realism: Realism::default(),
-        }),
+        scans: Some(ScanSpec::fixed(camera, Realism::default())),
         subdivide: 0,
         finer_targets: 0,
     };
