@@ -62,4 +62,4 @@ pub use dataset::{evaluate_pair, read_mirror, read_truth, Dataset, EvalError, Me
 pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
-pub use scan::{ScanScores, ShownPoints};
+pub use scan::{ScanScores, ShownPoints, SHOWN_BAND};

@@ -5,10 +5,13 @@
 //! The ground truth of a scan (`truth/NAME.txt`) names, per scan vertex, the body vertex seen
 //! at its pixel. A template point is **shown** when some scan vertex's truth names it: the
 //! camera saw that body vertex (it was rendered, unoccluded, and the scan kept its pixel).
-//! Not every unnamed point is hidden, though: at a silhouette the sensor samples the surface
-//! at a grazing angle, and a body vertex one edge away from a seen one may fall between two
-//! pixels. Neither answer is wrong there, so a point that is not shown but shares an edge with
-//! a shown one is in the **band** and scored neither way; every other point is **hidden**.
+//! Not every unnamed point is hidden, though: the truth names the nearest corner of the
+//! triangle seen at each pixel, so where the template is finer than the pixel grid (the face,
+//! the hands) a visible vertex may never be named, and at a silhouette the sensor samples the
+//! surface at a grazing angle. Neither answer is wrong within a short distance of a seen
+//! point, so a point that is not shown but lies within [`SHOWN_BAND`]·√area of a shown one
+//! along the template's edges is in the **band** and scored neither way; every other point is
+//! **hidden**.
 //!
 //! # Scores
 //! * **coverage** = shown points given a counterpart / shown points;
@@ -16,6 +19,12 @@
 //! * **`no_counterpart` recall** = listed hidden points / hidden points.
 
 use crate::dataset::MeshIds;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// Width of the band between shown and hidden points, in units of the template's √area
+/// (about 2 cm on a body): a few template edges, a few pixels of a depth camera at 3 m.
+pub const SHOWN_BAND: f64 = 0.015;
 
 /// Per template vertex of the mesh the matcher worked on: shown, hidden, or neither (the band).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -28,20 +37,24 @@ pub struct ShownPoints {
 
 impl ShownPoints {
     /// The shown and hidden template points of a scan: `template` relates the template the
-    /// matcher worked on to the common ids the truth speaks, `neighbors` is its edge graph,
-    /// `target_truth` the common id per scan input vertex (`None`: nothing seen there).
+    /// matcher worked on to the common ids the truth speaks, `positions` and `neighbors` are
+    /// its vertices and edge graph, `target_truth` the common id per scan input vertex
+    /// (`None`: nothing seen there).
     ///
     /// ```
     /// use symcorr_eval::{MeshIds, ShownPoints};
-    /// // A path 0 – 1 – 2 – 3; the scan saw vertex 0 only.
+    /// // A path 0 – 1 – 2 – 3 with edges of 0.01 (area 1: the band is 0.015 wide); the scan
+    /// // saw vertex 0 only.
     /// let ids = MeshIds { input_ids: &[0, 1, 2, 3], prepared_ids: &[Some(0), Some(1), Some(2), Some(3)], area: 1.0 };
+    /// let positions = [[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.02, 0.0, 0.0], [0.03, 0.0, 0.0]];
     /// let neighbors = vec![vec![1], vec![0, 2], vec![1, 3], vec![2]];
-    /// let s = ShownPoints::new(&ids, &neighbors, &[Some(0), None, Some(0)]);
+    /// let s = ShownPoints::new(&ids, &positions, &neighbors, &[Some(0), None, Some(0)]);
     /// assert_eq!(s.shown, [true, false, false, false]);
     /// assert_eq!(s.hidden, [false, false, true, true]); // vertex 1 is the band
     /// ```
     pub fn new(
         template: &MeshIds<'_>,
+        positions: &[[f64; 3]],
         neighbors: &[Vec<u32>],
         target_truth: &[Option<u32>],
     ) -> ShownPoints {
@@ -54,14 +67,32 @@ impl ShownPoints {
                 }
             }
         }
-        let hidden = (0..n)
-            .map(|v| {
-                !shown[v]
-                    && neighbors.get(v).is_none_or(|nb| {
-                        nb.iter().all(|&u| !shown.get(u as usize).unwrap_or(&false))
-                    })
-            })
-            .collect();
+        // Distance along the edges to the nearest shown point, searched no farther than the
+        // band (multi-source Dijkstra).
+        let band = SHOWN_BAND * template.area.sqrt();
+        let mut dist = vec![f64::INFINITY; n];
+        let mut heap = BinaryHeap::new();
+        for v in (0..n).filter(|&v| shown[v]) {
+            dist[v] = 0.0;
+            heap.push(Reverse((Dist(0.0), v)));
+        }
+        while let Some(Reverse((Dist(d), v))) = heap.pop() {
+            if d > dist[v] {
+                continue;
+            }
+            for &u in neighbors.get(v).map_or(&[][..], Vec::as_slice) {
+                let u = u as usize;
+                let (Some(a), Some(b)) = (positions.get(v), positions.get(u)) else {
+                    continue;
+                };
+                let e = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+                if u < n && d + e < dist[u] && d + e <= band {
+                    dist[u] = d + e;
+                    heap.push(Reverse((Dist(d + e), u)));
+                }
+            }
+        }
+        let hidden = dist.iter().map(|d| d.is_infinite()).collect();
         ShownPoints { shown, hidden }
     }
 }
@@ -143,6 +174,16 @@ impl ScanScores {
     }
 }
 
+/// A distance ordered for the heap (never NaN: sums of edge lengths).
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+struct Dist(f64);
+impl Eq for Dist {}
+impl Ord for Dist {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&o.0)
+    }
+}
+
 fn ratio(a: usize, b: usize) -> Option<f64> {
     (b > 0).then(|| a as f64 / b as f64)
 }
@@ -161,10 +202,11 @@ mod tests {
         let input_ids: Vec<u32> = (0..11).collect();
         let mut prepared_ids: Vec<Option<u32>> = (0..11).map(Some).collect();
         prepared_ids.push(None);
+        // Area 5 000: the band is 0.015·√5000 ≈ 1.06, one edge (not a diagonal, √2).
         let ids = MeshIds {
             input_ids: &input_ids,
             prepared_ids: &prepared_ids,
-            area: 5.0,
+            area: 5000.0,
         };
         let mut nb = m.vertex_neighbors();
         nb.truncate(11);
@@ -172,10 +214,11 @@ mod tests {
             l.retain(|&u| u < 11);
         }
         let truth = [Some(7), None, Some(6), Some(1), Some(0), Some(0)];
-        let s = ShownPoints::new(&ids, &nb, &truth);
+        let s = ShownPoints::new(&ids, &m.positions[..11], &nb, &truth);
         let shown: Vec<usize> = (0..11).filter(|&v| s.shown[v]).collect();
         assert_eq!(shown, [0, 1, 6, 7]);
-        // Column 2 (vertices 2 and 8) touches column 1: the band. Columns 3–5 are hidden.
+        // Column 2 (vertices 2 and 8) is one edge from column 1: the band. Columns 3–5 are
+        // hidden.
         let hidden: Vec<usize> = (0..11).filter(|&v| s.hidden[v]).collect();
         assert_eq!(hidden, [3, 4, 5, 9, 10]);
         // A matcher listing the right side from column 2 on, and vertex 0 by mistake.

@@ -152,7 +152,12 @@ pub fn scan_scores(
 ) -> Option<ScanScores> {
     let h = corr.has_counterpart()?;
     let ta = template.prepared_ids();
-    let shown = ShownPoints::new(&mesh_ids(template, &ta), neighbors, target_truth);
+    let shown = ShownPoints::new(
+        &mesh_ids(template, &ta),
+        &template.mesh.positions,
+        neighbors,
+        target_truth,
+    );
     let points: Vec<u32> = corr.pairs.iter().map(|m| m.template).collect();
     Some(ScanScores::new(&shown, &points, h))
 }
