@@ -39,8 +39,9 @@
 //!    [`ArticulatedOptions::nonrigid_rounds`] rounds whose gates run coarse to fine from
 //!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end` (module `nonrigid`).
 //! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
-//!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)` times
-//!    `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid displacement.
+//!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
+//!    target with a border (a scan) times `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid
+//!    displacement.
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
@@ -470,6 +471,14 @@ impl<'a> Alignment<'a> {
         ))
     }
 
+    /// Is the target a sensor's view — a surface with a border (a depth scan, a frame of a
+    /// recording)? Its sampling and noise get the non-rigid step's robust data term and the
+    /// displacement term of the confidence; a whole surface keeps the plain ones (measured:
+    /// `docs/decisions/2026-12-03-scan-matching.md`).
+    fn is_scan(&self) -> bool {
+        self.target.boundary.is_some_and(|b| b.contains(&true))
+    }
+
     /// Does the pair (posed template point `x`, its normal `n`) → target vertex `q` hold at
     /// this gate? Close enough, facing the same way, and not hanging over the target's border.
     fn holds(&self, x: &Point3<f64>, n: &Vector3<f64>, q: u32, gate: f64) -> bool {
@@ -551,10 +560,11 @@ struct FinalMap {
 }
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
-/// when that pair holds at the final gate (`gate_end`). Its confidence is
-/// `1/(1 + d/gate) · 1/(1 + |s|/DISPLACEMENT_SCALE)` from the final distance `d` and the
-/// non-rigid step's displacement `s` of the vertex (`posed − skinned`): where the bones alone
-/// fitted, the map is surer than where a displacement field had to pull the surface in.
+/// when that pair holds at the final gate (`gate_end`). Its confidence is `1/(1 + d/gate)`
+/// from the final distance `d`, on a sensor's view ([`Alignment::is_scan`]) times
+/// `1/(1 + |s|/DISPLACEMENT_SCALE)` with `s` the non-rigid step's displacement of the vertex
+/// (`posed − skinned`): where the bones alone fitted, the map is surer than where a
+/// displacement field had to pull the surface in.
 /// `hints`: the last nearest-neighbour answer before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
@@ -563,7 +573,12 @@ fn final_map(
     hints: &[(u32, f64)],
     skinned: &[Point3<f64>],
 ) -> Result<FinalMap, CorrespondError> {
-    let displacement_scale = DISPLACEMENT_SCALE * al.unit_len;
+    // A whole surface keeps the distance alone (the displacement term measured no gain there).
+    let displacement_scale = if al.is_scan() {
+        DISPLACEMENT_SCALE * al.unit_len
+    } else {
+        f64::INFINITY
+    };
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed);
