@@ -74,9 +74,11 @@ impl ShownPoints {
         let mut heap = BinaryHeap::new();
         for v in (0..n).filter(|&v| shown[v]) {
             dist[v] = 0.0;
-            heap.push(Reverse((Dist(0.0), v)));
+            heap.push(Reverse((0u64, v)));
         }
-        while let Some(Reverse((Dist(d), v))) = heap.pop() {
+        // Distances are non-negative: their IEEE bit patterns order like the numbers.
+        while let Some(Reverse((key, v))) = heap.pop() {
+            let d = f64::from_bits(key);
             if d > dist[v] {
                 continue;
             }
@@ -88,7 +90,7 @@ impl ShownPoints {
                 let e = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
                 if u < n && d + e < dist[u] && d + e <= band {
                     dist[u] = d + e;
-                    heap.push(Reverse((Dist(d + e), u)));
+                    heap.push(Reverse(((d + e).to_bits(), u)));
                 }
             }
         }
@@ -147,17 +149,6 @@ impl ScanScores {
         s
     }
 
-    /// The sum of two pairs' counts.
-    pub fn add(self, o: ScanScores) -> ScanScores {
-        ScanScores {
-            shown: self.shown + o.shown,
-            shown_matched: self.shown_matched + o.shown_matched,
-            hidden: self.hidden + o.hidden,
-            listed: self.listed + o.listed,
-            listed_hidden: self.listed_hidden + o.listed_hidden,
-        }
-    }
-
     /// Shown points given a counterpart / shown points (`None` when none is shown).
     pub fn coverage(&self) -> Option<f64> {
         ratio(self.shown_matched, self.shown)
@@ -174,13 +165,18 @@ impl ScanScores {
     }
 }
 
-/// A distance ordered for the heap (never NaN: sums of edge lengths).
-#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
-struct Dist(f64);
-impl Eq for Dist {}
-impl Ord for Dist {
-    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&o.0)
+impl std::ops::Add for ScanScores {
+    type Output = ScanScores;
+
+    /// The sum of two pairs' counts.
+    fn add(self, o: ScanScores) -> ScanScores {
+        ScanScores {
+            shown: self.shown + o.shown,
+            shown_matched: self.shown_matched + o.shown_matched,
+            hidden: self.hidden + o.hidden,
+            listed: self.listed + o.listed,
+            listed_hidden: self.listed_hidden + o.listed_hidden,
+        }
     }
 }
 
@@ -237,7 +233,7 @@ mod tests {
         assert!((c.precision().unwrap() - 5.0 / 6.0).abs() < 1e-12);
         // Pooled with a pair that matched everything: recall halves.
         let all = ScanScores::new(&s, &points, &[true; 11]);
-        let both = c.add(all);
+        let both = c + all;
         assert_eq!(both.recall(), Some(0.5));
         assert_eq!(both.coverage(), Some(7.0 / 8.0));
         assert_eq!(ScanScores::default().coverage(), None);

@@ -89,7 +89,7 @@ impl BenchReport {
         self.pairs
             .iter()
             .filter_map(|p| p.scan)
-            .reduce(ScanScores::add)
+            .reduce(|a, b| a + b)
     }
 
     /// Skeleton-filter fallbacks over all pairs.

@@ -117,8 +117,9 @@ pub struct ArticulatedOptions {
     pub icp_points: usize,
     /// A pair whose target point lies on the target's boundary is rejected (and the template
     /// point has no counterpart) when longer than this.
-    /// (0.02: a single-view scan has holes inside its silhouette as well, and at 0.01 one shown
-    /// template point in 16 went to `no_counterpart`; `docs/decisions/2026-12-03-scan-matching.md`.)
+    /// (0.015: a single-view scan has holes inside its silhouette as well, and at 0.01 one
+    /// shown template point in 16 went to `no_counterpart`; a wider gate pairs the flanks
+    /// beyond a silhouette. `docs/decisions/2026-12-03-scan-matching.md`.)
     pub boundary_gate: f64,
     /// Rounds of the non-rigid step after the ICP (0: none).
     pub nonrigid_rounds: usize,
@@ -149,7 +150,7 @@ impl Default for ArticulatedOptions {
             joint_anchor: 0.1,
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
-            boundary_gate: 0.02,
+            boundary_gate: 0.015,
             nonrigid_rounds: 3,
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
