@@ -11,6 +11,9 @@
 //!   meshes the matcher worked on, related to the files' ids by [`MeshIds`]) into an
 //!   [`Evaluation`]: per match the geodesic error over √area and whether it is a flip
 //!   ([`evaluate`] on an [`EvalGraph`]). [`table1_row`] ranks the matches by confidence.
+//! * For a single-view scan, [`ShownPoints`] says which template points it shows (from the
+//!   truth table) and [`ScanScores`] counts coverage and the `no_counterpart` precision and
+//!   recall.
 //! * [`Pooled`] pools the pairs of a run: mean error, flip rate, [`within`], the cumulative
 //!   curve ([`cumulative_curve`]) and the mean Table 1 row.
 //!
@@ -53,8 +56,10 @@
 
 mod dataset;
 mod metrics;
+mod scan;
 
 pub use dataset::{evaluate_pair, read_mirror, read_truth, Dataset, EvalError, MeshIds, Pooled};
 pub use metrics::{
     cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
 };
+pub use scan::{ScanScores, ShownPoints, SHOWN_BAND};

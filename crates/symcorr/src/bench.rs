@@ -9,7 +9,9 @@ use crate::{Correspondence, Pipeline, PipelineError, PreparedMesh};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::time::Instant;
-use symcorr_eval::{table1_row, Dataset, EvalGraph, Evaluation, MeshIds, Pooled};
+use symcorr_eval::{
+    table1_row, Dataset, EvalGraph, Evaluation, MeshIds, Pooled, ScanScores, ShownPoints,
+};
 
 /// The result of one pair.
 #[derive(Debug, Clone)]
@@ -24,6 +26,9 @@ pub struct PairResult {
     pub evaluation: Evaluation,
     /// Table 1 row of this pair.
     pub table1_row: [f64; 10],
+    /// A single-view target's coverage and `no_counterpart` counts (symcorr-eval's
+    /// [`ScanScores`]); `None` for a whole surface.
+    pub scan: Option<ScanScores>,
     /// Seconds the pair costs on its own: preparing both meshes plus matching.
     pub seconds: f64,
     /// Seconds of the pair stages alone (meshes already prepared).
@@ -79,6 +84,14 @@ impl BenchReport {
         self.pooled().curve()
     }
 
+    /// The scan pairs' coverage and `no_counterpart` counts summed (`None` without scans).
+    pub fn scan_scores(&self) -> Option<ScanScores> {
+        self.pairs
+            .iter()
+            .filter_map(|p| p.scan)
+            .reduce(|a, b| a + b)
+    }
+
     /// Skeleton-filter fallbacks over all pairs.
     pub fn fallbacks(&self) -> usize {
         self.pairs
@@ -94,6 +107,10 @@ impl BenchReport {
 /// evaluation graph of the target's prepared mesh — or, with `target_truth` (a partial scan),
 /// of the template's.
 ///
+/// On a partial target only the matches with a counterpart are scored: the points listed
+/// under `no_counterpart` are not matches of the output (coverage counts them,
+/// [`ScanScores`]).
+///
 /// Returns the evaluation and the confidences of the evaluated matches (for the Table 1 row).
 pub fn evaluate_pair(
     template: &PreparedMesh,
@@ -104,14 +121,45 @@ pub fn evaluate_pair(
     mirror: Option<&[u32]>,
 ) -> (Evaluation, Vec<f64>) {
     let (ta, tb) = (template.prepared_ids(), target.prepared_ids());
+    let listed: Vec<symcorr_correspond::Pair> = match corr.has_counterpart() {
+        Some(h) => corr
+            .pairs
+            .iter()
+            .zip(h)
+            .filter(|(_, &h)| h)
+            .map(|(m, _)| *m)
+            .collect(),
+        None => corr.pairs.clone(),
+    };
     symcorr_eval::evaluate_pair(
         &mesh_ids(template, &ta),
         &mesh_ids(target, &tb),
         target_truth,
         graph,
-        &corr.pairs,
+        &listed,
         mirror,
     )
+}
+
+/// A single-view target's coverage and `no_counterpart` counts against its truth table
+/// (symcorr-eval's [`ShownPoints`] and [`ScanScores`]); `None` when the correspondence says
+/// nothing about counterparts. `neighbors`: the template's prepared mesh's edge graph.
+pub fn scan_scores(
+    template: &PreparedMesh,
+    neighbors: &[Vec<u32>],
+    target_truth: &[Option<u32>],
+    corr: &Correspondence,
+) -> Option<ScanScores> {
+    let h = corr.has_counterpart()?;
+    let ta = template.prepared_ids();
+    let shown = ShownPoints::new(
+        &mesh_ids(template, &ta),
+        &template.mesh.positions,
+        neighbors,
+        target_truth,
+    );
+    let points: Vec<u32> = corr.pairs.iter().map(|m| m.template).collect();
+    Some(ScanScores::new(&shown, &points, h))
 }
 
 fn mesh_ids<'a>(p: &'a PreparedMesh, prepared_ids: &'a [Option<u32>]) -> MeshIds<'a> {
@@ -219,6 +267,18 @@ pub fn run_bench(
             (g, graph)
         })
         .collect();
+    // Template edge graphs of the scan pairs (the band of ShownPoints).
+    let neighbors: BTreeMap<&str, Vec<Vec<u32>>> = dataset
+        .pairs
+        .iter()
+        .filter(|(_, b)| truths.contains_key(b.as_str()))
+        .map(|(a, _)| {
+            (
+                a.as_str(),
+                prepared[index[a.as_str()]].1.mesh.vertex_neighbors(),
+            )
+        })
+        .collect();
     let total_pairs = dataset.pairs.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
     let pairs: Vec<PairResult> = dataset
@@ -238,6 +298,10 @@ pub fn run_bench(
                 dataset.mirror.as_deref(),
             );
             let row = table1_row(&evaluation.errors, &conf);
+            let scan = match (truths.get(b.as_str()), neighbors.get(a.as_str())) {
+                (Some(t), Some(nb)) => scan_scores(&ta.1, nb, t, &corr),
+                _ => None,
+            };
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(Progress::Matched {
                 done: d,
@@ -249,6 +313,7 @@ pub fn run_bench(
                 correspondence: corr,
                 evaluation,
                 table1_row: row,
+                scan,
                 seconds: ta.2 + tb.2 + match_seconds,
                 match_seconds,
             })
@@ -353,9 +418,22 @@ mod tests {
                 w.target = q;
             }
         }
+        // Only the matches with a counterpart are scored; coverage counts the others.
+        let has = corr.has_counterpart().unwrap();
+        let listed = corr
+            .pairs
+            .iter()
+            .zip(has)
+            .filter(|(m, &h)| h && target_of(m.template).is_some())
+            .count();
+        assert!(listed > visible / 2, "{listed} of {visible}");
         let (e, conf) = evaluate_pair(&a, &b, Some(&truth), &graph, &perfect, Some(&mirror));
-        assert_eq!(e.errors.len(), visible);
-        assert_eq!(conf.len(), visible);
+        assert_eq!(e.errors.len(), listed);
+        assert_eq!(conf.len(), listed);
+        let scores = scan_scores(&a, &a.mesh.vertex_neighbors(), &truth, &corr).unwrap();
+        assert_eq!(scores.shown, visible);
+        assert_eq!(scores.shown_matched, listed);
+        assert!(scores.hidden > 0 && scores.hidden + visible <= 200);
         assert!(e.mean_error() < 1e-12, "{}", e.mean_error());
         assert_eq!(e.flip_rate(), Some(0.0));
         let (e, _) = evaluate_pair(&a, &b, Some(&truth), &graph, &mirrored, Some(&mirror));

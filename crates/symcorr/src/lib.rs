@@ -82,7 +82,7 @@ pub use pipeline::{
 };
 pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
-    DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, PARTIAL_BOUNDARY_RATIO,
+    DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, ORIGIN_FACING_FRACTION, PARTIAL_BOUNDARY_RATIO,
 };
 pub use symcorr_correspond::{ArticulatedStart, BoneTransforms};
 

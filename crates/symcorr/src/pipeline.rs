@@ -265,7 +265,7 @@ fn articulated(
             joints: &m.attachment.joints,
             area: m.area,
             triangles: Some(&m.mesh.triangles),
-            viewpoint: m.viewpoint,
+            viewpoint: m.view_point(),
         }
     }
     let mut template_side = side(template, &tn, None, Some(&neighbors));

@@ -39,7 +39,9 @@
 //!    [`ArticulatedOptions::nonrigid_rounds`] rounds whose gates run coarse to fine from
 //!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end` (module `nonrigid`).
 //! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
-//!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`.
+//!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
+//!    target with a border (a scan) times `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid
+//!    displacement.
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
@@ -115,6 +117,9 @@ pub struct ArticulatedOptions {
     pub icp_points: usize,
     /// A pair whose target point lies on the target's boundary is rejected (and the template
     /// point has no counterpart) when longer than this.
+    /// (0.015: a single-view scan has holes inside its silhouette as well, and at 0.01 one
+    /// shown template point in 16 went to `no_counterpart`; a wider gate pairs the flanks
+    /// beyond a silhouette. `docs/decisions/2026-12-03-scan-matching.md`.)
     pub boundary_gate: f64,
     /// Rounds of the non-rigid step after the ICP (0: none).
     pub nonrigid_rounds: usize,
@@ -145,7 +150,7 @@ impl Default for ArticulatedOptions {
             joint_anchor: 0.1,
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
-            boundary_gate: 0.01,
+            boundary_gate: 0.015,
             nonrigid_rounds: 3,
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
@@ -182,8 +187,8 @@ pub const DEFAULT_ICP_POINTS: usize = 16_000;
 /// The result of [`articulated_match`].
 #[derive(Debug, Clone)]
 pub struct ArticulatedMatches {
-    /// One pair per template vertex, in vertex order; `confidence` is `1/(1 + d/gate)` with
-    /// `d` the final distance.
+    /// One pair per template vertex, in vertex order; `confidence` falls with the final
+    /// distance and the non-rigid displacement (`final_map`).
     pub pairs: Vec<crate::Pair>,
     /// Per template vertex, the final distance from the posed template point to its match,
     /// over √area.
@@ -242,11 +247,12 @@ pub fn articulated_match(
     timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
+    let skinned = posed.clone();
     let near = nonrigid::nonrigid_step(&al, &mut posed, &posed_normals, near)?;
     timings.push(("nonrigid", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let map = final_map(&al, &posed, &posed_normals, &near)?;
+    let map = final_map(&al, &posed, &posed_normals, &near, &skinned)?;
     timings.push(("map", t.elapsed().as_secs_f64()));
     Ok(ArticulatedMatches {
         pairs: map.pairs,
@@ -466,6 +472,14 @@ impl<'a> Alignment<'a> {
         ))
     }
 
+    /// Is the target a sensor's view — a surface with a border (a depth scan, a frame of a
+    /// recording)? Its sampling and noise get the non-rigid step's robust data term and the
+    /// displacement term of the confidence; a whole surface keeps the plain ones (measured:
+    /// `docs/decisions/2026-12-03-scan-matching.md`).
+    fn is_scan(&self) -> bool {
+        self.target.boundary.is_some_and(|b| b.contains(&true))
+    }
+
     /// Does the pair (posed template point `x`, its normal `n`) → target vertex `q` hold at
     /// this gate? Close enough, facing the same way, and not hanging over the target's border.
     fn holds(&self, x: &Point3<f64>, n: &Vector3<f64>, q: u32, gate: f64) -> bool {
@@ -535,6 +549,10 @@ fn initial_transforms(
     Ok((transforms, limit))
 }
 
+/// The non-rigid displacement (in √area) at which a match's confidence halves
+/// ([`final_map`]). Measured: `docs/decisions/2026-12-03-scan-matching.md`.
+const DISPLACEMENT_SCALE: f64 = 0.01;
+
 /// The dense map of [`articulated_match`], per template vertex.
 struct FinalMap {
     pairs: Vec<Pair>,
@@ -543,15 +561,25 @@ struct FinalMap {
 }
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
-/// when that pair holds at the final gate (`gate_end`), and its confidence is
-/// `1/(1 + d/gate)` from the final distance `d`. `hints`: the last nearest-neighbour answer
-/// before it (a search speed-up only).
+/// when that pair holds at the final gate (`gate_end`). Its confidence is `1/(1 + d/gate)`
+/// from the final distance `d`, on a sensor's view ([`Alignment::is_scan`]) times
+/// `1/(1 + |s|/DISPLACEMENT_SCALE)` with `s` the non-rigid step's displacement of the vertex
+/// (`posed − skinned`): where the bones alone fitted, the map is surer than where a
+/// displacement field had to pull the surface in.
+/// `hints`: the last nearest-neighbour answer before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
     posed: &[Point3<f64>],
     posed_normals: &[Vector3<f64>],
     hints: &[(u32, f64)],
+    skinned: &[Point3<f64>],
 ) -> Result<FinalMap, CorrespondError> {
+    // A whole surface keeps the distance alone (the displacement term measured no gain there).
+    let displacement_scale = if al.is_scan() {
+        DISPLACEMENT_SCALE * al.unit_len
+    } else {
+        f64::INFINITY
+    };
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed);
@@ -571,7 +599,9 @@ fn final_map(
             Pair {
                 template: v as u32,
                 target: q,
-                confidence: 1.0 / (1.0 + d / gate),
+                confidence: 1.0
+                    / (1.0 + d / gate)
+                    / (1.0 + (posed[v] - skinned[v]).norm() / displacement_scale),
             }
         })
         .collect();

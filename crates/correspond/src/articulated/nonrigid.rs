@@ -10,14 +10,29 @@ use rayon::prelude::*;
 /// Jacobi iterations per round of the non-rigid step.
 const NONRIGID_JACOBI: usize = 30;
 
+/// Scale σ of the Geman–McClure weight of a held pair, as a fraction of the round's gate.
+const ROBUST_SCALE: f64 = 0.5;
+
+/// How much of a pair's offset along the target's tangent plane the field follows: the
+/// nearest scan vertex is a sample of the surface, and its tangential offset is mostly where
+/// the sampling fell (and a depth sensor's noise is along the line of sight).
+const TANGENTIAL_SHARE: f64 = 0.3;
+
 /// Moves `posed` by [`ArticulatedOptions::nonrigid_rounds`](crate::ArticulatedOptions)
 /// rounds of a smooth displacement field; nothing without the template's edge graph
 /// (`neighbors`, one list per vertex). Each round pairs every posed vertex with its nearest
 /// pool vertex, keeps the pairs that hold at the round's gate (coarse to fine, from
 /// `nonrigid_gate_start` to `gate_end`, so a body part further off than the final gate — a
 /// heavier shape's belly — is pulled in by the early rounds), and spreads their offsets `d_v`
-/// by Jacobi iterations of `min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²` (`r_v` 1 for a
-/// held pair, else 0). The normals stay those of the skinning. `hints` (the matches before
+/// by Jacobi iterations of `min Σ r_v|s_v − d_v|² + λ Σ_edges |s_u − s_v|²` (`r_v` 0 without
+/// a held pair). On a whole surface `d_v` is the offset and `r_v` 1. On a sensor's view (a
+/// target with a border, [`Alignment::is_scan`]) `d_v` is the offset's component along the
+/// target's normal plus [`TANGENTIAL_SHARE`] of the rest, and `r_v` the Geman–McClure IRLS
+/// weight `(σ²/(σ² + |x_v − y_v|²))²`
+/// with σ = [`ROBUST_SCALE`]·gate (Geman & McClure 1987; Black & Rangarajan 1996, the
+/// outlier-process view): the gate truncates, and within it a far pair — a sensor outlier, a
+/// flying pixel at a silhouette — pulls less than a near one. The normals stay those of the
+/// skinning. `hints` (the matches before
 /// this step) start the first round's searches; returns the last round's matches, or `hints`
 /// when no round ran.
 pub(super) fn nonrigid_step(
@@ -32,6 +47,7 @@ pub(super) fn nonrigid_step(
         return Ok(hints);
     };
     let mut hints = hints;
+    let scan = al.is_scan();
     let rounds = options.nonrigid_rounds;
     let g0 = options.nonrigid_gate_start.max(options.gate_end);
     for round in 0..rounds {
@@ -52,10 +68,19 @@ pub(super) fn nonrigid_step(
         )?;
         let mut d = vec![Vector3::zeros(); n];
         let mut r = vec![0.0; n];
+        let s2 = (ROBUST_SCALE * round_gate).powi(2);
         for (v, &(q, d2)) in near.iter().enumerate() {
             if d2.is_finite() && al.holds(&posed[v], &posed_normals[v], q, round_gate) {
-                d[v] = al.target_positions[q as usize] - posed[v];
-                r[v] = 1.0;
+                let offset = al.target_positions[q as usize] - posed[v];
+                if scan {
+                    let normal = al.target_normals[q as usize];
+                    let along = normal * normal.dot(&offset);
+                    d[v] = along + (offset - along) * TANGENTIAL_SHARE;
+                    r[v] = (s2 / (s2 + offset.norm_squared())).powi(2);
+                } else {
+                    d[v] = offset;
+                    r[v] = 1.0;
+                }
             }
         }
         let lambda = options.nonrigid_smoothing;

@@ -86,6 +86,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "match_seconds": p.match_seconds,
                 "skeleton_filter_fallbacks": p.correspondence.filter_stats().fallbacks,
                 "coverage": p.correspondence.coverage(),
+                "scan": p.scan.map(scan_json),
             })
         })
         .collect();
@@ -114,8 +115,28 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
         "wall_seconds": report.wall_seconds,
         "skeleton_filter_fallbacks": report.fallbacks(),
         "curve": report.curve(),
+        "scan": report.scan_scores().map(scan_json),
         "pairs": pairs,
     })
+}
+
+/// A single-view target's scores (symcorr-eval's `ScanScores`): coverage of the shown
+/// template points, `no_counterpart` precision and recall, and the counts behind them.
+fn scan_json(s: symcorr_eval::ScanScores) -> Value {
+    json!({
+        "coverage": s.coverage(),
+        "no_counterpart_precision": s.precision(),
+        "no_counterpart_recall": s.recall(),
+        "shown": s.shown,
+        "shown_matched": s.shown_matched,
+        "hidden": s.hidden,
+        "listed": s.listed,
+        "listed_hidden": s.listed_hidden,
+    })
+}
+
+fn opt_pct(x: Option<f64>) -> String {
+    x.map_or_else(|| "    n/a".to_string(), pct)
 }
 
 fn pct(x: f64) -> String {
@@ -128,33 +149,57 @@ fn flip_str(f: Option<f64>) -> String {
 
 /// The table printed by `bench` and `demo`.
 pub fn table(report: &BenchReport, total: bool) -> String {
+    // Single-view targets add coverage and the `no_counterpart` precision and recall.
+    let scans = report.scan_scores().is_some();
+    let scan_cols = |c: Option<symcorr_eval::ScanScores>| match c {
+        Some(c) if scans => format!(
+            " {:>7} {:>7} {:>7}",
+            opt_pct(c.coverage()),
+            opt_pct(c.precision()),
+            opt_pct(c.recall())
+        ),
+        _ if scans => format!(" {:>7} {:>7} {:>7}", "n/a", "n/a", "n/a"),
+        _ => String::new(),
+    };
     let mut s = format!(
-        "{:<34} {:>8} {:>8} {:>7} {:>7} {:>7}\n",
-        "pair", "mean err", "flips", "≤0.05", "≤0.10", "s/pair"
+        "{:<34} {:>8} {:>8} {:>7} {:>7} {:>7}{}\n",
+        "pair",
+        "mean err",
+        "flips",
+        "≤0.05",
+        "≤0.10",
+        "s/pair",
+        if scans {
+            format!(" {:>7} {:>7} {:>7}", "cover", "nc P", "nc R")
+        } else {
+            String::new()
+        }
     );
     for p in &report.pairs {
         let name = format!("{} → {}", p.template, p.target);
         s += &format!(
-            "{:<34} {:>8.4} {:>8} {:>7} {:>7} {:>7.2}\n",
+            "{:<34} {:>8.4} {:>8} {:>7} {:>7} {:>7.2}{}\n",
             name,
             p.evaluation.mean_error(),
             flip_str(p.evaluation.flip_rate()),
             pct(p.evaluation.within(0.05)),
             pct(p.evaluation.within(0.10)),
-            p.seconds
+            p.seconds,
+            scan_cols(p.scan)
         );
     }
     if !total {
         return s;
     }
     s += &format!(
-        "{:<34} {:>8.4} {:>8} {:>7} {:>7} {:>7.2}\n",
+        "{:<34} {:>8.4} {:>8} {:>7} {:>7} {:>7.2}{}\n",
         format!("all ({} pairs)", report.pairs.len()),
         report.mean_error(),
         flip_str(report.flip_rate()),
         pct(report.within(0.05)),
         pct(report.within(0.10)),
-        report.seconds_per_pair()
+        report.seconds_per_pair(),
+        scan_cols(report.scan_scores())
     );
     let row: Vec<String> = report
         .table1_row()

@@ -138,6 +138,7 @@ pub fn run(args: DemoArgs, max_input_bytes: u64) -> Result<(), CliError> {
             correspondence: corr,
             evaluation,
             table1_row: row,
+            scan: None,
             seconds: ta + tb + match_seconds,
             match_seconds,
         });
