@@ -32,12 +32,12 @@ use std::io::{self, BufReader, Read, Seek, SeekFrom};
 use thiserror::Error;
 
 /// `"NIR\0"`, the first four bytes of every record.
-const RECORD_MAGIC: u32 = 0x0052_494E;
+pub(crate) const RECORD_MAGIC: u32 = 0x0052_494E;
 const RECORD_NODE_ADDED_1_0_0_4: u32 = 0x02;
 const RECORD_NODE_ADDED_1_0_0_5: u32 = 0x0C;
-const RECORD_NODE_ADDED: u32 = 0x0D;
-const RECORD_NEW_DATA: u32 = 0x0A;
-const RECORD_END: u32 = 0x0B;
+pub(crate) const RECORD_NODE_ADDED: u32 = 0x0D;
+pub(crate) const RECORD_NEW_DATA: u32 = 0x0A;
+pub(crate) const RECORD_END: u32 = 0x0B;
 /// The node type of a depth stream in a `NODE_ADDED` record.
 pub(crate) const NODE_TYPE_DEPTH: u32 = 2;
 /// The file header: `NI10`, version (u8, u8, u16, u32), max timestamp u64, max node id u32.

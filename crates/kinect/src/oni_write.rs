@@ -68,7 +68,9 @@
 use crate::camera::Intrinsics;
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
-use crate::oni_index::NODE_TYPE_DEPTH;
+use crate::oni_index::{
+    NODE_TYPE_DEPTH, RECORD_END, RECORD_MAGIC, RECORD_NEW_DATA, RECORD_NODE_ADDED,
+};
 use crate::recording::Recording;
 use std::io::{self, Write};
 use std::ops::Range;
@@ -82,15 +84,11 @@ pub const PIXEL_FORMAT_DEPTH_1_MM: u64 = 100;
 /// `MAX_VALUE` written for the depth stream: the whole u16 range (module docs).
 pub const MAX_DEPTH_MM: u64 = u16::MAX as u64;
 
-const RECORD_MAGIC: u32 = 0x0052_494E;
 const RECORD_INT_PROPERTY: u32 = 0x03;
 const RECORD_GENERAL_PROPERTY: u32 = 0x06;
 const RECORD_NODE_REMOVED: u32 = 0x07;
 const RECORD_NODE_DATA_BEGIN: u32 = 0x08;
 const RECORD_NODE_STATE_READY: u32 = 0x09;
-const RECORD_NEW_DATA: u32 = 0x0A;
-const RECORD_END: u32 = 0x0B;
-const RECORD_NODE_ADDED: u32 = 0x0D;
 const RECORD_SEEK_TABLE: u32 = 0x0E;
 /// A record header: magic, type, node id, fields size, payload size (u32), undo position (u64).
 const RECORD_HEADER_BYTES: usize = 28;
