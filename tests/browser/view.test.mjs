@@ -217,11 +217,15 @@ function assertTwinColours(img, region, where) {
 }
 
 // The first of `vertices` that the page shows unhidden inside its view `name`.
+// The first of `vertices` that is in view and that the page itself picks at the whole pixel
+// nearest its projection: a click there must select exactly it, not a neighbour.
 async function visibleVertex(page, name, vertices) {
   return page.evaluate(([name, vertices]) => {
     for (const v of vertices) {
       const p = window.symcorrView.project(name, v);
-      if (p && p.visible && p.inside) return { v, x: p.x, y: p.y };
+      if (!p || !p.visible || !p.inside) continue;
+      const [x, y] = [Math.round(p.x), Math.round(p.y)];
+      if (window.symcorrView.pick(name, x, y) === v) return { v, x, y };
     }
     return null;
   }, [name, vertices]);
