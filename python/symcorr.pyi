@@ -46,6 +46,10 @@ class Correspondence:
     method: str
     coverage: Optional[float]
     """Fraction of target vertices hit (``None`` for the paper's method)."""
+    surface_corners: Optional[npt.NDArray[np.int64]]
+    """``(k, 3)``: per pair the corners (target ids) of the target triangle its template point reaches; the articulated method only."""
+    surface_weights: Optional[npt.NDArray[np.float64]]
+    """``(k, 3)``: the barycentric weights of that point on the triangle."""
     def __init__(
         self,
         pairs: npt.NDArray[np.int64],
@@ -54,6 +58,8 @@ class Correspondence:
         timings: Dict[str, float],
         method: str,
         coverage: Optional[float],
+        surface_corners: Optional[npt.NDArray[np.int64]] = None,
+        surface_weights: Optional[npt.NDArray[np.float64]] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
 

@@ -457,7 +457,9 @@ fn pipeline_for(
 /// arrays or files given), `confidence` (`float64 (k,)`), `no_counterpart` (`int64` template
 /// vertices a partial target such as a single-view scan does not show; `None` for a whole
 /// target), `timings` (seconds per stage), `method` and `coverage` (fraction of target vertices
-/// hit; `None` for the paper's method).
+/// hit; `None` for the paper's method); the articulated method adds the matches as points of
+/// the target's surface, `surface_corners` (`int64 (k, 3)`, a triangle's corners, target ids)
+/// and `surface_weights` (`float64 (k, 3)`, barycentric), `None` for the other methods.
 #[pyclass(module = "symcorr", frozen, get_all)]
 struct Correspondence {
     pairs: Py<PyAny>,
@@ -466,18 +468,25 @@ struct Correspondence {
     timings: Py<PyAny>,
     method: String,
     coverage: Option<f64>,
+    surface_corners: Py<PyAny>,
+    surface_weights: Py<PyAny>,
 }
 
 #[pymethods]
 impl Correspondence {
     #[new]
+    #[pyo3(signature = (pairs, confidence, no_counterpart, timings, method, coverage, surface_corners=None, surface_weights=None))]
+    #[allow(clippy::too_many_arguments)] // the attributes, in order, as pickling passes them
     fn new(
+        py: Python<'_>,
         pairs: Py<PyAny>,
         confidence: Py<PyAny>,
         no_counterpart: Py<PyAny>,
         timings: Py<PyAny>,
         method: String,
         coverage: Option<f64>,
+        surface_corners: Option<Py<PyAny>>,
+        surface_weights: Option<Py<PyAny>>,
     ) -> Self {
         Correspondence {
             pairs,
@@ -486,6 +495,8 @@ impl Correspondence {
             timings,
             method,
             coverage,
+            surface_corners: surface_corners.unwrap_or_else(|| py.None()),
+            surface_weights: surface_weights.unwrap_or_else(|| py.None()),
         }
     }
 
@@ -497,6 +508,8 @@ impl Correspondence {
             self.timings.clone_ref(py),
             self.method.clone(),
             self.coverage,
+            self.surface_corners.clone_ref(py),
+            self.surface_weights.clone_ref(py),
         )
             .into_pyobject(py)
     }
@@ -529,9 +542,11 @@ fn correspondence_out(
     // The ids of the inputs, as the correspondence file writes them; template points a partial
     // target does not show are listed apart.
     let shown = corr.has_counterpart();
+    let surface = corr.surface_points(target);
     let mut pairs = Vec::with_capacity(corr.pairs.len());
     let mut confidence = Vec::with_capacity(corr.pairs.len());
     let mut unseen = Vec::new();
+    let (mut corners, mut weights) = (Vec::new(), Vec::new());
     for (i, m) in corr.pairs.iter().enumerate() {
         let t = i64::from(template.input_id(m.template));
         if shown.is_some_and(|h| !h[i]) {
@@ -540,10 +555,29 @@ fn correspondence_out(
             pairs.push(t);
             pairs.push(i64::from(target.input_id(m.target)));
             confidence.push(m.confidence);
+            if let Some(p) = surface.as_ref().and_then(|s| s.get(i)) {
+                corners.extend(p.corners.map(|c| i64::from(target.input_id(c))));
+                weights.extend(p.weights);
+            }
         }
     }
     let k = confidence.len();
     let pairs = Array2::from_shape_vec((k, 2), pairs).map_err(|e| value_err(e.to_string()))?;
+    let (surface_corners, surface_weights) = match surface {
+        Some(_) => (
+            Array2::from_shape_vec((k, 3), corners)
+                .map_err(|e| value_err(e.to_string()))?
+                .into_pyarray(py)
+                .into_any()
+                .unbind(),
+            Array2::from_shape_vec((k, 3), weights)
+                .map_err(|e| value_err(e.to_string()))?
+                .into_pyarray(py)
+                .into_any()
+                .unbind(),
+        ),
+        None => (py.None(), py.None()),
+    };
     let t = PyDict::new(py);
     for (name, s) in timings {
         t.set_item(name, s)?;
@@ -558,6 +592,8 @@ fn correspondence_out(
         timings: t.into_any().unbind(),
         method: method_name(method).to_string(),
         coverage: corr.coverage(),
+        surface_corners,
+        surface_weights,
     })
 }
 

@@ -107,6 +107,14 @@ def test_match_equals_the_command_line(rest, tpose, cli, tmp_path):
     assert {"attachment", "articulated_icp", "map", "total"} <= set(corr.timings)
     # The articulated method on exact joints: nearly every vertex onto itself (same order).
     assert (corr.pairs[:, 0] == np.arange(13380)).all()
+    # The matches as surface points: the file's, on a triangle around each matched vertex.
+    corners = np.array([c for c, _ in doc["surface_points"]])
+    weights = np.array([w for _, w in doc["surface_points"]])
+    np.testing.assert_array_equal(corr.surface_corners, corners)
+    np.testing.assert_allclose(corr.surface_weights, weights, rtol=0, atol=5e-7)
+    assert (corr.surface_corners == corr.pairs[:, 1:2]).any(axis=1).all()
+    assert (corr.surface_weights >= 0).all()
+    np.testing.assert_allclose(corr.surface_weights.sum(axis=1), 1.0, atol=1e-12)
 
 
 def test_match_inputs_and_pickle(rest, tpose):
@@ -126,6 +134,9 @@ def test_match_inputs_and_pickle(rest, tpose):
     np.testing.assert_array_equal(c2.pairs, corr.pairs)
     np.testing.assert_array_equal(c2.confidence, corr.confidence)
     assert c2.timings == corr.timings and c2.method == corr.method
+    np.testing.assert_array_equal(c2.surface_corners, corr.surface_corners)
+    np.testing.assert_array_equal(c2.surface_weights, corr.surface_weights)
+    assert corr.surface_corners.shape == (300, 3)
 
 
 def test_prepared_equals_match(rest, tpose):

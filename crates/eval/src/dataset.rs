@@ -477,6 +477,95 @@ pub fn evaluate_pair(
     (evaluation, confidence)
 }
 
+/// [`evaluate_pair`] for matches that are points on the target's surface
+/// ([`crate::surface_errors`]): per `(template vertex, target corners, weights)` a point of a
+/// target triangle. Without `target_truth` the error is measured on the target, from the true
+/// point of the template vertex; with it (a partial scan) each corner stands for the template
+/// point its truth names, the surface point for their weighted mean, and the error is measured
+/// on the template from the template vertex (corners without truth are dropped and the
+/// weights renormalised). A point is scored when its true point exists — for a scan, when
+/// the template vertex is visible and some corner has truth ([`evaluate_pair`] asks it of the
+/// matched vertex: the two sets differ only at scan vertices without truth). Returns the errors
+/// of the scored points, in order. Panics as [`evaluate_pair`] does.
+///
+/// ```
+/// use symcorr_eval::{evaluate_surface_pair, EvalGraph, MeshIds};
+/// use symcorr_mesh::TriMesh;
+/// let m = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+/// let ids = MeshIds { input_ids: &[0, 1, 2], prepared_ids: &[Some(0), Some(1), Some(2)], area: m.total_area() };
+/// // Template vertex 0 reaches the middle of edge 0–1: half an edge from its true point.
+/// let e = evaluate_surface_pair(&ids, &ids, None, &EvalGraph::new(&m), &[(0, [0, 1, 2], [0.5, 0.5, 0.0])]);
+/// assert!((e[0] - 0.5 / m.total_area().sqrt()).abs() < 1e-12);
+/// ```
+pub fn evaluate_surface_pair(
+    template: &MeshIds<'_>,
+    target: &MeshIds<'_>,
+    target_truth: Option<&[Option<u32>]>,
+    graph: &EvalGraph,
+    points: &[(u32, [u32; 3], [f64; 3])],
+) -> Vec<f64> {
+    let mut scored = Vec::with_capacity(points.len());
+    match target_truth {
+        None => {
+            for &(t, corners, weights) in points {
+                let truth = target
+                    .prepared_ids
+                    .get(template.input_id(t) as usize)
+                    .copied()
+                    .flatten();
+                if let Some(q) = truth {
+                    scored.push((q, corners, weights));
+                }
+            }
+            crate::surface_errors(graph, target.area, &scored)
+        }
+        Some(truth) => {
+            let common_to_template =
+                |c: u32| template.prepared_ids.get(c as usize).copied().flatten();
+            let mut visible = vec![false; template.num_vertices()];
+            for c in truth.iter().flatten() {
+                if let Some(p) = common_to_template(*c) {
+                    visible[p as usize] = true;
+                }
+            }
+            for &(t, corners, weights) in points {
+                if !visible[t as usize] {
+                    continue;
+                }
+                let landed = corners.map(|c| {
+                    truth
+                        .get(target.input_id(c) as usize)
+                        .copied()
+                        .flatten()
+                        .and_then(common_to_template)
+                });
+                let total: f64 = (0..3)
+                    .filter(|&k| landed[k].is_some())
+                    .map(|k| weights[k])
+                    .sum();
+                // The corner the vertex match names carries the point when the others lack truth.
+                let Some(first) = landed.iter().flatten().next().copied() else {
+                    continue;
+                };
+                let mut u = [first; 3];
+                let mut w = [0.0; 3];
+                for k in 0..3 {
+                    if let Some(c) = landed[k] {
+                        u[k] = c;
+                        w[k] = if total > 0.0 { weights[k] / total } else { 0.0 };
+                    }
+                }
+                if total <= 0.0 {
+                    w = [1.0, 0.0, 0.0];
+                    u[0] = first;
+                }
+                scored.push((t, u, w));
+            }
+            crate::surface_errors(graph, template.area, &scored)
+        }
+    }
+}
+
 /// [`evaluate_pair`] for a partial target: on the template's graph (see the module docs).
 fn evaluate_partial(
     template: &MeshIds<'_>,

@@ -58,8 +58,12 @@ mod dataset;
 mod metrics;
 mod scan;
 
-pub use dataset::{evaluate_pair, read_mirror, read_truth, Dataset, EvalError, MeshIds, Pooled};
+pub use dataset::{
+    evaluate_pair, evaluate_surface_pair, read_mirror, read_truth, Dataset, EvalError, MeshIds,
+    Pooled,
+};
 pub use metrics::{
-    cumulative_curve, evaluate, table1_row, within, EvalGraph, Evaluation, FLIP_MIN_SEPARATION,
+    cumulative_curve, evaluate, surface_errors, table1_row, within, EvalGraph, Evaluation,
+    FLIP_MIN_SEPARATION,
 };
 pub use scan::{ScanScores, ShownPoints, SHOWN_BAND};

@@ -228,6 +228,68 @@ pub fn evaluate(
     }
 }
 
+/// Geodesic errors of matches that are points on a surface rather than vertices, normalised
+/// by `√area`: per `(source, corners, weights)` the point `x = Σ wᵢ·corners[i]` of a triangle
+/// of `graph`'s mesh, and its error `min_i (‖x − cornerᵢ‖ + g(cornerᵢ, source))` — the
+/// shortest path that leaves `x` straight to a corner, then follows the edges ([`evaluate`]'s
+/// geodesic, which is what a surface point at a corner reduces to: weights `[1, 0, 0]` give
+/// `g(corner, source)`). `source` is the true point. Runs in parallel (rayon). Panics if a
+/// vertex is not a vertex of `graph`.
+///
+/// ```
+/// use symcorr_mesh::TriMesh;
+/// use symcorr_eval::{surface_errors, EvalGraph};
+/// let m = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+/// let g = EvalGraph::new(&m);
+/// let area = m.total_area(); // 0.5
+/// // Halfway along edge 0–1, truth at vertex 0: 0.5 away.
+/// let e = surface_errors(&g, area, &[(0, [0, 1, 2], [0.5, 0.5, 0.0]), (0, [1, 0, 2], [1.0, 0.0, 0.0])]);
+/// assert!((e[0] - 0.5 / area.sqrt()).abs() < 1e-12);
+/// assert!((e[1] - 1.0 / area.sqrt()).abs() < 1e-12); // a corner: the edge path
+/// ```
+pub fn surface_errors(
+    graph: &EvalGraph,
+    area: f64,
+    points: &[(u32, [u32; 3], [f64; 3])],
+) -> Vec<f64> {
+    let sqrt_area = area.sqrt();
+    points
+        .par_iter()
+        .map_init(
+            || DijkstraScratch::new(&graph.graph),
+            |s, &(source, corners, weights)| {
+                let at = |v: u32| nalgebra::Vector3::from(graph.positions[v as usize]);
+                let x: nalgebra::Vector3<f64> =
+                    corners.iter().zip(weights).map(|(&c, w)| at(c) * w).sum();
+                let straight = corners.map(|c| (at(c) - x).norm());
+                // Settle the corners in order of distance from the true point; a corner
+                // farther along the edges than the best path so far cannot improve it.
+                let mut best = f64::INFINITY;
+                let mut found = [false; 3];
+                let mut pruned = false;
+                graph.search(s, source, f64::INFINITY, |v, d| {
+                    if d >= best {
+                        pruned = true;
+                        return false;
+                    }
+                    for k in 0..3 {
+                        if corners[k] == v {
+                            found[k] = true;
+                            best = best.min(straight[k] + d);
+                        }
+                    }
+                    !found.iter().all(|&f| f)
+                });
+                // Corners a whole search never reached (another component): straight lines.
+                for k in (0..3).filter(|&k| !found[k] && !pruned) {
+                    best = best.min(straight[k] + graph.euclid(corners[k], source));
+                }
+                best / sqrt_area
+            },
+        )
+        .collect()
+}
+
 /// The cumulative error curve: for each of `steps + 1` evenly spaced `x` in `[0, max]`, the
 /// fraction of errors `≤ x` (the paper's plots use `max = 0.25`).
 pub fn cumulative_curve(errors: &[f64], max: f64, steps: usize) -> Vec<(f64, f64)> {
@@ -290,6 +352,43 @@ mod tests {
             let d = g.distance(a, b);
             assert!((d - g.distance(b, a)).abs() < 1e-12);
             assert!(d + 1e-12 >= g.euclid(a, b));
+        }
+    }
+
+    #[test]
+    fn surface_errors_lie_between_the_straight_line_and_every_corner_path() {
+        // On a plane: never shorter than the straight line to the true point, never longer
+        // than the path through any one corner (computed here with `EvalGraph::distance`, a
+        // whole search), equal to the vertex error at a corner.
+        let m = grid(12, 9);
+        let g = EvalGraph::new(&m);
+        let sqrt_area = m.total_area().sqrt();
+        let mut points = Vec::new();
+        for (k, tri) in m.triangles.iter().enumerate().step_by(7) {
+            let source = (k * 31 % m.num_vertices()) as u32;
+            let a = (k % 5) as f64 / 5.0;
+            let b = (1.0 - a) * ((k % 3) as f64 / 3.0);
+            points.push((source, *tri, [a, b, 1.0 - a - b]));
+            points.push((source, *tri, [1.0, 0.0, 0.0]));
+        }
+        let e = surface_errors(&g, m.total_area(), &points);
+        for (&(source, corners, w), &err) in points.iter().zip(&e) {
+            let at = |v: u32| nalgebra::Vector3::from(m.positions[v as usize]);
+            let x: nalgebra::Vector3<f64> = corners.iter().zip(w).map(|(&c, w)| at(c) * w).sum();
+            let err = err * sqrt_area;
+            assert!(err + 1e-12 >= (x - at(source)).norm(), "{err}");
+            let through: Vec<f64> = corners
+                .iter()
+                .map(|&c| (x - at(c)).norm() + g.distance(c, source))
+                .collect();
+            assert!(
+                through.iter().all(|&t| err <= t + 1e-12),
+                "{err} {through:?}"
+            );
+            assert!(through.iter().any(|&t| (err - t).abs() < 1e-12));
+            if w == [1.0, 0.0, 0.0] {
+                assert!((err - g.distance(corners[0], source)).abs() < 1e-12);
+            }
         }
     }
 

@@ -29,6 +29,95 @@ pub fn closest_on_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> 
     (q, nalgebra::distance(p, &q))
 }
 
+/// Closest point to `p` on the triangle `a b c`, as barycentric weights `[wa, wb, wc]`
+/// (non-negative, summing to 1), and its distance.
+///
+/// Decides which Voronoi region of the triangle `p` projects into — a corner, an edge or the
+/// face — from the signs of the dot products of Ericson, *Real-Time Collision Detection*
+/// (2005), §5.1.5. A degenerate triangle (zero area) gives the closest point on its longest
+/// edge.
+///
+/// ```
+/// use nalgebra::Point3;
+/// use symcorr_mesh::geometry::closest_on_triangle;
+/// let [a, b, c] = [Point3::origin(), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)];
+/// let (w, d) = closest_on_triangle(&Point3::new(0.25, 0.25, 2.0), &a, &b, &c);
+/// assert_eq!((w, d), ([0.5, 0.25, 0.25], 2.0));
+/// // Beyond corner b: the corner itself.
+/// assert_eq!(closest_on_triangle(&Point3::new(3.0, -1.0, 0.0), &a, &b, &c).0, [0.0, 1.0, 0.0]);
+/// ```
+pub fn closest_on_triangle(
+    p: &Point3<f64>,
+    a: &Point3<f64>,
+    b: &Point3<f64>,
+    c: &Point3<f64>,
+) -> ([f64; 3], f64) {
+    let weights = closest_weights(p, a, b, c);
+    let q = Point3::from(a.coords * weights[0] + b.coords * weights[1] + c.coords * weights[2]);
+    (weights, nalgebra::distance(p, &q))
+}
+
+/// The barycentric weights of [`closest_on_triangle`].
+fn closest_weights(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> [f64; 3] {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    if ab.cross(&ac).norm_squared() <= f64::EPSILON * ab.norm_squared() * ac.norm_squared() {
+        // Degenerate: the longest edge holds the whole triangle.
+        let edges = [(0, 1, a, b), (1, 2, b, c), (0, 2, a, c)];
+        let (i, j, u, v) = edges
+            .into_iter()
+            .max_by(|x, y| {
+                (x.3 - x.2)
+                    .norm_squared()
+                    .total_cmp(&(y.3 - y.2).norm_squared())
+            })
+            .unwrap_or((0, 1, a, b));
+        let uv = v - u;
+        let l2 = uv.norm_squared();
+        let t = if l2 > 0.0 {
+            ((p - u).dot(&uv) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let mut w = [0.0; 3];
+        w[i] = 1.0 - t;
+        w[j] = t;
+        return w;
+    }
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return [1.0, 0.0, 0.0]; // corner a
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return [0.0, 1.0, 0.0]; // corner b
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let t = d1 / (d1 - d3);
+        return [1.0 - t, t, 0.0]; // edge ab
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0]; // corner c
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let t = d2 / (d2 - d6);
+        return [1.0 - t, 0.0, t]; // edge ac
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - t, t]; // edge bc
+    }
+    // Inside the face.
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    [1.0 - v - w, v, w]
+}
+
 /// `(b − a) × (c − a)` for the corners of a triangle: twice its area times its unit normal.
 #[inline]
 fn corner_cross(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Vector3<f64> {

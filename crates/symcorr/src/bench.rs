@@ -29,6 +29,10 @@ pub struct PairResult {
     /// A single-view target's coverage and `no_counterpart` counts (symcorr-eval's
     /// [`ScanScores`]); `None` for a whole surface.
     pub scan: Option<ScanScores>,
+    /// The articulated method: the errors of the matches as surface points
+    /// ([`Correspondence::surface_points`], symcorr-eval's `evaluate_surface_pair`); `None`
+    /// for the methods that give vertices only.
+    pub surface_errors: Option<Vec<f64>>,
     /// Seconds the pair costs on its own: preparing both meshes plus matching.
     pub seconds: f64,
     /// Seconds of the pair stages alone (meshes already prepared).
@@ -67,6 +71,19 @@ impl BenchReport {
     /// Fraction of all matches with error ≤ x.
     pub fn within(&self, x: f64) -> f64 {
         self.pooled().within(x)
+    }
+
+    /// Mean error of the matches as surface points over all pairs (`None` unless every pair
+    /// has them: the articulated method).
+    pub fn surface_mean_error(&self) -> Option<f64> {
+        let mut sum = 0.0;
+        let mut n = 0usize;
+        for p in &self.pairs {
+            let e = p.surface_errors.as_ref()?;
+            sum += e.iter().sum::<f64>();
+            n += e.len();
+        }
+        (n > 0).then(|| sum / n as f64)
     }
 
     /// Table 1 row averaged over pairs.
@@ -139,6 +156,36 @@ pub fn evaluate_pair(
         &listed,
         mirror,
     )
+}
+
+/// The errors of `corr`'s matches as surface points ([`Correspondence::surface_points`]),
+/// scored where [`evaluate_pair`] scores them (symcorr-eval's
+/// [`symcorr_eval::evaluate_surface_pair`]); `None` for a method that gives vertices only.
+pub fn evaluate_surface_points(
+    template: &PreparedMesh,
+    target: &PreparedMesh,
+    target_truth: Option<&[Option<u32>]>,
+    graph: &EvalGraph,
+    corr: &Correspondence,
+) -> Option<Vec<f64>> {
+    let points = corr.surface_points(target)?;
+    let h = corr.has_counterpart();
+    let listed: Vec<(u32, [u32; 3], [f64; 3])> = corr
+        .pairs
+        .iter()
+        .zip(&points)
+        .enumerate()
+        .filter(|(i, _)| h.is_none_or(|h| h[*i]))
+        .map(|(_, (m, p))| (m.template, p.corners, p.weights))
+        .collect();
+    let (ta, tb) = (template.prepared_ids(), target.prepared_ids());
+    Some(symcorr_eval::evaluate_surface_pair(
+        &mesh_ids(template, &ta),
+        &mesh_ids(target, &tb),
+        target_truth,
+        graph,
+        &listed,
+    ))
 }
 
 /// A single-view target's coverage and `no_counterpart` counts against its truth table
@@ -298,6 +345,13 @@ pub fn run_bench(
                 dataset.mirror.as_deref(),
             );
             let row = table1_row(&evaluation.errors, &conf);
+            let surface_errors = evaluate_surface_points(
+                &ta.1,
+                &tb.1,
+                truths.get(b.as_str()).map(Vec::as_slice),
+                &graphs[&graph_of(a, b)],
+                &corr,
+            );
             let scan = match (truths.get(b.as_str()), neighbors.get(a.as_str())) {
                 (Some(t), Some(nb)) => scan_scores(&ta.1, nb, t, &corr),
                 _ => None,
@@ -314,6 +368,7 @@ pub fn run_bench(
                 evaluation,
                 table1_row: row,
                 scan,
+                surface_errors,
                 seconds: ta.2 + tb.2 + match_seconds,
                 match_seconds,
             })

@@ -94,6 +94,12 @@ pub struct CorrespondenceFile {
     pub segments: MeshPair<Vec<Option<usize>>>,
     /// What the paper's skeleton filter did (all zero for the other methods).
     pub skeleton_filter: FilterCounts,
+    /// The articulated method only: per pair (same order as `pairs`), the point of the target's
+    /// surface the template point reaches, `[[a, b, c], [wa, wb, wc]]` — a triangle's corners
+    /// (target input ids) and barycentric weights (rounded to 1e-6); `pairs` holds the matched
+    /// vertex, one of the corners. Absent for the other methods and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_points: Option<Vec<([u32; 3], [f64; 3])>>,
     /// The target mesh file.
     pub target: MeshRef,
     /// The template mesh file.

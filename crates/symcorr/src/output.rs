@@ -58,6 +58,14 @@ pub fn correspondence_json(
         .filter(|&(i, _)| !seen(i))
         .map(|(_, m)| template.input_id(m.template))
         .collect();
+    let surface_points = corr.surface_points(target).map(|points| {
+        points
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| seen(i))
+            .map(|(_, p)| (p.corners.map(|c| target.input_id(c)), p.weights.map(round6)))
+            .collect()
+    });
     let pairs = corr
         .pairs
         .iter()
@@ -93,6 +101,7 @@ pub fn correspondence_json(
             target: labels(target),
             template: labels(template),
         },
+        surface_points,
         skeleton_filter: FilterCounts {
             fallbacks: f.fallbacks,
             kept: f.kept,

@@ -4,6 +4,7 @@
 use crate::prepare::Timings;
 use crate::prepare::{PrepareOptions, PreparedMesh};
 use crate::{OptionError, PipelineError};
+use nalgebra::Point3;
 use std::time::Instant;
 use symcorr_correspond::{
     articulated_match, coverage, explain_point, farthest_point_sample, match_points,
@@ -11,6 +12,7 @@ use symcorr_correspond::{
     ArticulatedStart, BoneTransforms, FilterStats, Match, MatchOptions, Pair, PaperFilter,
     PointExplanation, RefineOptions, RefinedInputs, SpectralBasis,
 };
+use symcorr_mesh::geometry::closest_on_triangle;
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::Skeleton;
 use symcorr_spectral::EdgeGraph;
@@ -198,6 +200,59 @@ impl Correspondence {
         }
     }
 
+    /// Per pair, the point of the target's surface that its template point reaches: the
+    /// point nearest the posed template point (the articulated method's final fit) on the
+    /// triangles around the matched vertex ([`closest_on_triangle`]). The matched vertex is
+    /// the nearest *vertex* in the method's feature space; the surface point removes the
+    /// target's sampling from the answer (a scan's pixel spacing, a coarse mesh's edges).
+    /// `None` for the methods that pose no template (paper, refined); `target` must be the
+    /// mesh the correspondence was computed onto.
+    ///
+    /// ```
+    /// use symcorr::{Mode, Pipeline, PipelineOptions};
+    /// let (mesh, joints) = symcorr_attach::doc_example();
+    /// let pipeline = Pipeline::new(PipelineOptions { mode: Mode::Dense, ..Default::default() });
+    /// let template = pipeline.prepare(mesh.clone(), &joints).unwrap();
+    /// let target = pipeline.prepare(mesh, &joints).unwrap();
+    /// let corr = pipeline.run(&template, &target).unwrap(); // the articulated method
+    /// let points = corr.surface_points(&target).unwrap();
+    /// assert_eq!(points.len(), corr.pairs.len());
+    /// // Each surface point lies on a triangle around its matched vertex.
+    /// for (p, m) in points.iter().zip(&corr.pairs) {
+    ///     assert!(p.corners.contains(&m.target));
+    ///     assert!((p.weights.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    /// }
+    /// ```
+    pub fn surface_points(&self, target: &PreparedMesh) -> Option<Vec<SurfacePoint>> {
+        let MethodReport::Articulated { posed, .. } = &self.report else {
+            return None;
+        };
+        let mesh = &target.mesh;
+        let around = mesh.vertex_triangles();
+        let at = |v: u32| Point3::from(mesh.positions[v as usize]);
+        Some(
+            self.pairs
+                .iter()
+                .map(|m| {
+                    let p = posed
+                        .get(m.template as usize)
+                        .map_or_else(|| at(m.target), |x| Point3::from(*x));
+                    let mut best = SurfacePoint::vertex(m.target);
+                    let mut best_d = nalgebra::distance(&p, &at(m.target));
+                    for &t in around.get(m.target as usize).into_iter().flatten() {
+                        let corners = mesh.triangles[t as usize];
+                        let [a, b, c] = corners.map(at);
+                        let (weights, d) = closest_on_triangle(&p, &a, &b, &c);
+                        if d < best_d {
+                            (best, best_d) = (SurfacePoint { corners, weights }, d);
+                        }
+                    }
+                    best
+                })
+                .collect(),
+        )
+    }
+
     /// Per pair, whether the target shows the template point (partial targets of the
     /// articulated method; `None` otherwise).
     pub fn has_counterpart(&self) -> Option<&[bool]> {
@@ -208,6 +263,35 @@ impl Correspondence {
             } => Some(h),
             _ => None,
         }
+    }
+}
+
+/// A point on a mesh's surface: a triangle's corners (vertex ids of the prepared mesh) and
+/// barycentric weights (non-negative, summing to 1). A vertex is the corner with weight 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// The triangle's corners.
+    pub corners: [u32; 3],
+    /// The weight of each corner.
+    pub weights: [f64; 3],
+}
+
+impl SurfacePoint {
+    /// The vertex `v` itself.
+    pub fn vertex(v: u32) -> SurfacePoint {
+        SurfacePoint {
+            corners: [v; 3],
+            weights: [1.0, 0.0, 0.0],
+        }
+    }
+
+    /// Its position on `mesh` (whose vertices the corners name).
+    pub fn position(&self, mesh: &TriMesh) -> Point3<f64> {
+        let mut q = nalgebra::Vector3::zeros();
+        for (c, w) in self.corners.iter().zip(self.weights) {
+            q += nalgebra::Vector3::from(mesh.positions[*c as usize]) * w;
+        }
+        Point3::from(q)
     }
 }
 

@@ -76,6 +76,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "target": p.target,
                 "matches": p.evaluation.errors.len(),
                 "mean_error": p.evaluation.mean_error(),
+                "surface_mean_error": p.surface_errors.as_ref().map(|e| e.iter().sum::<f64>() / e.len().max(1) as f64),
                 "flip_rate": p.evaluation.flip_rate(),
                 "flips": flips,
                 "flip_counted": counted,
@@ -107,6 +108,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
         "eigenpairs": spectral.then_some(o.prepare.eigenpairs),
         "base_radius": spectral.then_some(o.prepare.base_radius),
         "mean_error": report.mean_error(),
+        "surface_mean_error": report.surface_mean_error(),
         "flip_rate": report.flip_rate(),
         "within_0.05": report.within(0.05),
         "within_0.10": report.within(0.10),
@@ -210,6 +212,9 @@ pub fn table(report: &BenchReport, total: bool) -> String {
         "Table 1 row (best 10 %…100 % by confidence): {}\n",
         row.join(" ")
     );
+    if let Some(e) = report.surface_mean_error() {
+        s += &format!("mean error of the matches as surface points: {e:.4}\n");
+    }
     s
 }
 

@@ -8,7 +8,7 @@ use super::CliError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use symcorr::bench::{evaluate_pair, BenchReport, PairResult};
+use symcorr::bench::{evaluate_pair, evaluate_surface_points, BenchReport, PairResult};
 use symcorr::io::{read_mesh, read_skeleton};
 use symcorr::output::{correspondence_json, curve_svg, pair_timings};
 use symcorr::{Method, Mode, Pipeline, PipelineOptions};
@@ -135,6 +135,7 @@ pub fn run(args: DemoArgs, max_input_bytes: u64) -> Result<(), CliError> {
         results.push(PairResult {
             template: a_name.clone(),
             target: format!("{b_name} ({tag})"),
+            surface_errors: evaluate_surface_points(&a, &b, None, &graph, &corr),
             correspondence: corr,
             evaluation,
             table1_row: row,

@@ -660,6 +660,7 @@ mod tests {
                 target: vec![Some(11); nb],
                 template: vec![Some(12); na],
             },
+            surface_points: None,
             skeleton_filter: crate::formats::FilterCounts {
                 fallbacks: 0,
                 kept: 0,
