@@ -86,7 +86,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "seconds": p.seconds,
                 "match_seconds": p.match_seconds,
                 "skeleton_filter_fallbacks": p.correspondence.filter_stats().fallbacks,
-                "coverage": p.correspondence.coverage(),
+                "target_vertices_hit": p.correspondence.coverage(),
                 "scan": p.scan.map(scan_json),
             })
         })
