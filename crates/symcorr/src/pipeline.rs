@@ -205,8 +205,8 @@ impl Correspondence {
     /// triangles around the matched vertex ([`closest_on_triangle`]). The matched vertex is
     /// the nearest *vertex* in the method's feature space; the surface point removes the
     /// target's sampling from the answer (a scan's pixel spacing, a coarse mesh's edges).
-    /// `None` for the methods that pose no template (paper, refined); `target` must be the
-    /// mesh the correspondence was computed onto.
+    /// `None` for the methods that pose no template (paper, refined), and when `target` is
+    /// not the mesh the correspondence was computed onto (a pair names no vertex of it).
     ///
     /// ```
     /// use symcorr::{Mode, Pipeline, PipelineOptions};
@@ -228,6 +228,13 @@ impl Correspondence {
             return None;
         };
         let mesh = &target.mesh;
+        if self
+            .pairs
+            .iter()
+            .any(|m| m.target as usize >= mesh.num_vertices())
+        {
+            return None;
+        }
         let around = mesh.vertex_triangles();
         let at = |v: u32| Point3::from(mesh.positions[v as usize]);
         Some(
@@ -283,15 +290,6 @@ impl SurfacePoint {
             corners: [v; 3],
             weights: [1.0, 0.0, 0.0],
         }
-    }
-
-    /// Its position on `mesh` (whose vertices the corners name).
-    pub fn position(&self, mesh: &TriMesh) -> Point3<f64> {
-        let mut q = nalgebra::Vector3::zeros();
-        for (c, w) in self.corners.iter().zip(self.weights) {
-            q += nalgebra::Vector3::from(mesh.positions[*c as usize]) * w;
-        }
-        Point3::from(q)
     }
 }
 
