@@ -46,24 +46,41 @@ struct Source {
     visible: bool,
 }
 
+/// A bone as a heat source of a vertex: `(distance / reach, bone, closest point)`.
+type BoneDistance = (f64, usize, Point3<f64>);
+
+/// Per active bone `(distance / reach, bone, closest point)` from `x`, in `active`'s order
+/// (a bone with reach 2 claims vertices twice as far), and the closest point of the nearest
+/// bone by plain distance (the first of equals; `x` without bones).
+fn bone_distances(
+    x: &Point3<f64>,
+    p: &Joints,
+    active: &[usize],
+    reach: &[f64; 19],
+) -> (Vec<BoneDistance>, Point3<f64>) {
+    let mut nearest: Option<(f64, Point3<f64>)> = None;
+    let d = active
+        .iter()
+        .map(|&b| {
+            let (q, d) =
+                closest_on_segment(x, &p[BONES[b].parent.index()], &p[BONES[b].child.index()]);
+            if nearest.is_none_or(|(best, _)| d.total_cmp(&best).is_lt()) {
+                nearest = Some((d, q));
+            }
+            (d / reach[b], b, q)
+        })
+        .collect();
+    (d, nearest.map_or(*x, |(_, q)| q))
+}
+
+/// The heat sources of the vertex `v` at `x`, from its [`bone_distances`] `d`.
 fn sources(
     x: Point3<f64>,
     normal: Vector3<f64>,
     v: u32,
-    p: &Joints,
-    active: &[usize],
-    reach: &[f64; 19],
+    mut d: Vec<BoneDistance>,
     bvh: &TriangleBvh,
 ) -> Source {
-    // Distances divided by the bone's reach: a bone with reach 2 claims vertices twice as far.
-    let mut d: Vec<(f64, usize, Point3<f64>)> = active
-        .iter()
-        .map(|&b| {
-            let (q, d) =
-                closest_on_segment(&x, &p[BONES[b].parent.index()], &p[BONES[b].child.index()]);
-            (d / reach[b], b, q)
-        })
-        .collect();
     d.sort_by(|a, b| a.0.total_cmp(&b.0));
     let nearest = Source {
         d: d[0].0,
@@ -181,28 +198,27 @@ pub(crate) fn bone_heat(
         // The facing test needs outward normals; a mesh wound the other way round (or a scan
         // meshed facing away) is recognised by its nearest bones lying in front of most
         // vertices, and its normals are turned round.
-        let in_front = (0..m)
+        // Each vertex's bone distances serve the vote and its heat sources alike.
+        let distances: Vec<(Vec<BoneDistance>, bool)> = (0..m)
             .into_par_iter()
-            .filter(|&i| {
+            .map(|i| {
                 let x = Point3::from(sub_mesh.positions[i]);
-                let q = active
-                    .iter()
-                    .map(|&b| bone_distance(&x, b))
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map_or(x, |c| c.0);
-                Vector3::from(normals[i]).dot(&(q - x)) > 0.0
+                let (d, q) = bone_distances(&x, p, active, reach);
+                (d, Vector3::from(normals[i]).dot(&(q - x)) > 0.0)
             })
-            .count();
+            .collect();
+        let in_front = distances.iter().filter(|d| d.1).count();
         if 2 * in_front > m {
             for n in &mut normals {
                 *n = (-Vector3::from(*n)).into();
             }
         }
-        let src: Vec<Source> = (0..m)
+        let src: Vec<Source> = distances
             .into_par_iter()
-            .map(|i| {
+            .enumerate()
+            .map(|(i, (d, _))| {
                 let x = Point3::from(sub_mesh.positions[i]);
-                sources(x, normals[i].into(), old_id[i], p, active, reach, &bvh)
+                sources(x, normals[i].into(), old_id[i], d, &bvh)
             })
             .collect();
         let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;

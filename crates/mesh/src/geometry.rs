@@ -213,16 +213,48 @@ impl TriMesh {
 
     /// Unique undirected edges `(i, j)` with `i < j`, sorted.
     pub fn edges(&self) -> Vec<[u32; 2]> {
-        let mut e: Vec<[u32; 2]> = self
+        // Bucketed by the smaller end (a counting sort), each short bucket sorted and
+        // deduplicated: linear in the triangles, where one sort of every half-edge was a
+        // visible share of each recorded frame (edge graphs, Laplacians). Same order.
+        let ends = |t: &[u32; 3]| {
+            [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].map(|(a, b)| (a.min(b), a.max(b)))
+        };
+        let n = self
             .triangles
             .iter()
-            .flat_map(|t| {
-                [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
-                    .map(|(a, b)| if a < b { [a, b] } else { [b, a] })
-            })
-            .collect();
-        e.sort_unstable();
-        e.dedup();
+            .flatten()
+            .map(|&v| v as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut start = vec![0usize; n + 1];
+        for t in &self.triangles {
+            for (a, _) in ends(t) {
+                start[a as usize + 1] += 1;
+            }
+        }
+        for a in 0..n {
+            start[a + 1] += start[a];
+        }
+        let mut fill = start.clone();
+        let mut upper = vec![0u32; start[n]];
+        for t in &self.triangles {
+            for (a, b) in ends(t) {
+                upper[fill[a as usize]] = b;
+                fill[a as usize] += 1;
+            }
+        }
+        let mut e = Vec::with_capacity(upper.len() / 2 + 1);
+        for a in 0..n {
+            let bucket = &mut upper[start[a]..start[a + 1]];
+            bucket.sort_unstable();
+            let mut previous = None;
+            for &b in bucket.iter() {
+                if previous != Some(b) {
+                    e.push([a as u32, b]);
+                    previous = Some(b);
+                }
+            }
+        }
         e
     }
 
@@ -325,6 +357,39 @@ mod tests {
         assert_eq!(m.edges().len(), 6);
         assert_eq!(m.connected_components().1, 1);
         assert!(m.vertex_neighbors().iter().all(|n| n.len() == 3));
+    }
+
+    #[test]
+    fn edges_are_every_sorted_unique_pair_of_a_triangle() {
+        // Shared edges, a repeated triangle, both windings and a vertex in no triangle.
+        let triangles = vec![
+            [0, 1, 2],
+            [2, 1, 3],
+            [3, 1, 2],
+            [0, 1, 2],
+            [5, 4, 0],
+            [4, 5, 3],
+        ];
+        let m = TriMesh {
+            positions: vec![[0.0; 3]; 7],
+            triangles,
+        };
+        let mut expected: Vec<[u32; 2]> = m
+            .triangles
+            .iter()
+            .flat_map(|t| {
+                [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].map(|(a, b)| [a.min(b), a.max(b)])
+            })
+            .collect();
+        expected.sort_unstable();
+        expected.dedup();
+        assert_eq!(m.edges(), expected);
+        assert!(TriMesh {
+            positions: Vec::new(),
+            triangles: Vec::new()
+        }
+        .edges()
+        .is_empty());
     }
 
     #[test]

@@ -292,15 +292,42 @@ struct Topology {
 
 impl Topology {
     fn new(mesh: &TriMesh, tris: &[u32]) -> Self {
-        let mut half = Vec::with_capacity(3 * tris.len());
-        for &t in tris {
+        // Bucketed by the smaller end (a counting sort), each short bucket sorted: the order of
+        // one sort of every half-edge in linear time (a recorded frame's scan is validated and
+        // its boundary traced on every frame).
+        let halves = |t: u32| {
             let tri = mesh.triangles[t as usize];
-            for k in 0..3 {
+            [0, 1, 2].map(|k| {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                half.push((a.min(b), a.max(b), t, a < b));
+                (a.min(b), a.max(b), t, a < b)
+            })
+        };
+        let n = tris
+            .iter()
+            .flat_map(|&t| mesh.triangles[t as usize])
+            .map(|v| v as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut start = vec![0usize; n + 1];
+        for &t in tris {
+            for h in halves(t) {
+                start[h.0 as usize + 1] += 1;
             }
         }
-        half.sort_unstable();
+        for a in 0..n {
+            start[a + 1] += start[a];
+        }
+        let mut fill = start.clone();
+        let mut half = vec![(0, 0, 0, false); start[n]];
+        for &t in tris {
+            for h in halves(t) {
+                half[fill[h.0 as usize]] = h;
+                fill[h.0 as usize] += 1;
+            }
+        }
+        for a in 0..n {
+            half[start[a]..start[a + 1]].sort_unstable();
+        }
         Topology { half }
     }
 
@@ -363,25 +390,39 @@ impl Topology {
 fn non_manifold_vertices(mesh: &TriMesh, tris: &[u32], n: usize) -> Vec<u32> {
     fan_groups(mesh, tris, n)
         .into_iter()
-        .enumerate()
-        .filter(|(_, fans)| fans.len() > 1)
-        .map(|(v, _)| v as u32)
+        .map(|(v, _)| v)
         .collect()
 }
 
-/// For every vertex, its incident triangles grouped into fans (triangles around the vertex
-/// connected through edges at the vertex). Fans are ordered by their smallest triangle id.
-fn fan_groups(mesh: &TriMesh, tris: &[u32], n: usize) -> Vec<Vec<Vec<u32>>> {
-    let mut incident: Vec<Vec<u32>> = vec![Vec::new(); n];
+/// The vertices whose incident triangles form more than one fan (triangles around the vertex
+/// connected through edges at the vertex), ascending, each with its fans, ordered by their
+/// smallest triangle id. Only those: the fans of every other vertex would be one allocation
+/// per vertex for nothing.
+fn fan_groups(mesh: &TriMesh, tris: &[u32], n: usize) -> Vec<(u32, Vec<Vec<u32>>)> {
+    // Incident triangles per vertex, compressed rows (counts, offsets, then triangle ids).
+    let mut start = vec![0usize; n + 1];
     for &t in tris {
         for &v in &mesh.triangles[t as usize] {
-            incident[v as usize].push(t);
+            start[v as usize + 1] += 1;
         }
     }
-    let mut result = vec![Vec::new(); n];
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut incident_ids = vec![0u32; start[n]];
+    for &t in tris {
+        for &v in &mesh.triangles[t as usize] {
+            incident_ids[fill[v as usize]] = t;
+            fill[v as usize] += 1;
+        }
+    }
+    let mut result = Vec::new();
     let mut parent: Vec<usize> = Vec::new();
     let mut spokes: Vec<(u32, usize)> = Vec::new();
-    for (v, inc) in incident.iter().enumerate() {
+    let mut root_fan: Vec<usize> = Vec::new();
+    for v in 0..n {
+        let inc = &incident_ids[start[v]..start[v + 1]];
         if inc.is_empty() {
             continue;
         }
@@ -412,8 +453,12 @@ fn fan_groups(mesh: &TriMesh, tris: &[u32], n: usize) -> Vec<Vec<Vec<u32>>> {
                 }
             }
         }
+        if (0..inc.len()).all(|k| find(&mut parent, k) == 0) {
+            continue; // one fan
+        }
         let mut fans: Vec<Vec<u32>> = Vec::new();
-        let mut root_fan: Vec<usize> = vec![usize::MAX; inc.len()];
+        root_fan.clear();
+        root_fan.resize(inc.len(), usize::MAX);
         for (k, &t) in inc.iter().enumerate() {
             let r = find(&mut parent, k);
             if root_fan[r] == usize::MAX {
@@ -422,7 +467,7 @@ fn fan_groups(mesh: &TriMesh, tris: &[u32], n: usize) -> Vec<Vec<Vec<u32>>> {
             }
             fans[root_fan[r]].push(t);
         }
-        result[v] = fans;
+        result.push((v as u32, fans));
     }
     result
 }
@@ -774,7 +819,8 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
             })
             .collect();
         let fans = fan_groups(&tmp, &all, positions.len());
-        for (v, fans) in fans.iter().enumerate() {
+        for (v, fans) in &fans {
+            let v = *v as usize;
             for fan in fans.iter().skip(1) {
                 let copy = positions.len() as u32;
                 positions.push(positions[v]);
@@ -816,23 +862,60 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
 /// from each component's first triangle across edges shared by exactly two triangles; a
 /// non-orientable component (a Möbius band) keeps the first orientation each triangle got.
 fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> usize {
-    use std::collections::HashMap;
     let proper = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
-    // Undirected edge → the triangles using it, with the direction each runs it in.
-    let mut edges: HashMap<(u32, u32), Vec<(u32, bool)>> = HashMap::new();
-    for (t, tri) in triangles.iter().enumerate() {
-        if !proper(tri) {
-            continue;
-        }
+    // Undirected edge → the triangles using it (ascending), with the direction each runs it
+    // in: the half-edges bucketed by their smaller end (a counting sort), each bucket sorted by
+    // the larger end, and every triangle side pointing at its edge's run. A hash map of lists
+    // cost an allocation per edge on every recorded frame's scan.
+    let ends = |tri: &[u32; 3], k: usize| {
+        let (a, b) = (tri[k], tri[(k + 1) % 3]);
+        (a.min(b), a.max(b), a < b)
+    };
+    let vertices = triangles
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut bucket = vec![0usize; vertices + 1];
+    for tri in triangles.iter().filter(|t| proper(t)) {
         for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            edges
-                .entry((a.min(b), a.max(b)))
-                .or_default()
-                .push((t as u32, a < b));
+            bucket[ends(tri, k).0 as usize + 1] += 1;
+        }
+    }
+    for v in 0..vertices {
+        bucket[v + 1] += bucket[v];
+    }
+    let mut bucket_fill = bucket.clone();
+    // (larger end, triangle, forward, side), bucketed by the smaller end.
+    let mut half = vec![(0u32, 0u32, false, 0u8); bucket[vertices]];
+    for (t, tri) in triangles.iter().enumerate() {
+        if proper(tri) {
+            for k in 0..3 {
+                let (lo, hi, forward) = ends(tri, k);
+                half[bucket_fill[lo as usize]] = (hi, t as u32, forward, k as u8);
+                bucket_fill[lo as usize] += 1;
+            }
         }
     }
     let n = triangles.len();
+    // The run of `half` holding the edge of each triangle side (`3·t + k`).
+    let mut side = vec![(0usize, 0usize); 3 * n];
+    for v in 0..vertices {
+        let end = bucket[v + 1];
+        half[bucket[v]..end].sort_unstable();
+        let mut i = bucket[v];
+        while i < end {
+            let mut j = i + 1;
+            while j < end && half[j].0 == half[i].0 {
+                j += 1;
+            }
+            for &(_, t, _, k) in &half[i..j] {
+                side[3 * t as usize + k as usize] = (i, j);
+            }
+            i = j;
+        }
+    }
     // flip[t]: None = not reached yet.
     let mut flip: Vec<Option<bool>> = vec![None; n];
     let mut turned = 0;
@@ -849,9 +932,8 @@ fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> us
             let ft = flip[t] == Some(true);
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                let Some(users) = edges.get(&(a.min(b), a.max(b))) else {
-                    continue;
-                };
+                let (first, last) = side[3 * t + k];
+                let users = &half[first..last];
                 if users.len() == 1 {
                     closed = false;
                 }
@@ -859,7 +941,7 @@ fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> us
                     continue; // a boundary or non-manifold edge carries no orientation
                 }
                 let forward = (a < b) != ft; // t's direction along the edge after its flip
-                for &(u, dir) in users {
+                for &(_, u, dir, _) in users {
                     let u = u as usize;
                     if u == t || flip[u].is_some() {
                         continue;

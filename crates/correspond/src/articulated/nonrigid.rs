@@ -10,6 +10,9 @@ use rayon::prelude::*;
 /// Jacobi iterations per round of the non-rigid step.
 const NONRIGID_JACOBI: usize = 30;
 
+/// Vertices per parallel task of a Jacobi sweep (a vertex's update is a few dozen flops).
+const JACOBI_CHUNK: usize = 1024;
+
 /// Scale σ of the Geman–McClure weight of a held pair, as a fraction of the round's gate.
 const ROBUST_SCALE: f64 = 0.5;
 
@@ -84,23 +87,37 @@ pub(super) fn nonrigid_step(
             }
         }
         let lambda = options.nonrigid_smoothing;
-        let mut field = d.clone();
+        // Per vertex, its data term and the factor of its update (0 where nothing pulls).
+        let data: Vec<Vector3<f64>> = (0..n).map(|v| d[v] * r[v]).collect();
+        let scale: Vec<f64> = (0..n)
+            .map(|v| {
+                let wsum = r[v] + lambda * nb[v].len() as f64;
+                if wsum > 0.0 {
+                    1.0 / wsum
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        // Two buffers swapped between sweeps: a sweep allocates nothing.
+        let mut field = d;
+        let mut next = vec![Vector3::zeros(); n];
         for _ in 0..NONRIGID_JACOBI {
-            field = (0..n)
-                .into_par_iter()
-                .map(|v| {
-                    let mut acc = d[v] * r[v];
+            next.par_iter_mut()
+                .with_min_len(JACOBI_CHUNK)
+                .enumerate()
+                .for_each(|(v, out)| {
+                    let mut acc = data[v];
                     for &u in &nb[v] {
                         acc += field[u as usize] * lambda;
                     }
-                    let wsum = r[v] + lambda * nb[v].len() as f64;
-                    if wsum > 0.0 {
-                        acc * (1.0 / wsum)
+                    *out = if scale[v] > 0.0 {
+                        acc * scale[v]
                     } else {
                         Vector3::zeros()
-                    }
-                })
-                .collect();
+                    };
+                });
+            std::mem::swap(&mut field, &mut next);
         }
         for (x, f) in posed.iter_mut().zip(&field) {
             *x += f;

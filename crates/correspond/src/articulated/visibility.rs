@@ -93,7 +93,7 @@ pub(super) fn visible_from(
             (((v - v0) / cell) as usize).min(height - 1),
         )
     };
-    // Triangles per cell (compressed rows: counts, offsets, then ids).
+    // The cells a triangle's image bounding box overlaps.
     let cells_of = |c: &[(f64, f64, f64); 3]| {
         let (i0, j0) = to_cell(
             c[0].0.min(c[1].0).min(c[2].0),
@@ -105,9 +105,30 @@ pub(super) fn visible_from(
         );
         (j0..=j1).flat_map(move |j| (i0..=i1).map(move |i| j * width + i))
     };
+    // The triangles that can hide a vertex, with what the test reads of them in one compact
+    // table, listed per cell by their index in it (compressed rows: counts, offsets, then
+    // indices): the test runs five times per recorded frame over every template vertex, and
+    // chasing each triangle's corners through the vertex table was much of its cost. A
+    // triangle with a corner behind the eye or a zero image area hides nothing and is left
+    // out.
+    let image: Vec<ImageTriangle> = triangles
+        .iter()
+        .filter_map(|tri| {
+            let [a, b, c] = corners(tri)?;
+            let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
+            (area.abs() >= 1e-18).then_some(ImageTriangle {
+                corners: [a, b, c],
+                area,
+                // Its interpolated depth is at least this (the weights are ≥ 0 and sum to 1,
+                // up to rounding, which the factor covers many times over).
+                nearest: a.2.min(b.2).min(c.2) * (1.0 - 1e-9),
+                vertices: *tri,
+            })
+        })
+        .collect();
     let mut start = vec![0usize; width * height + 1];
-    for c in triangles.iter().filter_map(corners) {
-        for k in cells_of(&c) {
+    for t in &image {
+        for k in cells_of(&t.corners) {
             start[k + 1] += 1;
         }
     }
@@ -116,12 +137,10 @@ pub(super) fn visible_from(
     }
     let mut fill = start.clone();
     let mut members = vec![0u32; start[width * height]];
-    for (t, tri) in triangles.iter().enumerate() {
-        if let Some(c) = corners(tri) {
-            for k in cells_of(&c) {
-                members[fill[k]] = t as u32;
-                fill[k] += 1;
-            }
+    for (i, t) in image.iter().enumerate() {
+        for k in cells_of(&t.corners) {
+            members[fill[k]] = i as u32;
+            fill[k] += 1;
         }
     }
     (0..n)
@@ -132,18 +151,15 @@ pub(super) fn visible_from(
             };
             let (i, j) = to_cell(x, y);
             let k = j * width + i;
+            let limit = z - tolerance;
             !members[start[k]..start[k + 1]].iter().any(|&t| {
-                let tri = &triangles[t as usize];
-                if tri.contains(&(v as u32)) {
+                let t = &image[t as usize];
+                // Nothing of the triangle is nearer than the vertex by the tolerance.
+                if t.nearest >= limit || t.vertices.contains(&(v as u32)) {
                     return false;
                 }
-                let Some([a, b, c]) = corners(tri) else {
-                    return false;
-                };
-                let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
-                if area.abs() < 1e-18 {
-                    return false;
-                }
+                let [a, b, c] = t.corners;
+                let area = t.area;
                 // Barycentric coordinates of the vertex's image point.
                 let wa = ((b.0 - x) * (c.1 - y) - (c.0 - x) * (b.1 - y)) / area;
                 let wb = ((c.0 - x) * (a.1 - y) - (a.0 - x) * (c.1 - y)) / area;
@@ -153,10 +169,20 @@ pub(super) fn visible_from(
                 }
                 // Perspective-correct: 1/depth, not depth, is affine in image coordinates.
                 let depth = 1.0 / (wa / a.2 + wb / b.2 + wc / c.2);
-                depth < z - tolerance
+                depth < limit
             })
         })
         .collect()
+}
+
+/// A template triangle in the image of [`visible_from`]: its corners (image coordinates and
+/// depth), twice its signed image area, a lower bound of its depth, and its vertices.
+#[derive(Debug, Clone, Copy)]
+struct ImageTriangle {
+    corners: [(f64, f64, f64); 3],
+    area: f64,
+    nearest: f64,
+    vertices: [u32; 3],
 }
 
 #[cfg(test)]
