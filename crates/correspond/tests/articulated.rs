@@ -229,9 +229,9 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
     );
 }
 
-/// Without the normal test the back of a thin limb lies within the gate of its front; the
-/// reciprocal check refuses it (the front's scan points are nearest the template's front),
-/// and keeps the front.
+/// Without the normal test, without border flags and with a gate wider than a limb, the back
+/// of a limb pairs with its front; the reciprocal check refuses it (the front's scan points are nearest the
+/// template's front) and keeps the front.
 #[test]
 fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
     let (a, b, att_a) = bodies();
@@ -263,15 +263,19 @@ fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
     let na = outward(&a.mesh, &att_a);
     let ns = outward(&scan, &att_s);
     let run = |reciprocal_radius| {
+        // A gate wider than a limb, no normal test, no border: the back of an arm pairs with
+        // its front.
         let options = ArticulatedOptions {
             min_normal_cosine: -1.0,
+            gate_end: 0.1,
             reciprocal_radius,
             ..ArticulatedOptions::default()
         };
         let out = articulated_match(
             &side(&a.mesh, &att_a, &na, None),
             &att_a.weights,
-            &side(&scan, &att_s, &ns, Some(&scan.boundary_vertices())),
+            // No border flags: the boundary gate would refuse the back's flank pairs itself.
+            &side(&scan, &att_s, &ns, None),
             &EdgeGraph::new(&scan),
             &options,
             ArticulatedStart::Skeletons,

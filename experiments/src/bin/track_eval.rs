@@ -15,7 +15,11 @@
 //! the template's label of the body vertex they show, and the matches that jumped: template
 //! vertices matched in this frame and the previous one whose matched body vertex moved more
 //! than 5 cm on the body at rest — the same material point stays the same body vertex however
-//! the body moves, so any such move is beyond the true motion), then the totals.
+//! the body moves, so any such move is beyond the true motion), then the totals, with flips and
+//! jumps per template segment. `--breakdown` adds, under each frame's line, one line per segment
+//! with flips or jumps: their counts and how far the posed segment sits from the scan points
+//! showing its vertices (median, and the rigid motion between the two: a turned or a shifted
+//! fit).
 
 use clap::Parser;
 use std::path::PathBuf;
@@ -232,18 +236,11 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                 jumps += frame_jumps;
                 followed += frame_followed;
                 previous = Some(shows);
-                for k in 0..nseg {
-                    jumps_per_segment[k] += frame_seg_jumps[k];
-                    flips_per_segment[k] += frame_seg_flips[k];
+                for (total, k) in jumps_per_segment.iter_mut().zip(&frame_seg_jumps) {
+                    *total += k;
                 }
-                if args.breakdown {
-                    print_breakdown(
-                        &m,
-                        &truth.data_mm,
-                        &template_labels,
-                        &frame_seg_flips,
-                        &frame_seg_jumps,
-                    );
+                for (total, k) in flips_per_segment.iter_mut().zip(&frame_seg_flips) {
+                    *total += k;
                 }
                 if args.detail == Some(i) {
                     let segs = symcorr_attach::Segment::ALL;
@@ -315,6 +312,15 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                     e.mean_error(),
                     agree as f64 / seen.max(1) as f64
                 );
+                if args.breakdown {
+                    print_breakdown(
+                        &m,
+                        &truth.data_mm,
+                        &template_labels,
+                        &frame_seg_flips,
+                        &frame_seg_jumps,
+                    );
+                }
                 all_errors.extend(e.errors);
                 flips += f;
                 counted += c;
