@@ -228,3 +228,77 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
         "precision {precision}, recall {recall}"
     );
 }
+
+/// Without the normal test, without border flags and with a gate wider than a limb, the back
+/// of a limb pairs with its front; the reciprocal check refuses it (the front's scan points are nearest the
+/// template's front) and keeps the front.
+#[test]
+fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
+    let (a, b, att_a) = bodies();
+    let tn = b.mesh.triangle_normals();
+    let front: Vec<[u32; 3]> = b
+        .mesh
+        .triangles
+        .iter()
+        .zip(&tn)
+        .filter(|(_, n)| n[2] > 0.2)
+        .map(|(t, _)| *t)
+        .collect();
+    let mut used: Vec<u32> = front.iter().flatten().copied().collect();
+    used.sort_unstable();
+    used.dedup();
+    let mut new_id = vec![u32::MAX; b.mesh.num_vertices()];
+    for (i, &v) in used.iter().enumerate() {
+        new_id[v as usize] = i as u32;
+    }
+    let scan = TriMesh::new(
+        used.iter().map(|&v| b.mesh.positions[v as usize]).collect(),
+        front
+            .iter()
+            .map(|t| t.map(|v| new_id[v as usize]))
+            .collect(),
+    )
+    .unwrap();
+    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
+    let na = outward(&a.mesh, &att_a);
+    let ns = outward(&scan, &att_s);
+    let run = |reciprocal_radius| {
+        // A gate wider than a limb, no normal test, no border: the back of an arm pairs with
+        // its front.
+        let options = ArticulatedOptions {
+            min_normal_cosine: -1.0,
+            gate_end: 0.1,
+            reciprocal_radius,
+            ..ArticulatedOptions::default()
+        };
+        let out = articulated_match(
+            &side(&a.mesh, &att_a, &na, None),
+            &att_a.weights,
+            // No border flags: the boundary gate would refuse the back's flank pairs itself.
+            &side(&scan, &att_s, &ns, None),
+            &EdgeGraph::new(&scan),
+            &options,
+            ArticulatedStart::Skeletons,
+        )
+        .unwrap();
+        let (mut tp, mut fp) = (0usize, 0usize);
+        for (m, &seen) in out.pairs.iter().zip(&out.has_counterpart) {
+            match (new_id[m.template as usize] != u32::MAX, seen) {
+                (true, true) => tp += 1,
+                (false, true) => fp += 1,
+                _ => {}
+            }
+        }
+        (tp, fp)
+    };
+    let (tp_off, fp_off) = run(None);
+    let (tp_on, fp_on) = run(Some(0.03));
+    assert!(
+        fp_on * 2 < fp_off,
+        "hidden vertices given a counterpart: {fp_off} without the check, {fp_on} with it"
+    );
+    assert!(
+        tp_on as f64 > 0.9 * tp_off as f64,
+        "shown vertices given a counterpart: {tp_off} without the check, {tp_on} with it"
+    );
+}

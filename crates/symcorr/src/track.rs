@@ -26,7 +26,12 @@
 //!    previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by the
 //!    joints' motion, what the joints cannot say, a bone's roll and the head's twist, carried
 //!    over; fewer ICP rounds), and started afresh from the skeletons after a skipped frame or
-//!    when a joint jumped more than [`TrackOptions::max_warm_jump_m`].
+//!    when a joint jumped more than [`TrackOptions::max_warm_jump_m`]. The match refuses a pair
+//!    whose target point is nearer another part of the posed template
+//!    ([`TrackOptions::reciprocal_radius`]: the far cheek of a head posed turned too little
+//!    would take the near one), and a warm-started frame drops a match that moved more than
+//!    [`TrackOptions::max_match_shift_m`] against its posed vertex since the previous frame
+//!    (it slid to another part of the surface).
 //!
 //! Steps 1–4 ([`Observer`]) follow the joint log and the depth frames only, never a match;
 //! step 5 ([`Fitter`]) follows the previous fit. The two can run on two threads, frame k + 1
@@ -71,6 +76,16 @@ pub struct TrackOptions {
     /// since the previous frame) starts afresh from the skeletons: the previous fit is no
     /// longer near.
     pub max_warm_jump_m: f64,
+    /// The articulated method's reciprocal check
+    /// ([`symcorr_correspond::ArticulatedOptions::reciprocal_radius`], √area of the template;
+    /// `None`: the pipeline's setting): a template vertex the frame does not show takes the
+    /// nearest shown surface, another part of the body, and turns the fit and its match.
+    pub reciprocal_radius: Option<f64>,
+    /// Temporal check (`None`: off): in a warm-started frame a template vertex whose match moved
+    /// farther than this (metres) against the posed template since the previous frame has no
+    /// counterpart in this frame. The posed template follows the body's motion, so a match
+    /// that moved against it slid to another part of the surface.
+    pub max_match_shift_m: Option<f64>,
 }
 
 impl Default for TrackOptions {
@@ -82,9 +97,19 @@ impl Default for TrackOptions {
             scan: ScanOptions::default(),
             warm_start: true,
             max_warm_jump_m: 0.15,
+            reciprocal_radius: Some(RECIPROCAL_RADIUS),
+            max_match_shift_m: Some(MAX_MATCH_SHIFT_M),
         }
     }
 }
+
+/// Default [`TrackOptions::reciprocal_radius`] (√area of the template).
+/// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
+pub const RECIPROCAL_RADIUS: f64 = 0.03;
+
+/// Default [`TrackOptions::max_match_shift_m`], metres.
+/// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
+pub const MAX_MATCH_SHIFT_M: f64 = 0.03;
 
 /// Something the tracker corrected in a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -189,6 +214,9 @@ pub struct Fitter<'a> {
     options: TrackOptions,
     /// The previous frame's fit: its bone transforms and the refined joints they pose onto.
     previous_fit: Option<(BoneTransforms, Skeleton)>,
+    /// Per template input vertex, the previous frame's match minus its posed position (camera
+    /// space, metres; `None` where it had no match): the temporal check's reference.
+    previous_offsets: Option<Vec<Option<[f64; 3]>>>,
 }
 
 /// Matches the frames of one recording, in time order, against one prepared template: an
@@ -215,6 +243,9 @@ impl<'a> Tracker<'a> {
         pipeline.options.prepare.attach.align = false;
         pipeline.options.prepare.attach.poor_fit = PoorFitPolicy::Accept;
         pipeline.options.prepare.cache = None;
+        if options.reciprocal_radius.is_some() {
+            pipeline.options.articulated.reciprocal_radius = options.reciprocal_radius;
+        }
         Tracker {
             observer: Observer {
                 pipeline: pipeline.clone(),
@@ -229,6 +260,7 @@ impl<'a> Tracker<'a> {
                 template,
                 options,
                 previous_fit: None,
+                previous_offsets: None,
             },
         }
     }
@@ -469,6 +501,7 @@ impl Fitter<'_> {
     /// Forgets the previous fit: the next frame starts from the skeletons.
     pub fn reset(&mut self) {
         self.previous_fit = None;
+        self.previous_offsets = None;
     }
 
     /// Matches the template onto an observed frame: warm-started from the previous fit unless
@@ -541,6 +574,19 @@ impl Fitter<'_> {
             target_of[v] = target.input_id(p.target) as i32;
             confidence[v] = p.confidence as f32;
         }
+        if let Some(posed) = &posed {
+            let offsets = match_offsets(&target_of, posed, &scan.mesh.positions);
+            if let (Some(max), Some(previous), true) = (
+                self.options.max_match_shift_m,
+                &self.previous_offsets,
+                was_warm,
+            ) {
+                refuse_shifted(&mut target_of, &mut confidence, &offsets, previous, max);
+            }
+            // The reference is every match of this frame, refused or not: a match that stays
+            // where it moved to is followed again from the next frame on.
+            self.previous_offsets = Some(offsets);
+        }
         let matched = target_of.iter().filter(|&&x| x >= 0).count();
         let mean_confidence = if matched > 0 {
             confidence.iter().map(|&c| f64::from(c)).sum::<f64>() / matched as f64
@@ -563,6 +609,50 @@ impl Fitter<'_> {
             timings,
         })
     }
+}
+
+/// Per template input vertex, its match's position minus its posed position (`None` where it
+/// has no match).
+fn match_offsets(
+    target_of: &[i32],
+    posed: &[[f32; 3]],
+    scan: &[[f64; 3]],
+) -> Vec<Option<[f64; 3]>> {
+    target_of
+        .iter()
+        .zip(posed)
+        .map(|(&t, x)| {
+            let y = scan.get(usize::try_from(t).ok()?)?;
+            Some([
+                y[0] - f64::from(x[0]),
+                y[1] - f64::from(x[1]),
+                y[2] - f64::from(x[2]),
+            ])
+        })
+        .collect()
+}
+
+/// The temporal check: every match whose offset from its posed vertex moved more than `max`
+/// since `previous` loses it (target −1, confidence 0). Returns how many were refused.
+fn refuse_shifted(
+    target_of: &mut [i32],
+    confidence: &mut [f32],
+    offsets: &[Option<[f64; 3]>],
+    previous: &[Option<[f64; 3]>],
+    max: f64,
+) -> usize {
+    let mut refused = 0;
+    for (v, (now, before)) in offsets.iter().zip(previous).enumerate() {
+        if let (Some(a), Some(b)) = (now, before) {
+            let d2 = (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2);
+            if d2 > max * max {
+                target_of[v] = -1;
+                confidence[v] = 0.0;
+                refused += 1;
+            }
+        }
+    }
+    refused
 }
 
 /// Confidence given to a joint borrowed from the previous frame: usable, below a tracked one.
@@ -649,6 +739,35 @@ mod tests {
         let mut cur2 = lost_both.clone();
         assert!(!borrow_lost_joints(&lost_both, &mut cur2));
         assert_eq!(cur2.confidence[spine], 0.0);
+    }
+
+    #[test]
+    fn a_match_that_moved_against_its_posed_vertex_is_refused() {
+        // Vertex 0 moved with its posed vertex, vertex 1 slid 4 cm along the surface, vertex 2
+        // had no match before, vertex 3 has none now.
+        let posed = [
+            [0.0f32, 0.0, 1.0],
+            [0.1, 0.0, 1.0],
+            [0.2, 0.0, 1.0],
+            [0.3, 0.0, 1.0],
+        ];
+        let scan = [[0.005, 0.0, 1.0], [0.14, 0.0, 1.0], [0.2, 0.1, 1.0]];
+        let mut target_of = vec![0, 1, 2, -1];
+        let mut confidence = vec![0.9f32, 0.8, 0.7, 0.0];
+        let offsets = match_offsets(&target_of, &posed, &scan);
+        assert_eq!(offsets[3], None);
+        approx::assert_relative_eq!(offsets[1].unwrap()[0], 0.04, epsilon = 1e-6);
+        let previous = vec![Some([0.0, 0.0, 0.0]), Some([0.0, 0.0, 0.0]), None, None];
+        let refused = refuse_shifted(&mut target_of, &mut confidence, &offsets, &previous, 0.03);
+        assert_eq!(refused, 1);
+        assert_eq!(target_of, vec![0, -1, 2, -1]);
+        assert_eq!(confidence, vec![0.9, 0.0, 0.7, 0.0]);
+        // A looser bound keeps it.
+        let mut target_of = vec![0, 1, 2, -1];
+        assert_eq!(
+            refuse_shifted(&mut target_of, &mut confidence, &offsets, &previous, 0.05),
+            0
+        );
     }
 
     #[test]

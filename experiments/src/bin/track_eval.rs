@@ -15,7 +15,11 @@
 //! the template's label of the body vertex they show, and the matches that jumped: template
 //! vertices matched in this frame and the previous one whose matched body vertex moved more
 //! than 5 cm on the body at rest — the same material point stays the same body vertex however
-//! the body moves, so any such move is beyond the true motion), then the totals.
+//! the body moves, so any such move is beyond the true motion), then the totals, with flips and
+//! jumps per template segment. `--breakdown` adds, under each frame's line, one line per segment
+//! with flips or jumps: their counts and how far the posed segment sits from the scan points
+//! showing its vertices (median, and the rigid motion between the two: a turned or a shifted
+//! fit).
 
 use clap::Parser;
 use std::path::PathBuf;
@@ -63,6 +67,21 @@ struct Args {
     /// Rounds of the non-rigid step (default: the method's).
     #[arg(long)]
     nonrigid_rounds: Option<usize>,
+    /// Radius of the reciprocal check, in the template's √area (default: the tracker's; 0
+    /// turns it off).
+    #[arg(long)]
+    reciprocal_radius: Option<f64>,
+    /// Temporal check: largest move of a match against its posed vertex between frames,
+    /// metres (default: the tracker's; 0 turns it off).
+    #[arg(long)]
+    max_match_shift: Option<f64>,
+    /// Weight of the joint anchors in a bone's fit (default: the method's).
+    #[arg(long)]
+    joint_anchor: Option<f64>,
+    /// Per frame, also print the flips and jumps per template segment and how far that
+    /// segment's posed template sits from where the frame shows it (median, metres).
+    #[arg(long)]
+    breakdown: bool,
 }
 
 /// A match that moves farther than this on the body between consecutive frames jumped (metres,
@@ -99,6 +118,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     a.icp_points = args.icp_points.unwrap_or(a.icp_points);
     a.warm_iterations = args.warm_iterations.unwrap_or(a.warm_iterations);
     a.nonrigid_rounds = args.nonrigid_rounds.unwrap_or(a.nonrigid_rounds);
+    a.joint_anchor = args.joint_anchor.unwrap_or(a.joint_anchor);
     let pipeline = Pipeline::new(options);
     let template = pipeline.prepare(mesh, &sk)?;
     let index: Vec<usize> = template.labels().iter().map(|l| l.index()).collect();
@@ -108,6 +128,16 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         fix_swaps: !args.no_swap_fix,
         warm_start: !args.cold,
         smoothing: (!args.no_smoothing).then(symcorr_kinect::OneEuroFilter::default),
+        reciprocal_radius: args
+            .reciprocal_radius
+            .map_or(Some(symcorr::track::RECIPROCAL_RADIUS), |r| {
+                (r > 0.0).then_some(r)
+            }),
+        max_match_shift_m: args
+            .max_match_shift
+            .map_or(Some(symcorr::track::MAX_MATCH_SHIFT_M), |d| {
+                (d > 0.0).then_some(d)
+            }),
         ..TrackOptions::default()
     };
     let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);
@@ -121,6 +151,10 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let mut previous: Option<Vec<Option<u32>>> = None;
     let (mut jumps, mut followed) = (0usize, 0usize);
     let mut jumps_per_segment = vec![0usize; symcorr_attach::Segment::ALL.len()];
+    let mut flips_per_segment = vec![0usize; symcorr_attach::Segment::ALL.len()];
+    // Jumps whose match in the later frame is the wrong one (more than half a jump from its
+    // truth); the others left a wrong match of the earlier frame.
+    let mut jumps_wrong_now = 0usize;
     println!(
         "frame status corrections coverage mean_error flips off_body seconds labels_agreement jumps"
     );
@@ -162,9 +196,20 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                         agree += usize::from(*l == template_labels[usize::from(b) - 1]);
                     }
                 }
+                let e = evaluate(&graph, area, &pairs, |p| p, Some(&mirror));
                 let mut shows = vec![None; m.target_of.len()];
-                for &(v, b) in &pairs {
+                let mut error_of = vec![f64::NAN; m.target_of.len()];
+                for (&(v, b), err) in pairs.iter().zip(&e.errors) {
                     shows[v as usize] = Some(b);
+                    error_of[v as usize] = err * area.sqrt();
+                }
+                let nseg = symcorr_attach::Segment::ALL.len();
+                let mut frame_seg_jumps = vec![0usize; nseg];
+                let mut frame_seg_flips = vec![0usize; nseg];
+                for (&(v, _), flip) in pairs.iter().zip(&e.flips) {
+                    if *flip == Some(true) {
+                        frame_seg_flips[template_labels[v as usize]] += 1;
+                    }
                 }
                 let (mut frame_jumps, mut frame_followed) = (0usize, 0usize);
                 if let Some(prev) = &previous {
@@ -178,7 +223,12 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                             .sqrt();
                             if d > JUMP_M {
                                 frame_jumps += 1;
-                                jumps_per_segment[template_labels[v]] += 1;
+                                frame_seg_jumps[template_labels[v]] += 1;
+                                // Which end of the jump is wrong: a match within half the
+                                // jump of its truth now was the wrong one before.
+                                if error_of[v] > JUMP_M / 2.0 {
+                                    jumps_wrong_now += 1;
+                                }
                             }
                         }
                     }
@@ -186,7 +236,12 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                 jumps += frame_jumps;
                 followed += frame_followed;
                 previous = Some(shows);
-                let e = evaluate(&graph, area, &pairs, |p| p, Some(&mirror));
+                for (total, k) in jumps_per_segment.iter_mut().zip(&frame_seg_jumps) {
+                    *total += k;
+                }
+                for (total, k) in flips_per_segment.iter_mut().zip(&frame_seg_flips) {
+                    *total += k;
+                }
                 if args.detail == Some(i) {
                     let segs = symcorr_attach::Segment::ALL;
                     let mut conf = vec![vec![0usize; segs.len()]; segs.len()];
@@ -257,6 +312,15 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                     e.mean_error(),
                     agree as f64 / seen.max(1) as f64
                 );
+                if args.breakdown {
+                    print_breakdown(
+                        &m,
+                        &truth.data_mm,
+                        &template_labels,
+                        &frame_seg_flips,
+                        &frame_seg_jumps,
+                    );
+                }
                 all_errors.extend(e.errors);
                 flips += f;
                 counted += c;
@@ -277,8 +341,68 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         .filter(|(_, &k)| k > 0)
         .map(|(s, k)| format!("{s:?} {k}"))
         .collect();
-    println!("jumps per template segment: {}", per.join(", "));
+    println!(
+        "jumps per template segment: {} (wrong in the later frame: {jumps_wrong_now})",
+        per.join(", ")
+    );
+    let per: Vec<String> = symcorr_attach::Segment::ALL
+        .iter()
+        .zip(&flips_per_segment)
+        .filter(|(_, &k)| k > 0)
+        .map(|(s, k)| format!("{s:?} {k}"))
+        .collect();
+    println!("flips per template segment: {}", per.join(", "));
     Ok(())
+}
+
+/// One line per template segment with flips or jumps in this frame: their counts and the
+/// median distance (metres) from the segment's posed template vertices to the scan points
+/// whose truth names them — how far off the fit put that segment.
+fn print_breakdown(
+    m: &symcorr::track::MatchedFrame,
+    truth: &[u16],
+    template_labels: &[usize],
+    flips: &[usize],
+    jumps: &[usize],
+) {
+    let segs = symcorr_attach::Segment::ALL;
+    let mut off: Vec<Vec<f64>> = vec![Vec::new(); segs.len()];
+    // Per segment, (posed, shown) point pairs: the rigid motion taking the one onto the other
+    // says whether the segment is turned or shifted.
+    let mut both: Vec<Vec<(nalgebra::Point3<f64>, nalgebra::Point3<f64>)>> =
+        vec![Vec::new(); segs.len()];
+    if let Some(posed) = &m.posed {
+        for (sv, &pixel) in m.scan.pixel_ids.iter().enumerate() {
+            let b = truth.get(pixel as usize).copied().unwrap_or(0);
+            if b == 0 {
+                continue;
+            }
+            let v = usize::from(b) - 1;
+            let (x, y) = (posed[v], m.scan.mesh.positions[sv]);
+            let d = ((f64::from(x[0]) - y[0]).powi(2)
+                + (f64::from(x[1]) - y[1]).powi(2)
+                + (f64::from(x[2]) - y[2]).powi(2))
+            .sqrt();
+            off[template_labels[v]].push(d);
+            both[template_labels[v]].push((
+                nalgebra::Point3::from(x.map(f64::from)),
+                nalgebra::Point3::from(y),
+            ));
+        }
+    }
+    for (k, seg) in segs.iter().enumerate() {
+        if flips[k] == 0 && jumps[k] == 0 {
+            continue;
+        }
+        let d = &mut off[k];
+        d.sort_by(f64::total_cmp);
+        let median = d.get(d.len() / 2).copied().unwrap_or(f64::NAN);
+        let (angle, shift, axis) = rigid_offset(&both[k]);
+        println!(
+            "  {seg:?}: flips {} jumps {} posed off {median:.3} m (rigidly: turned {angle:.1}° about ({:.2} {:.2} {:.2}), shifted {shift:.3} m)",
+            flips[k], jumps[k], axis[0], axis[1], axis[2]
+        );
+    }
 }
 
 fn main() {
@@ -287,4 +411,39 @@ fn main() {
         eprintln!("track_eval: {e}");
         std::process::exit(1);
     }
+}
+
+/// The rigid motion best taking the first points of `pairs` onto the second (Kabsch): its
+/// rotation angle (degrees) and the shift of the first points' centroid (metres).
+fn rigid_offset(pairs: &[(nalgebra::Point3<f64>, nalgebra::Point3<f64>)]) -> (f64, f64, [f64; 3]) {
+    if pairs.len() < 3 {
+        return (f64::NAN, f64::NAN, [f64::NAN; 3]);
+    }
+    let n = pairs.len() as f64;
+    let ca = pairs
+        .iter()
+        .fold(nalgebra::Vector3::zeros(), |a, p| a + p.0.coords)
+        / n;
+    let cb = pairs
+        .iter()
+        .fold(nalgebra::Vector3::zeros(), |a, p| a + p.1.coords)
+        / n;
+    let h = pairs.iter().fold(nalgebra::Matrix3::zeros(), |h, (a, b)| {
+        h + (a.coords - ca) * (b.coords - cb).transpose()
+    });
+    let svd = h.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return (f64::NAN, (cb - ca).norm(), [f64::NAN; 3]);
+    };
+    let mut r = vt.transpose() * u.transpose();
+    if r.determinant() < 0.0 {
+        let mut v = vt.transpose();
+        v.column_mut(2).neg_mut();
+        r = v * u.transpose();
+    }
+    let cos = ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+    let axis = nalgebra::Rotation3::from_matrix_unchecked(r)
+        .axis()
+        .map_or([f64::NAN; 3], |a| [a.x, a.y, a.z]);
+    (cos.acos().to_degrees(), (cb - ca).norm(), axis)
 }

@@ -82,11 +82,15 @@ pub(super) fn articulated_icp(
             gate,
             last.as_deref(),
         )?;
+        let reverse = al.reverse(&posed, &posed_normals, visible.as_deref());
         // Pairs per bone: (rest position, target position, weight).
         let mut per_bone: Vec<Vec<FitPair>> = vec![Vec::new(); Bone::COUNT];
         for (v, &(q, d2)) in near.iter().enumerate() {
-            if !d2.is_finite() || !al.holds(&posed[v], &posed_normals[v], q, gate) {
-                continue; // not in the sample, hidden, or nothing near
+            if !d2.is_finite()
+                || !al.holds(&posed[v], &posed_normals[v], q, gate)
+                || !al.reciprocal(reverse.as_ref(), v, q)
+            {
+                continue; // not in the sample, hidden, nothing near, or another part's
             }
             let y = al.target_positions[q as usize];
             for &(b, w) in al.weights.row(v) {

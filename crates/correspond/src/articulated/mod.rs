@@ -59,7 +59,7 @@ pub use transforms::{bone_transforms, outward_normals, skin, BoneTransforms};
 use twist::TwistLimit;
 pub use twist::{MAX_HEAD_TWIST_DEG, TWISTS};
 
-use crate::kdtree::PoolTrees;
+use crate::kdtree::{KdTree, PoolTrees};
 use crate::{CorrespondError, Pair, SegmentPools};
 use nalgebra::{Point3, Vector3};
 use std::time::Instant;
@@ -137,6 +137,14 @@ pub struct ArticulatedOptions {
     pub warm_iterations: usize,
     /// Pair-rejection distance of the first iteration from a warm start.
     pub warm_gate_start: f64,
+    /// Reciprocal check (`None`: off): a pair (template vertex `v` → target vertex `q`) holds
+    /// only when the posed template vertex nearest `q` (same features, among those the
+    /// target's viewpoint shows) lies within this distance of `v` on the template at rest.
+    /// A template vertex the target does not show — the far cheek of a head posed turned
+    /// less than it is — takes the nearest shown surface, which belongs to another part of
+    /// the template; its pull turns the fit towards the wrong pose and its match flips or
+    /// jumps. In every ICP round, non-rigid round and the final map.
+    pub reciprocal_radius: Option<f64>,
 }
 
 impl Default for ArticulatedOptions {
@@ -157,6 +165,7 @@ impl Default for ArticulatedOptions {
             occlusion_tolerance: 0.01,
             warm_iterations: 4,
             warm_gate_start: 0.05,
+            reciprocal_radius: None,
         }
     }
 }
@@ -491,6 +500,44 @@ impl<'a> Alignment<'a> {
             && !(on_boundary && d > self.boundary_gate)
     }
 
+    /// The reverse search of the reciprocal check ([`ArticulatedOptions::reciprocal_radius`]):
+    /// a k-d tree over the features of the posed template vertices `visible` allows (all
+    /// when `None`). `None` when the check is off.
+    fn reverse(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        visible: Option<&[bool]>,
+    ) -> Option<Reverse> {
+        let radius = self.options.reciprocal_radius? * self.unit_len;
+        let (mut points, mut ids) = (Vec::new(), Vec::new());
+        for (v, (x, n)) in posed.iter().zip(normals).enumerate() {
+            if visible.is_none_or(|s| s.get(v) == Some(&true)) {
+                points.push(self.feature(x, n));
+                ids.push(v as u32);
+            }
+        }
+        Some(Reverse {
+            tree: KdTree::new(points, ids),
+            radius2: radius * radius,
+        })
+    }
+
+    /// Does the pair `v → q` pass the reciprocal check of `reverse` (always, without one)?
+    fn reciprocal(&self, reverse: Option<&Reverse>, v: usize, q: u32) -> bool {
+        let Some(r) = reverse else {
+            return true;
+        };
+        let q = q as usize;
+        let f = self.feature(&self.target_positions[q], &self.target_normals[q]);
+        r.tree
+            .nearest_within(&f, (u32::MAX, f64::INFINITY))
+            .is_none_or(|(u, _)| {
+                (self.template_positions[u as usize] - self.template_positions[v]).norm_squared()
+                    <= r.radius2
+            })
+    }
+
     /// The template vertices that drive the ICP fits, per pool group: an even stride sample
     /// of at most [`ArticulatedOptions::icp_points`] (a bone's rigid fit needs hundreds of
     /// pairs, not tens of thousands; the final map uses all).
@@ -500,6 +547,14 @@ impl<'a> Alignment<'a> {
         self.pools
             .members_where(|v| (v as usize).is_multiple_of(stride))
     }
+}
+
+/// The posed template's shown vertices as a target point sees them: the reverse search of the
+/// reciprocal check ([`Alignment::reverse`]).
+pub(super) struct Reverse {
+    tree: KdTree<6>,
+    /// The check's radius, squared, in length units.
+    radius2: f64,
 }
 
 /// Position ⊕ β·normal: the nearest-neighbour feature of the alignment.
@@ -583,6 +638,7 @@ fn final_map(
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed);
+    let reverse = al.reverse(posed, posed_normals, visible.as_deref());
     let n = posed.len();
     let mut has_counterpart = Vec::with_capacity(n);
     let mut distance = Vec::with_capacity(n);
@@ -593,7 +649,8 @@ fn final_map(
             let d = (posed[v] - al.target_positions[q as usize]).norm();
             has_counterpart.push(
                 visible.as_ref().is_none_or(|s| s[v])
-                    && al.holds(&posed[v], &posed_normals[v], q, gate),
+                    && al.holds(&posed[v], &posed_normals[v], q, gate)
+                    && al.reciprocal(reverse.as_ref(), v, q),
             );
             distance.push(d / al.unit_len);
             Pair {

@@ -69,11 +69,15 @@ pub(super) fn nonrigid_step(
             round_gate,
             Some(&hints),
         )?;
+        let reverse = al.reverse(posed, posed_normals, visible.as_deref());
         let mut d = vec![Vector3::zeros(); n];
         let mut r = vec![0.0; n];
         let s2 = (ROBUST_SCALE * round_gate).powi(2);
         for (v, &(q, d2)) in near.iter().enumerate() {
-            if d2.is_finite() && al.holds(&posed[v], &posed_normals[v], q, round_gate) {
+            if d2.is_finite()
+                && al.holds(&posed[v], &posed_normals[v], q, round_gate)
+                && al.reciprocal(reverse.as_ref(), v, q)
+            {
                 let offset = al.target_positions[q as usize] - posed[v];
                 if scan {
                     let normal = al.target_normals[q as usize];
