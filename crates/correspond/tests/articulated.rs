@@ -151,13 +151,12 @@ fn a_skinned_copy_is_matched_to_itself() {
     assert_eq!(crossed, 0);
 }
 
-#[test]
-fn a_front_view_reports_the_back_as_without_counterpart() {
-    let (a, b, att_a) = bodies();
-    // Front view: triangles facing +z (the camera), vertices renumbered in reverse.
-    let tn = b.mesh.triangle_normals();
-    let front: Vec<[u32; 3]> = b
-        .mesh
+/// The front view of `mesh`: its triangles facing +z (the camera) as a mesh of their own, and
+/// per body vertex its id in that mesh (`u32::MAX`: not in view). `reverse` numbers the kept
+/// vertices in reverse order.
+fn front_view(mesh: &TriMesh, reverse: bool) -> (TriMesh, Vec<u32>) {
+    let tn = mesh.triangle_normals();
+    let front: Vec<[u32; 3]> = mesh
         .triangles
         .iter()
         .zip(&tn)
@@ -167,19 +166,29 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
     let mut used: Vec<u32> = front.iter().flatten().copied().collect();
     used.sort_unstable();
     used.dedup();
-    used.reverse();
-    let mut new_id = vec![u32::MAX; b.mesh.num_vertices()];
+    if reverse {
+        used.reverse();
+    }
+    let mut new_id = vec![u32::MAX; mesh.num_vertices()];
     for (i, &v) in used.iter().enumerate() {
         new_id[v as usize] = i as u32;
     }
     let scan = TriMesh::new(
-        used.iter().map(|&v| b.mesh.positions[v as usize]).collect(),
+        used.iter().map(|&v| mesh.positions[v as usize]).collect(),
         front
             .iter()
             .map(|t| t.map(|v| new_id[v as usize]))
             .collect(),
     )
     .unwrap();
+    (scan, new_id)
+}
+
+#[test]
+fn a_front_view_reports_the_back_as_without_counterpart() {
+    let (a, b, att_a) = bodies();
+    // Vertices renumbered in reverse: the scan's ids are not the body's.
+    let (scan, new_id) = front_view(&b.mesh, true);
     let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
     let na = outward(&a.mesh, &att_a);
     // Wound the other way round: outward_normals must turn them.
@@ -235,30 +244,7 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
 #[test]
 fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
     let (a, b, att_a) = bodies();
-    let tn = b.mesh.triangle_normals();
-    let front: Vec<[u32; 3]> = b
-        .mesh
-        .triangles
-        .iter()
-        .zip(&tn)
-        .filter(|(_, n)| n[2] > 0.2)
-        .map(|(t, _)| *t)
-        .collect();
-    let mut used: Vec<u32> = front.iter().flatten().copied().collect();
-    used.sort_unstable();
-    used.dedup();
-    let mut new_id = vec![u32::MAX; b.mesh.num_vertices()];
-    for (i, &v) in used.iter().enumerate() {
-        new_id[v as usize] = i as u32;
-    }
-    let scan = TriMesh::new(
-        used.iter().map(|&v| b.mesh.positions[v as usize]).collect(),
-        front
-            .iter()
-            .map(|t| t.map(|v| new_id[v as usize]))
-            .collect(),
-    )
-    .unwrap();
+    let (scan, new_id) = front_view(&b.mesh, false);
     let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
     let na = outward(&a.mesh, &att_a);
     let ns = outward(&scan, &att_s);
