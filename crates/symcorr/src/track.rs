@@ -243,6 +243,9 @@ impl<'a> Tracker<'a> {
         pipeline.options.prepare.attach.align = false;
         pipeline.options.prepare.attach.poor_fit = PoorFitPolicy::Accept;
         pipeline.options.prepare.cache = None;
+        // A frame keeps only the matches of the template vertices it shows (`target_of` −1
+        // elsewhere): the final map need not guess the others'.
+        pipeline.options.articulated.guess_hidden = false;
         if options.reciprocal_radius.is_some() {
             pipeline.options.articulated.reciprocal_radius = options.reciprocal_radius;
         }

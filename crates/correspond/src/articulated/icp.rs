@@ -88,7 +88,7 @@ pub(super) fn articulated_icp(
         for (v, &(q, d2)) in near.iter().enumerate() {
             if !d2.is_finite()
                 || !al.holds(&posed[v], &posed_normals[v], q, gate)
-                || !al.reciprocal(reverse.as_ref(), v, q)
+                || !al.reciprocal(reverse.as_ref(), &posed, &posed_normals, v, q)
             {
                 continue; // not in the sample, hidden, nothing near, or another part's
             }

@@ -145,6 +145,14 @@ pub struct ArticulatedOptions {
     /// the template; its pull turns the fit towards the wrong pose and its match flips or
     /// jumps. In every ICP round, non-rigid round and the final map.
     pub reciprocal_radius: Option<f64>,
+    /// Does the final map pair every template vertex? `true`: a vertex without a counterpart
+    /// is paired with its nearest pool vertex all the same (a guess). `false`: the map
+    /// searches only the vertices that can have a counterpart (shown, and no farther than a
+    /// pair that holds at the final gate can be), and a vertex without one gets a pair of
+    /// confidence 0 to an arbitrary pool vertex (its last match, else vertex 0) and an
+    /// infinite distance — for a caller that drops those pairs (a tracker). The vertices with
+    /// a counterpart get the same pairs either way.
+    pub guess_hidden: bool,
 }
 
 impl Default for ArticulatedOptions {
@@ -166,6 +174,7 @@ impl Default for ArticulatedOptions {
             warm_iterations: 4,
             warm_gate_start: 0.05,
             reciprocal_radius: None,
+            guess_hidden: true,
         }
     }
 }
@@ -524,18 +533,39 @@ impl<'a> Alignment<'a> {
     }
 
     /// Does the pair `v → q` pass the reciprocal check of `reverse` (always, without one)?
-    fn reciprocal(&self, reverse: Option<&Reverse>, v: usize, q: u32) -> bool {
+    /// `posed` and `normals` are those `reverse` was built from, and `v` must be one of the
+    /// vertices it holds (a shown vertex).
+    fn reciprocal(
+        &self,
+        reverse: Option<&Reverse>,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        v: usize,
+        q: u32,
+    ) -> bool {
         let Some(r) = reverse else {
             return true;
         };
         let q = q as usize;
         let f = self.feature(&self.target_positions[q], &self.target_normals[q]);
-        r.tree
-            .nearest_within(&f, (u32::MAX, f64::INFINITY))
-            .is_none_or(|(u, _)| {
-                (self.template_positions[u as usize] - self.template_positions[v]).norm_squared()
-                    <= r.radius2
-            })
+        // The search starts from `v` itself, one of the tree's points, at its distance summed
+        // as the tree's leaves sum it: the answer is the unbounded search's (ties to the
+        // smaller id alike), found without visiting the cells farther than the pair.
+        let p = self.feature(&posed[v], &normals[v]);
+        let mut d = 0.0;
+        for k in 0..6 {
+            let t = p[k] - f[k];
+            d += t * t;
+        }
+        let start = if d.is_finite() {
+            (v as u32, d)
+        } else {
+            (u32::MAX, f64::INFINITY)
+        };
+        r.tree.nearest_within(&f, start).is_none_or(|(u, _)| {
+            (self.template_positions[u as usize] - self.template_positions[v]).norm_squared()
+                <= r.radius2
+        })
     }
 
     /// The template vertices that drive the ICP fits, per pool group: an even stride sample
@@ -636,8 +666,21 @@ fn final_map(
         f64::INFINITY
     };
     let gate = al.options.gate_end * al.unit_len;
-    let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed);
+    let near = if al.options.guess_hidden {
+        al.nearest(posed, posed_normals, None, Some(hints))?
+    } else {
+        // Exactly the pairs that can hold at `gate` ([`Alignment::candidates`]); the others
+        // are `(0, ∞)`.
+        al.candidates(
+            posed,
+            posed_normals,
+            None,
+            visible.as_deref(),
+            gate,
+            Some(hints),
+        )?
+    };
     let reverse = al.reverse(posed, posed_normals, visible.as_deref());
     let n = posed.len();
     let mut has_counterpart = Vec::with_capacity(n);
@@ -645,12 +688,23 @@ fn final_map(
     let pairs = near
         .iter()
         .enumerate()
-        .map(|(v, &(q, _))| {
+        .map(|(v, &(q, d2))| {
+            if !d2.is_finite() && !al.options.guess_hidden {
+                // Not searched or nothing near enough: no counterpart, no guess.
+                has_counterpart.push(false);
+                distance.push(f64::INFINITY);
+                let last = hints.get(v).filter(|h| h.1.is_finite()).map_or(0, |h| h.0);
+                return Pair {
+                    template: v as u32,
+                    target: last,
+                    confidence: 0.0,
+                };
+            }
             let d = (posed[v] - al.target_positions[q as usize]).norm();
             has_counterpart.push(
                 visible.as_ref().is_none_or(|s| s[v])
                     && al.holds(&posed[v], &posed_normals[v], q, gate)
-                    && al.reciprocal(reverse.as_ref(), v, q),
+                    && al.reciprocal(reverse.as_ref(), posed, posed_normals, v, q),
             );
             distance.push(d / al.unit_len);
             Pair {

@@ -76,7 +76,7 @@ pub(super) fn nonrigid_step(
         for (v, &(q, d2)) in near.iter().enumerate() {
             if d2.is_finite()
                 && al.holds(&posed[v], &posed_normals[v], q, round_gate)
-                && al.reciprocal(reverse.as_ref(), v, q)
+                && al.reciprocal(reverse.as_ref(), posed, posed_normals, v, q)
             {
                 let offset = al.target_positions[q as usize] - posed[v];
                 if scan {
