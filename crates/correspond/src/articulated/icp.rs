@@ -74,7 +74,7 @@ pub(super) fn articulated_icp(
             1.0
         };
         let gate = al.unit_len * (gate_start * (options.gate_end / gate_start).powf(frac));
-        let near = al.candidates(
+        let (near, reverse) = al.candidates_and_reverse(
             &posed,
             &posed_normals,
             Some(sample),
@@ -82,14 +82,19 @@ pub(super) fn articulated_icp(
             gate,
             last.as_deref(),
         )?;
-        let reverse = al.reverse(&posed, &posed_normals, visible.as_deref());
+        let held = al.held(
+            &posed,
+            &posed_normals,
+            &near,
+            visible.as_deref(),
+            gate,
+            reverse.as_ref(),
+            true,
+        );
         // Pairs per bone: (rest position, target position, weight).
         let mut per_bone: Vec<Vec<FitPair>> = vec![Vec::new(); Bone::COUNT];
-        for (v, &(q, d2)) in near.iter().enumerate() {
-            if !d2.is_finite()
-                || !al.holds(&posed[v], &posed_normals[v], q, gate)
-                || !al.reciprocal(reverse.as_ref(), &posed, &posed_normals, v, q)
-            {
+        for (v, &(q, _)) in near.iter().enumerate() {
+            if !held[v] {
                 continue; // not in the sample, hidden, nothing near, or another part's
             }
             let y = al.target_positions[q as usize];

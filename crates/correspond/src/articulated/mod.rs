@@ -62,6 +62,7 @@ pub use twist::{MAX_HEAD_TWIST_DEG, TWISTS};
 use crate::kdtree::{KdTree, PoolTrees};
 use crate::{CorrespondError, Pair, SegmentPools};
 use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
 use std::time::Instant;
 use symcorr_attach::BoneWeights;
 use symcorr_skeleton::{Bone, Joint, Segment, Skeleton, BONES};
@@ -509,6 +510,53 @@ impl<'a> Alignment<'a> {
             && !(on_boundary && d > self.boundary_gate)
     }
 
+    /// Per entry of `near` (one per template vertex, as [`Alignment::candidates`] or
+    /// [`Alignment::nearest`] answer): is the vertex one `visible` allows (all when `None`),
+    /// does its pair hold at `gate` ([`Alignment::holds`]) and pass the reciprocal check of
+    /// `reverse` (`posed` and `normals` are those it was built from)? With `found_only`, a
+    /// vertex with nothing near (`∞`) does not. Tested in parallel, in chunks: each test is
+    /// independent of the others.
+    #[allow(clippy::too_many_arguments)]
+    fn held(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        near: &[(u32, f64)],
+        visible: Option<&[bool]>,
+        gate: f64,
+        reverse: Option<&Reverse>,
+        found_only: bool,
+    ) -> Vec<bool> {
+        near.par_iter()
+            .with_min_len(HELD_CHUNK)
+            .enumerate()
+            .map(|(v, &(q, d2))| {
+                (d2.is_finite() || !found_only)
+                    && visible.is_none_or(|s| s.get(v) == Some(&true))
+                    && self.holds(&posed[v], &normals[v], q, gate)
+                    && self.reciprocal(reverse, posed, normals, v, q)
+            })
+            .collect()
+    }
+
+    /// [`Alignment::candidates`] and [`Alignment::reverse`] on the same pose, side by side
+    /// (they are independent: the reverse tree is built while the pool trees are searched).
+    fn candidates_and_reverse(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        subset: Option<&[Vec<u32>]>,
+        visible: Option<&[bool]>,
+        gate: f64,
+        hints: Option<&[(u32, f64)]>,
+    ) -> Result<(Vec<(u32, f64)>, Option<Reverse>), CorrespondError> {
+        let (near, reverse) = rayon::join(
+            || self.candidates(posed, normals, subset, visible, gate, hints),
+            || self.reverse(posed, normals, visible),
+        );
+        Ok((near?, reverse))
+    }
+
     /// The reverse search of the reciprocal check ([`ArticulatedOptions::reciprocal_radius`]):
     /// a k-d tree over the features of the posed template vertices `visible` allows (all
     /// when `None`). `None` when the check is off.
@@ -586,6 +634,10 @@ pub(super) struct Reverse {
     /// The check's radius, squared, in length units.
     radius2: f64,
 }
+
+/// Pairs per parallel task of [`Alignment::held`] (a test is a distance, a dot product and
+/// at most one k-d tree search).
+const HELD_CHUNK: usize = 256;
 
 /// Position ⊕ β·normal: the nearest-neighbour feature of the alignment.
 fn feature(x: &Point3<f64>, n: &Vector3<f64>, beta: f64) -> [f64; 6] {
@@ -667,12 +719,16 @@ fn final_map(
     };
     let gate = al.options.gate_end * al.unit_len;
     let visible = al.visibility(posed);
-    let near = if al.options.guess_hidden {
-        al.nearest(posed, posed_normals, None, Some(hints))?
+    let (near, reverse) = if al.options.guess_hidden {
+        let (near, reverse) = rayon::join(
+            || al.nearest(posed, posed_normals, None, Some(hints)),
+            || al.reverse(posed, posed_normals, visible.as_deref()),
+        );
+        (near?, reverse)
     } else {
         // Exactly the pairs that can hold at `gate` ([`Alignment::candidates`]); the others
         // are `(0, ∞)`.
-        al.candidates(
+        al.candidates_and_reverse(
             posed,
             posed_normals,
             None,
@@ -681,7 +737,15 @@ fn final_map(
             Some(hints),
         )?
     };
-    let reverse = al.reverse(posed, posed_normals, visible.as_deref());
+    let held = al.held(
+        posed,
+        posed_normals,
+        &near,
+        visible.as_deref(),
+        gate,
+        reverse.as_ref(),
+        false,
+    );
     let n = posed.len();
     let mut has_counterpart = Vec::with_capacity(n);
     let mut distance = Vec::with_capacity(n);
@@ -701,11 +765,7 @@ fn final_map(
                 };
             }
             let d = (posed[v] - al.target_positions[q as usize]).norm();
-            has_counterpart.push(
-                visible.as_ref().is_none_or(|s| s[v])
-                    && al.holds(&posed[v], &posed_normals[v], q, gate)
-                    && al.reciprocal(reverse.as_ref(), posed, posed_normals, v, q),
-            );
+            has_counterpart.push(held[v]);
             distance.push(d / al.unit_len);
             Pair {
                 template: v as u32,

@@ -61,7 +61,7 @@ pub(super) fn nonrigid_step(
         };
         let round_gate = al.unit_len * g0 * (options.gate_end / g0).powf(frac);
         let visible = al.visibility(posed);
-        let near = al.candidates(
+        let (near, reverse) = al.candidates_and_reverse(
             posed,
             posed_normals,
             None,
@@ -69,15 +69,20 @@ pub(super) fn nonrigid_step(
             round_gate,
             Some(&hints),
         )?;
-        let reverse = al.reverse(posed, posed_normals, visible.as_deref());
+        let held = al.held(
+            posed,
+            posed_normals,
+            &near,
+            visible.as_deref(),
+            round_gate,
+            reverse.as_ref(),
+            true,
+        );
         let mut d = vec![Vector3::zeros(); n];
         let mut r = vec![0.0; n];
         let s2 = (ROBUST_SCALE * round_gate).powi(2);
-        for (v, &(q, d2)) in near.iter().enumerate() {
-            if d2.is_finite()
-                && al.holds(&posed[v], &posed_normals[v], q, round_gate)
-                && al.reciprocal(reverse.as_ref(), posed, posed_normals, v, q)
-            {
+        for (v, &(q, _)) in near.iter().enumerate() {
+            if held[v] {
                 let offset = al.target_positions[q as usize] - posed[v];
                 if scan {
                     let normal = al.target_normals[q as usize];
