@@ -78,8 +78,8 @@ pub mod view;
 
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
-    Correspondence, Method, MethodReport, Mode, Pipeline, PipelineOptions, SurfacePoint,
-    DEFAULT_SAMPLES,
+    ArticulatedTables, Correspondence, Method, MethodReport, Mode, Pipeline, PipelineOptions,
+    SurfacePoint, DEFAULT_SAMPLES,
 };
 pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,

@@ -293,29 +293,89 @@ impl SurfacePoint {
     }
 }
 
+/// The tables of one mesh that the articulated method derives from it alone, per frame of a
+/// recording no matter how many frames: its outward normals, and as a template its edge graph
+/// (the non-rigid step), as a target its boundary flags and its edge graph for the pools' band.
+/// Built once for a template and, for a recording's frame, on the thread that observes it
+/// ([`Pipeline::run_with`]); [`Pipeline::run_from`] builds both for each call.
+#[derive(Debug, Clone)]
+pub struct ArticulatedTables {
+    normals: Vec<[f64; 3]>,
+    /// As a template: the vertex neighbours.
+    neighbors: Option<Vec<Vec<u32>>>,
+    /// As a target: the boundary flags, and the edge graph unless the mesh was prepared for
+    /// the refined method (which holds one).
+    boundary: Option<Vec<bool>>,
+    graph: Option<EdgeGraph>,
+}
+
+impl ArticulatedTables {
+    /// The tables of `m` as the template of the articulated method.
+    pub fn template(m: &PreparedMesh) -> ArticulatedTables {
+        ArticulatedTables {
+            normals: articulated_normals(m),
+            neighbors: Some(m.mesh.vertex_neighbors()),
+            boundary: None,
+            graph: None,
+        }
+    }
+
+    /// The tables of `m` as the target of the articulated method.
+    pub fn target(m: &PreparedMesh) -> ArticulatedTables {
+        ArticulatedTables {
+            normals: articulated_normals(m),
+            neighbors: None,
+            boundary: Some(m.mesh.boundary_vertices()),
+            graph: m.refine.is_none().then(|| EdgeGraph::new(&m.mesh)),
+        }
+    }
+}
+
+/// A mesh's vertex normals turned out of the body ([`outward_normals`]).
+fn articulated_normals(m: &PreparedMesh) -> Vec<[f64; 3]> {
+    outward_normals(
+        &m.mesh.positions,
+        m.mesh.vertex_normals(),
+        &m.attachment.labels,
+        &m.attachment.joints,
+    )
+}
+
 /// The articulated method: skeleton-driven articulated alignment of the
-/// template onto the target (symcorr-correspond's `articulated_match`).
+/// template onto the target (symcorr-correspond's `articulated_match`), with the tables of
+/// both ([`ArticulatedTables::template`], [`ArticulatedTables::target`]).
 fn articulated(
-    template: &PreparedMesh,
-    target: &PreparedMesh,
+    (template, tt): (&PreparedMesh, &ArticulatedTables),
+    (target, qt): (&PreparedMesh, &ArticulatedTables),
     options: &ArticulatedOptions,
     start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, PipelineError> {
-    let graph = match &target.refine {
-        Some(r) => std::borrow::Cow::Borrowed(&r.graph),
-        None => std::borrow::Cow::Owned(EdgeGraph::new(&target.mesh)),
+    let built;
+    let graph = match (&target.refine, &qt.graph) {
+        (Some(r), _) => &r.graph,
+        (None, Some(g)) => g,
+        (None, None) => {
+            built = EdgeGraph::new(&target.mesh);
+            &built
+        }
     };
-    let normals = |m: &PreparedMesh| {
-        outward_normals(
-            &m.mesh.positions,
-            m.mesh.vertex_normals(),
-            &m.attachment.labels,
-            &m.attachment.joints,
-        )
+    let built_boundary;
+    let boundary = match &qt.boundary {
+        Some(b) => b,
+        None => {
+            built_boundary = target.mesh.boundary_vertices();
+            &built_boundary
+        }
     };
-    let (tn, qn) = (normals(template), normals(target));
-    let boundary = target.mesh.boundary_vertices();
-    let neighbors = template.mesh.vertex_neighbors();
+    let built_neighbors;
+    let neighbors = match &tt.neighbors {
+        Some(nb) => nb,
+        None => {
+            built_neighbors = template.mesh.vertex_neighbors();
+            &built_neighbors
+        }
+    };
+    let (tn, qn) = (&tt.normals, &qt.normals);
     // Each mesh's unit comes from its own skeleton: a template in metres matched onto a scan
     // in millimetres works in the target's unit.
     let ratio = template.metres_per_unit() / target.metres_per_unit();
@@ -350,7 +410,7 @@ fn articulated(
             viewpoint: m.view_point(),
         }
     }
-    let mut template_side = side(template, &tn, None, Some(&neighbors));
+    let mut template_side = side(template, tn, None, Some(neighbors));
     if let Some((positions, joints)) = &scaled {
         template_side.positions = positions;
         template_side.joints = joints;
@@ -359,8 +419,8 @@ fn articulated(
     Ok(articulated_match(
         &template_side,
         &template.attachment.weights,
-        &side(target, &qn, Some(&boundary), None),
-        &graph,
+        &side(target, qn, Some(boundary), None),
+        graph,
         options,
         start,
     )?)
@@ -456,19 +516,47 @@ impl Pipeline {
         target: &PreparedMesh,
         start: ArticulatedStart<'_>,
     ) -> Result<Correspondence, PipelineError> {
+        self.run_with(template, target, start, None)
+    }
+
+    /// [`Pipeline::run_from`] with the articulated method's tables of both meshes built
+    /// beforehand (`tables`: the template's from [`ArticulatedTables::template`], the
+    /// target's from [`ArticulatedTables::target`], each of that mesh; `None`: built here) —
+    /// a recording's template once for every frame, a frame's on the thread that observed it.
+    /// The result is the same. The other methods ignore `tables`.
+    pub fn run_with(
+        &self,
+        template: &PreparedMesh,
+        target: &PreparedMesh,
+        start: ArticulatedStart<'_>,
+        tables: Option<(&ArticulatedTables, &ArticulatedTables)>,
+    ) -> Result<Correspondence, PipelineError> {
         self.options.check()?;
         let t = Instant::now();
         let points = self.points(template);
         let mut timings = vec![("sampling".to_string(), t.elapsed().as_secs_f64())];
         let (pairs, report, stage_timings) = match self.options.method {
-            Method::Articulated => run_articulated(
-                template,
-                target,
-                &self.options.articulated,
-                &points,
-                self.options.mode,
-                start,
-            )?,
+            Method::Articulated => {
+                let built;
+                let (tt, qt) = match tables {
+                    Some(t) => t,
+                    None => {
+                        built = (
+                            ArticulatedTables::template(template),
+                            ArticulatedTables::target(target),
+                        );
+                        (&built.0, &built.1)
+                    }
+                };
+                run_articulated(
+                    (template, tt),
+                    (target, qt),
+                    &self.options.articulated,
+                    &points,
+                    self.options.mode,
+                    start,
+                )?
+            }
             Method::Refined => run_refined(
                 template,
                 target,
@@ -502,14 +590,15 @@ fn stage_timings(t: &[(&'static str, f64)]) -> Timings {
 }
 
 fn run_articulated(
-    template: &PreparedMesh,
-    target: &PreparedMesh,
+    template: (&PreparedMesh, &ArticulatedTables),
+    target: (&PreparedMesh, &ArticulatedTables),
     options: &ArticulatedOptions,
     points: &[u32],
     mode: Mode,
     start: ArticulatedStart<'_>,
 ) -> Result<MethodOutput, PipelineError> {
     let out = articulated(template, target, options, start)?;
+    let target = target.0;
     // Only a partial view leaves template points without a counterpart; on a whole surface
     // every point has one, however far the fit left it.
     let partial = target.is_partial();

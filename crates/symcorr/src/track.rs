@@ -45,7 +45,8 @@
 pub mod animation;
 
 use crate::{
-    ArticulatedStart, BoneTransforms, MethodReport, Pipeline, PipelineError, PreparedMesh,
+    ArticulatedStart, ArticulatedTables, BoneTransforms, Method, MethodReport, Pipeline,
+    PipelineError, PreparedMesh,
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
@@ -190,6 +191,9 @@ pub struct Observation {
     corrections: Vec<Correction>,
     scan: ScanMesh,
     target: PreparedMesh,
+    /// The articulated method's tables of `target` (`None` for the other methods), built here
+    /// rather than on the fitter's thread.
+    tables: Option<ArticulatedTables>,
     timings: Vec<(String, f64)>,
 }
 
@@ -211,6 +215,8 @@ pub struct Observer {
 pub struct Fitter<'a> {
     pipeline: Pipeline,
     template: &'a PreparedMesh,
+    /// The articulated method's tables of the template, built once.
+    template_tables: ArticulatedTables,
     options: TrackOptions,
     /// The previous frame's fit: its bone transforms and the refined joints they pose onto.
     previous_fit: Option<(BoneTransforms, Skeleton)>,
@@ -259,6 +265,7 @@ impl<'a> Tracker<'a> {
                 previous: None,
             },
             fitter: Fitter {
+                template_tables: ArticulatedTables::template(template),
                 pipeline,
                 template,
                 options,
@@ -472,6 +479,8 @@ impl Observer {
             .map_err(|e| e.to_string())?
             // The scan is in camera space: its camera sits at the origin.
             .seen_from(nalgebra::Point3::origin());
+        let tables = (self.pipeline.options.method == Method::Articulated)
+            .then(|| ArticulatedTables::target(&target));
         let t_prepare = t.elapsed().as_secs_f64();
         let d = &target.attachment.diagnostics;
         let mut timings = vec![
@@ -495,6 +504,7 @@ impl Observer {
             corrections,
             scan,
             target,
+            tables,
             timings,
         })
     }
@@ -526,6 +536,7 @@ impl Fitter<'_> {
             corrections,
             scan,
             target,
+            tables,
             mut timings,
         } = observation;
         let t = Instant::now();
@@ -541,7 +552,12 @@ impl Fitter<'_> {
         let was_warm = warm.is_some();
         let corr = self
             .pipeline
-            .run_from(self.template, &target, start)
+            .run_with(
+                self.template,
+                &target,
+                start,
+                tables.as_ref().map(|t| (&self.template_tables, t)),
+            )
             .map_err(|e: PipelineError| e.to_string())?;
         let t_match = t.elapsed().as_secs_f64();
         let posed = match &corr.report {
