@@ -288,3 +288,47 @@ fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
         "shown vertices given a counterpart: {tp_off} without the check, {tp_on} with it"
     );
 }
+
+/// The final map without guesses for the hidden vertices (`guess_hidden: false`) gives the
+/// same counterparts and the same pairs for them as the full map; the others get confidence 0.
+#[test]
+fn the_map_without_guesses_keeps_every_counterpart_and_its_pair() {
+    let (a, b, att_a) = bodies();
+    let (scan, _) = front_view(&b.mesh, false);
+    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
+    let na = outward(&a.mesh, &att_a);
+    let ns = outward(&scan, &att_s);
+    let neighbors = a.mesh.vertex_neighbors();
+    let boundary = scan.boundary_vertices();
+    let run = |guess_hidden| {
+        let options = ArticulatedOptions {
+            reciprocal_radius: Some(0.03),
+            guess_hidden,
+            ..ArticulatedOptions::default()
+        };
+        let mut template = side(&a.mesh, &att_a, &na, None);
+        template.neighbors = Some(&neighbors);
+        articulated_match(
+            &template,
+            &att_a.weights,
+            &side(&scan, &att_s, &ns, Some(&boundary)),
+            &EdgeGraph::new(&scan),
+            &options,
+            ArticulatedStart::Skeletons,
+        )
+        .unwrap()
+    };
+    let (full, shown) = (run(true), run(false));
+    assert_eq!(full.has_counterpart, shown.has_counterpart);
+    assert_eq!(full.posed, shown.posed);
+    let counterparts = full.has_counterpart.iter().filter(|&&h| h).count();
+    assert!(counterparts > 0 && counterparts < full.pairs.len());
+    for (v, &h) in full.has_counterpart.iter().enumerate() {
+        if h {
+            assert_eq!(full.pairs[v], shown.pairs[v]);
+            assert_eq!(full.distance[v], shown.distance[v]);
+        } else {
+            assert_eq!(shown.pairs[v].confidence, 0.0);
+        }
+    }
+}

@@ -549,7 +549,7 @@ impl<'a> Alignment<'a> {
         visible: Option<&[bool]>,
         gate: f64,
         hints: Option<&[(u32, f64)]>,
-    ) -> Result<(Vec<(u32, f64)>, Option<Reverse>), CorrespondError> {
+    ) -> Result<(Matches, Option<Reverse>), CorrespondError> {
         let (near, reverse) = rayon::join(
             || self.candidates(posed, normals, subset, visible, gate, hints),
             || self.reverse(posed, normals, visible),
@@ -634,6 +634,10 @@ pub(super) struct Reverse {
     /// The check's radius, squared, in length units.
     radius2: f64,
 }
+
+/// Per template vertex, its nearest target vertex and the squared feature distance (`(0, ∞)`
+/// for none).
+type Matches = Vec<(u32, f64)>;
 
 /// Pairs per parallel task of [`Alignment::held`] (a test is a distance, a dot product and
 /// at most one k-d tree search).
