@@ -149,10 +149,10 @@ pub struct ArticulatedOptions {
     /// Does the final map pair every template vertex? `true`: a vertex without a counterpart
     /// is paired with its nearest pool vertex all the same (a guess). `false`: the map
     /// searches only the vertices that can have a counterpart (shown, and no farther than a
-    /// pair that holds at the final gate can be), and a vertex without one gets a pair of
-    /// confidence 0 to an arbitrary pool vertex (its last match, else vertex 0) and an
-    /// infinite distance — for a caller that drops those pairs (a tracker). The vertices with
-    /// a counterpart get the same pairs either way.
+    /// pair that holds at the final gate can be), and a vertex without one gets confidence 0
+    /// (its pair names the nearest pool vertex where that search found one, else its last
+    /// match or vertex 0 with an infinite distance) — for a caller that drops those pairs (a
+    /// tracker). The vertices with a counterpart get the same pairs either way.
     pub guess_hidden: bool,
 }
 
@@ -771,12 +771,15 @@ fn final_map(
             let d = (posed[v] - al.target_positions[q as usize]).norm();
             has_counterpart.push(held[v]);
             distance.push(d / al.unit_len);
+            let confidence = if held[v] || al.options.guess_hidden {
+                1.0 / (1.0 + d / gate) / (1.0 + (posed[v] - skinned[v]).norm() / displacement_scale)
+            } else {
+                0.0
+            };
             Pair {
                 template: v as u32,
                 target: q,
-                confidence: 1.0
-                    / (1.0 + d / gate)
-                    / (1.0 + (posed[v] - skinned[v]).norm() / displacement_scale),
+                confidence,
             }
         })
         .collect();
