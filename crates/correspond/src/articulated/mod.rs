@@ -41,7 +41,8 @@
 //! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
 //!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
 //!    target with a border (a scan) times `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid
-//!    displacement.
+//!    displacement. Without [`ArticulatedOptions::guess_hidden`] only the vertices that can
+//!    have a counterpart are searched (the others get confidence 0).
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
