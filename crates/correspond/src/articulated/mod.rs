@@ -28,7 +28,9 @@
 //!    [`ArticulatedOptions::gate_end`]), its normals agree
 //!    ([`ArticulatedOptions::min_normal_cosine`]: the template's back has no counterpart on a
 //!    front view) and its target point is not on the target's border beyond
-//!    [`ArticulatedOptions::boundary_gate`]. Each bone with at least 20 pairs of weight > 0.1 is
+//!    [`ArticulatedOptions::boundary_gate`]. With a target viewpoint, a posed vertex hidden
+//!    behind the posed template (module `visibility`) or facing away from the viewpoint
+//!    ([`ArticulatedOptions::min_facing_cosine`]) takes no pair. Each bone with at least 20 pairs of weight > 0.1 is
 //!    re-fitted by weighted Kabsch (Arun et al. 1987) to them plus its two joints as anchors
 //!    ([`ArticulatedOptions::joint_anchor`]), then the template is re-skinned (module `icp`).
 //! 5. **Non-rigid step** (needs the template's edge graph, [`ArticulatedInputs::neighbors`]):
@@ -117,9 +119,10 @@ pub struct ArticulatedOptions {
     pub icp_points: usize,
     /// A pair whose target point lies on the target's boundary is rejected (and the template
     /// point has no counterpart) when longer than this.
-    /// (0.015: a single-view scan has holes inside its silhouette as well, and at 0.01 one
-    /// shown template point in 16 went to `no_counterpart`; a wider gate pairs the flanks
-    /// beyond a silhouette. `docs/decisions/2026-12-03-scan-matching.md`.)
+    /// (0.02: a single-view scan has holes inside its silhouette as well, and the fit's error
+    /// at a border is up to 0.022; the flanks just beyond a silhouette, which a wide gate
+    /// would pair, face away from the camera and are left out by
+    /// [`ArticulatedOptions::min_facing_cosine`]. `docs/decisions/2026-12-03-facing-test.md`.)
     pub boundary_gate: f64,
     /// Rounds of the non-rigid step after the ICP (0: none).
     pub nonrigid_rounds: usize,
@@ -133,6 +136,14 @@ pub struct ArticulatedOptions {
     /// template's nearest surface along its line of sight is occluded (no pair, no
     /// counterpart).
     pub occlusion_tolerance: f64,
+    /// With a target viewpoint: a posed template vertex whose normal makes a cosine below
+    /// this with its line of sight to the viewpoint is not visible (no pair, no counterpart),
+    /// like an occluded one. 0: a surface facing away from the camera cannot be seen by it —
+    /// near a silhouette the occlusion test misses such a vertex (no other triangle lies in
+    /// front of it by the tolerance) and the scan's grazing border normals pass the normal
+    /// test. A positive value also refuses shown points, the posed normals being 10–15° off
+    /// (`docs/decisions/2026-12-03-facing-test.md`).
+    pub min_facing_cosine: f64,
     /// ICP iterations from a warm start ([`ArticulatedStart::Warm`]).
     pub warm_iterations: usize,
     /// Pair-rejection distance of the first iteration from a warm start.
@@ -158,11 +169,12 @@ impl Default for ArticulatedOptions {
             joint_anchor: 0.1,
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
-            boundary_gate: 0.015,
+            boundary_gate: 0.02,
             nonrigid_rounds: 3,
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
             occlusion_tolerance: 0.01,
+            min_facing_cosine: 0.0,
             warm_iterations: 4,
             warm_gate_start: 0.05,
             reciprocal_radius: None,
@@ -468,17 +480,35 @@ impl<'a> Alignment<'a> {
             .nearest(self.pools, &f, Some(&searched), hints, within)
     }
 
-    /// Per posed template vertex, can the target show it: `None` when every vertex may be
-    /// shown (no target viewpoint or no template triangles), else the occlusion test of
-    /// module `visibility` from the target's viewpoint.
-    fn visibility(&self, posed: &[Point3<f64>]) -> Option<Vec<bool>> {
+    /// Per posed template vertex (positions and normals), can the target show it: `None` when
+    /// every vertex may be shown (no target viewpoint or no template triangles), else the
+    /// occlusion test of module `visibility` from the target's viewpoint and the facing test
+    /// ([`ArticulatedOptions::min_facing_cosine`]).
+    fn visibility(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+    ) -> Option<Vec<bool>> {
         let (eye, triangles) = (self.target.viewpoint?, self.template.triangles?);
-        Some(visibility::visible_from(
+        let mut visible = visibility::visible_from(
             &eye,
             posed,
             triangles,
             self.options.occlusion_tolerance * self.unit_len,
-        ))
+        );
+        for ((s, x), n) in visible.iter_mut().zip(posed).zip(normals) {
+            *s = *s && self.faces_viewpoint(x, n);
+        }
+        Some(visible)
+    }
+
+    /// Does the posed template point `x` with normal `n` face the target's viewpoint at a
+    /// cosine of at least [`ArticulatedOptions::min_facing_cosine`] (always, without one)?
+    fn faces_viewpoint(&self, x: &Point3<f64>, n: &Vector3<f64>) -> bool {
+        self.target.viewpoint.is_none_or(|eye| {
+            let sight = eye - x;
+            n.dot(&sight) >= self.options.min_facing_cosine * sight.norm()
+        })
     }
 
     /// Is the target a sensor's view — a surface with a border (a depth scan, a frame of a
@@ -637,7 +667,7 @@ fn final_map(
     };
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None, Some(hints))?;
-    let visible = al.visibility(posed);
+    let visible = al.visibility(posed, posed_normals);
     let reverse = al.reverse(posed, posed_normals, visible.as_deref());
     let n = posed.len();
     let mut has_counterpart = Vec::with_capacity(n);
