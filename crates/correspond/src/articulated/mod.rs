@@ -118,12 +118,18 @@ pub struct ArticulatedOptions {
     /// At most this many template vertices (an even stride sample) drive the ICP fits.
     pub icp_points: usize,
     /// A pair whose target point lies on the target's boundary is rejected (and the template
-    /// point has no counterpart) when longer than this.
-    /// (0.02: a single-view scan has holes inside its silhouette as well, and the fit's error
-    /// at a border is up to 0.022; the flanks just beyond a silhouette, which a wide gate
-    /// would pair, face away from the camera and are left out by
-    /// [`ArticulatedOptions::min_facing_cosine`]. `docs/decisions/2026-12-03-facing-test.md`.)
+    /// point has no counterpart) when longer than this; a target with a viewpoint uses
+    /// [`ArticulatedOptions::seen_boundary_gate`] instead.
+    /// (0.015: a single-view scan has holes inside its silhouette as well, and at 0.01 one
+    /// shown template point in 16 went to `no_counterpart`; a wider gate pairs the flanks
+    /// beyond a silhouette. `docs/decisions/2026-12-03-scan-matching.md`.)
     pub boundary_gate: f64,
+    /// [`ArticulatedOptions::boundary_gate`] of a target with a viewpoint. (0.02: the fit's
+    /// error at a scan's border reaches 0.022; the flanks just beyond a silhouette, which a
+    /// wider gate pairs, face away from the camera and the facing test
+    /// ([`ArticulatedOptions::min_facing_cosine`]) leaves them out.
+    /// `docs/decisions/2026-12-03-facing-test.md`.)
+    pub seen_boundary_gate: f64,
     /// Rounds of the non-rigid step after the ICP (0: none).
     pub nonrigid_rounds: usize,
     /// Pair-rejection distance of the first non-rigid round; the rounds' gates shrink
@@ -169,7 +175,8 @@ impl Default for ArticulatedOptions {
             joint_anchor: 0.1,
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
-            boundary_gate: 0.02,
+            boundary_gate: 0.015,
+            seen_boundary_gate: 0.02,
             nonrigid_rounds: 3,
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
@@ -363,7 +370,8 @@ pub(super) struct Alignment<'a> {
     unit_len: f64,
     /// β of the features, in length units.
     beta: f64,
-    /// [`ArticulatedOptions::boundary_gate`] in length units.
+    /// The border gate of this target ([`ArticulatedOptions::boundary_gate`] or, with a
+    /// viewpoint, [`ArticulatedOptions::seen_boundary_gate`]) in length units.
     boundary_gate: f64,
     /// The largest squared length of a target normal (1 for unit normals).
     longest_target_normal2: f64,
@@ -409,7 +417,12 @@ impl<'a> Alignment<'a> {
             // A template point whose nearest target point is on the target's border, and not
             // right at it, lies beyond what the target shows (the standard rejection of
             // partial ICP).
-            boundary_gate: options.boundary_gate * unit_len,
+            boundary_gate: unit_len
+                * if target.viewpoint.is_some() {
+                    options.seen_boundary_gate
+                } else {
+                    options.boundary_gate
+                },
         })
     }
 
