@@ -49,6 +49,7 @@
 //! `docs/decisions/2026-12-01-articulated-adjacent-pools.md`,
 //! `docs/decisions/2026-12-01-articulated-kdtrees.md`.
 
+mod confidence;
 mod icp;
 mod nonrigid;
 mod transforms;
@@ -608,6 +609,16 @@ fn initial_transforms(
 /// ([`final_map`]). Measured: `docs/decisions/2026-12-03-scan-matching.md`.
 const DISPLACEMENT_SCALE: f64 = 0.01;
 
+/// The RMS point-to-plane residual of a vertex's bones (in √area) at which a match's
+/// confidence halves ([`final_map`], module `confidence`). Chosen on half of the
+/// bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
+const RESIDUAL_SCALE: f64 = 0.002;
+
+/// The distance (in √area) between a vertex's fitted pose and its pose from the skeletons
+/// alone at which a match's confidence halves ([`final_map`], module `confidence`). Chosen on
+/// half of the bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
+const DISAGREEMENT_SCALE: f64 = 0.02;
+
 /// The dense map of [`articulated_match`], per template vertex.
 struct FinalMap {
     pairs: Vec<Pair>,
@@ -617,10 +628,22 @@ struct FinalMap {
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
 /// when that pair holds at the final gate (`gate_end`). Its confidence is `1/(1 + d/gate)`
-/// from the final distance `d`, on a sensor's view ([`Alignment::is_scan`]) times
-/// `1/(1 + |s|/DISPLACEMENT_SCALE)` with `s` the non-rigid step's displacement of the vertex
-/// (`posed − skinned`): where the bones alone fitted, the map is surer than where a
-/// displacement field had to pull the surface in.
+/// from the final distance `d`; on a sensor's view ([`Alignment::is_scan`]) times three
+/// factors of the same form `1/(1 + x/scale)` that rank whole regions of the fit, which a
+/// vertex's own distance cannot (a forearm slid along its axis still lies on the scan):
+///
+/// - `x = |s|`, the non-rigid step's displacement of the vertex (`posed − skinned`), scale
+///   [`DISPLACEMENT_SCALE`]: where the bones alone fitted, the map is surer than where a
+///   displacement field had to pull the surface in;
+/// - `x = σ_v`, the RMS point-to-plane residual of the held pairs of the vertex's bones,
+///   blended by its skinning weights (`confidence::bone_residuals`), scale
+///   [`RESIDUAL_SCALE`]: a bone the rigid fit could not lay on the scan;
+/// - `x = |skinned − skeletal|`, how far the fit moved the vertex from the pose the two
+///   skeletons alone give ([`bone_transforms`], [`skin`]), scale [`DISAGREEMENT_SCALE`]: a
+///   region the ICP had to pull far from its joints.
+///
+/// The confidence only ranks: it changes no match and no counterpart decision. Measured
+/// (Table 1 rows): `docs/decisions/2026-12-03-confidence-ranking.md`.
 /// `hints`: the last nearest-neighbour answer before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
@@ -629,42 +652,68 @@ fn final_map(
     hints: &[(u32, f64)],
     skinned: &[Point3<f64>],
 ) -> Result<FinalMap, CorrespondError> {
-    // A whole surface keeps the distance alone (the displacement term measured no gain there).
-    let displacement_scale = if al.is_scan() {
-        DISPLACEMENT_SCALE * al.unit_len
-    } else {
-        f64::INFINITY
-    };
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed);
     let reverse = al.reverse(posed, posed_normals, visible.as_deref());
-    let n = posed.len();
-    let mut has_counterpart = Vec::with_capacity(n);
-    let mut distance = Vec::with_capacity(n);
-    let pairs = near
+    let has_counterpart: Vec<bool> = near
         .iter()
         .enumerate()
         .map(|(v, &(q, _))| {
-            let d = (posed[v] - al.target_positions[q as usize]).norm();
-            has_counterpart.push(
-                visible.as_ref().is_none_or(|s| s[v])
-                    && al.holds(&posed[v], &posed_normals[v], q, gate)
-                    && al.reciprocal(reverse.as_ref(), v, q),
-            );
-            distance.push(d / al.unit_len);
-            Pair {
-                template: v as u32,
-                target: q,
-                confidence: 1.0
-                    / (1.0 + d / gate)
-                    / (1.0 + (posed[v] - skinned[v]).norm() / displacement_scale),
-            }
+            visible.as_ref().is_none_or(|s| s[v])
+                && al.holds(&posed[v], &posed_normals[v], q, gate)
+                && al.reciprocal(reverse.as_ref(), v, q)
+        })
+        .collect();
+    let distance: Vec<f64> = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, _))| (posed[v] - al.target_positions[q as usize]).norm())
+        .collect();
+    // The region terms; a whole surface keeps the distance alone (its distance already ranks:
+    // best 10 % 0.0000 on bodies20, and neither term measured a gain there).
+    let regional: Vec<f64> = if al.is_scan() {
+        let residuals = confidence::bone_residuals(
+            al.weights,
+            posed,
+            (&al.target_positions, &al.target_normals),
+            &near,
+            &has_counterpart,
+        );
+        let (skeletal, _) = skin(
+            al.template.positions,
+            al.template.normals,
+            al.weights,
+            &bone_transforms(al.template.joints, al.target.joints),
+        );
+        let (ds, rs, gs) = (
+            DISPLACEMENT_SCALE * al.unit_len,
+            RESIDUAL_SCALE * al.unit_len,
+            DISAGREEMENT_SCALE * al.unit_len,
+        );
+        (0..posed.len())
+            .map(|v| {
+                let s = (posed[v] - skinned[v]).norm();
+                let r = confidence::blend(al.weights, v, &residuals);
+                let g = (skinned[v] - skeletal[v]).norm();
+                1.0 / ((1.0 + s / ds) * (1.0 + r / rs) * (1.0 + g / gs))
+            })
+            .collect()
+    } else {
+        vec![1.0; posed.len()]
+    };
+    let pairs = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, _))| Pair {
+            template: v as u32,
+            target: q,
+            confidence: regional[v] / (1.0 + distance[v] / gate),
         })
         .collect();
     Ok(FinalMap {
         pairs,
-        distance,
+        distance: distance.iter().map(|d| d / al.unit_len).collect(),
         has_counterpart,
     })
 }
