@@ -605,19 +605,15 @@ fn initial_transforms(
     Ok((transforms, limit))
 }
 
-/// The non-rigid displacement (in √area) at which a match's confidence halves
-/// ([`final_map`]). Measured: `docs/decisions/2026-12-03-scan-matching.md`.
-const DISPLACEMENT_SCALE: f64 = 0.01;
-
 /// The RMS point-to-plane residual of a vertex's bones (in √area) at which a match's
 /// confidence halves ([`final_map`], module `confidence`). Chosen on half of the
 /// bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
-const RESIDUAL_SCALE: f64 = 0.002;
+const RESIDUAL_SCALE: f64 = 0.001;
 
 /// The distance (in √area) between a vertex's fitted pose and its pose from the skeletons
 /// alone at which a match's confidence halves ([`final_map`], module `confidence`). Chosen on
 /// half of the bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
-const DISAGREEMENT_SCALE: f64 = 0.02;
+const DISAGREEMENT_SCALE: f64 = 0.04;
 
 /// The dense map of [`articulated_match`], per template vertex.
 struct FinalMap {
@@ -628,22 +624,22 @@ struct FinalMap {
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
 /// when that pair holds at the final gate (`gate_end`). Its confidence is `1/(1 + d/gate)`
-/// from the final distance `d`; on a sensor's view ([`Alignment::is_scan`]) times three
-/// factors of the same form `1/(1 + x/scale)` that rank whole regions of the fit, which a
-/// vertex's own distance cannot (a forearm slid along its axis still lies on the scan):
+/// from the final distance `d`; on a sensor's view ([`Alignment::is_scan`]) times two factors
+/// of the same form `1/(1 + x/scale)` that rank whole regions of the fit, which a vertex's own
+/// distance cannot (a forearm slid along its axis still lies on the scan; module
+/// `confidence`):
 ///
-/// - `x = |s|`, the non-rigid step's displacement of the vertex (`posed − skinned`), scale
-///   [`DISPLACEMENT_SCALE`]: where the bones alone fitted, the map is surer than where a
-///   displacement field had to pull the surface in;
 /// - `x = σ_v`, the RMS point-to-plane residual of the held pairs of the vertex's bones,
-///   blended by its skinning weights (`confidence::bone_residuals`), scale
-///   [`RESIDUAL_SCALE`]: a bone the rigid fit could not lay on the scan;
+///   blended by its skinning weights, scale [`RESIDUAL_SCALE`]: a bone the rigid fit could not
+///   lay on the scan;
 /// - `x = |skinned − skeletal|`, how far the fit moved the vertex from the pose the two
 ///   skeletons alone give ([`bone_transforms`], [`skin`]), scale [`DISAGREEMENT_SCALE`]: a
 ///   region the ICP had to pull far from its joints.
 ///
-/// The confidence only ranks: it changes no match and no counterpart decision. Measured
-/// (Table 1 rows): `docs/decisions/2026-12-03-confidence-ranking.md`.
+/// The non-rigid step's displacement is no factor: on the scored (shown) points it ranked
+/// backwards. The confidence only ranks: it changes no match and no counterpart decision.
+/// Measured (Table 1 rows, the terms tried and dropped):
+/// `docs/decisions/2026-12-03-confidence-ranking.md`.
 /// `hints`: the last nearest-neighbour answer before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
@@ -686,17 +682,15 @@ fn final_map(
             al.weights,
             &bone_transforms(al.template.joints, al.target.joints),
         );
-        let (ds, rs, gs) = (
-            DISPLACEMENT_SCALE * al.unit_len,
+        let (rs, gs) = (
             RESIDUAL_SCALE * al.unit_len,
             DISAGREEMENT_SCALE * al.unit_len,
         );
         (0..posed.len())
             .map(|v| {
-                let s = (posed[v] - skinned[v]).norm();
                 let r = confidence::blend(al.weights, v, &residuals);
                 let g = (skinned[v] - skeletal[v]).norm();
-                1.0 / ((1.0 + s / ds) * (1.0 + r / rs) * (1.0 + g / gs))
+                1.0 / ((1.0 + r / rs) * (1.0 + g / gs))
             })
             .collect()
     } else {
