@@ -40,14 +40,17 @@
 //!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end` (module `nonrigid`).
 //! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
 //!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
-//!    target with a border (a scan) times `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid
-//!    displacement.
+//!    target with a border (a scan) times `1/(1 + σ/0.001)` and `1/(1 + g/0.04)`: σ the RMS
+//!    point-to-plane residual of the vertex's bones, g how far the fit moved the vertex from
+//!    the pose of the skeletons alone (module `confidence`). It ranks the matches and decides
+//!    nothing.
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
 //! `docs/decisions/2026-11-23-articulated-nonrigid-step.md`,
 //! `docs/decisions/2026-12-01-articulated-adjacent-pools.md`,
-//! `docs/decisions/2026-12-01-articulated-kdtrees.md`.
+//! `docs/decisions/2026-12-01-articulated-kdtrees.md`,
+//! `docs/decisions/2026-12-03-confidence-ranking.md`.
 
 mod confidence;
 mod icp;
@@ -198,7 +201,8 @@ pub const DEFAULT_ICP_POINTS: usize = 16_000;
 #[derive(Debug, Clone)]
 pub struct ArticulatedMatches {
     /// One pair per template vertex, in vertex order; `confidence` falls with the final
-    /// distance and the non-rigid displacement (`final_map`).
+    /// distance and, on a scan, with the residual of the vertex's bones and the fit's distance
+    /// from the skeletons' pose (`final_map`).
     pub pairs: Vec<crate::Pair>,
     /// Per template vertex, the final distance from the posed template point to its match,
     /// over √area.
@@ -484,8 +488,9 @@ impl<'a> Alignment<'a> {
 
     /// Is the target a sensor's view — a surface with a border (a depth scan, a frame of a
     /// recording)? Its sampling and noise get the non-rigid step's robust data term and the
-    /// displacement term of the confidence; a whole surface keeps the plain ones (measured:
-    /// `docs/decisions/2026-12-03-scan-matching.md`).
+    /// region terms of the confidence; a whole surface keeps the plain ones (measured:
+    /// `docs/decisions/2026-12-03-scan-matching.md`,
+    /// `docs/decisions/2026-12-03-confidence-ranking.md`).
     fn is_scan(&self) -> bool {
         self.target.boundary.is_some_and(|b| b.contains(&true))
     }
