@@ -671,8 +671,8 @@ fn final_map(
         .enumerate()
         .map(|(v, &(q, _))| (posed[v] - al.target_positions[q as usize]).norm())
         .collect();
-    // The region terms; a whole surface keeps the distance alone (its distance already ranks:
-    // best 10 % 0.0000 on bodies20, and neither term measured a gain there).
+    // The region terms; a whole surface keeps the distance alone (its distance already ranks,
+    // best 10 % 0.0000 on bodies20, and both terms made later entries of its row worse).
     let regional: Vec<f64> = if al.is_scan() {
         let residuals = confidence::bone_residuals(
             al.weights,
