@@ -10,7 +10,7 @@ use symcorr_correspond::{
     ArticulatedOptions, ArticulatedStart,
 };
 use symcorr_mesh::TriMesh;
-use symcorr_skeleton::{Joint, Skeleton};
+use symcorr_skeleton::{Joint, Segment, Skeleton};
 use symcorr_spectral::EdgeGraph;
 
 /// Euclidean distance between two stored mesh positions.
@@ -341,5 +341,54 @@ fn the_facing_test_refuses_the_back_seen_from_the_viewpoint() {
     assert!(
         tp_on as f64 > 0.9 * tp_off as f64,
         "shown vertices given a counterpart: {tp_off} without the test, {tp_on} with it"
+
+/// The confidence ranks a region the fit had to pull away from its joints below one where the
+/// joints and the surface agree: the scan's left wrist and hand joints are slid 4 cm along the
+/// forearm (the surface is not), so the skeletons pose the left forearm off the scan and the
+/// ICP moves it back. Each forearm's vertices lie on the scan after the fit, so their own
+/// distances hardly differ; the skeleton-pose disagreement and the bone residual do.
+#[test]
+fn a_forearm_pulled_away_from_its_joints_gets_the_lower_confidence() {
+    let (a, b, att_a) = bodies();
+    let (scan, _) = front_view(&b.mesh, false);
+    let na = outward(&a.mesh, &att_a);
+    let run = |slide: f64| {
+        let mut joints = b.skeleton.clone();
+        let (elbow, wrist) = (
+            joints.position(Joint::ElbowLeft),
+            joints.position(Joint::WristLeft),
+        );
+        let along = (wrist - elbow).normalize() * slide;
+        for j in [Joint::WristLeft, Joint::HandLeft] {
+            joints.positions[j.index()] += along;
+        }
+        let att_s = attach(&scan, &joints, &AttachOptions::default()).unwrap();
+        let ns = outward(&scan, &att_s);
+        let out = articulated_match(
+            &side(&a.mesh, &att_a, &na, None),
+            &att_a.weights,
+            &side(&scan, &att_s, &ns, Some(&scan.boundary_vertices())),
+            &EdgeGraph::new(&scan),
+            &ArticulatedOptions::default(),
+            ArticulatedStart::Skeletons,
+        )
+        .unwrap();
+        let mean = |segment: Segment| {
+            let c: Vec<f64> = out
+                .pairs
+                .iter()
+                .zip(&out.has_counterpart)
+                .filter(|(m, &seen)| seen && att_a.labels[m.template as usize] == segment)
+                .map(|(m, _)| m.confidence)
+                .collect();
+            assert!(c.len() > 20, "{} shown {segment:?} vertices", c.len());
+            c.iter().sum::<f64>() / c.len() as f64
+        };
+        mean(Segment::ForearmLeft) / mean(Segment::ForearmRight)
+    };
+    let (agreeing, slid) = (run(0.0), run(0.04));
+    assert!(
+        slid < 0.8 * agreeing,
+        "left/right forearm confidence: {agreeing} with the joints on the surface, {slid} with them slid"
     );
 }

@@ -42,15 +42,19 @@
 //!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end` (module `nonrigid`).
 //! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
 //!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
-//!    target with a border (a scan) times `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid
-//!    displacement.
+//!    target with a border (a scan) times `1/(1 + σ/0.001)` and `1/(1 + g/0.04)`: σ the RMS
+//!    point-to-plane residual of the vertex's bones, g how far the fit moved the vertex from
+//!    the pose of the skeletons alone (module `confidence`). It ranks the matches and decides
+//!    nothing.
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
 //! `docs/decisions/2026-11-23-articulated-nonrigid-step.md`,
 //! `docs/decisions/2026-12-01-articulated-adjacent-pools.md`,
-//! `docs/decisions/2026-12-01-articulated-kdtrees.md`.
+//! `docs/decisions/2026-12-01-articulated-kdtrees.md`,
+//! `docs/decisions/2026-12-03-confidence-ranking.md`.
 
+mod confidence;
 mod icp;
 mod nonrigid;
 mod transforms;
@@ -216,7 +220,8 @@ pub const DEFAULT_ICP_POINTS: usize = 16_000;
 #[derive(Debug, Clone)]
 pub struct ArticulatedMatches {
     /// One pair per template vertex, in vertex order; `confidence` falls with the final
-    /// distance and the non-rigid displacement (`final_map`).
+    /// distance and, on a scan, with the residual of the vertex's bones and the fit's distance
+    /// from the skeletons' pose (`final_map`).
     pub pairs: Vec<crate::Pair>,
     /// Per template vertex, the final distance from the posed template point to its match,
     /// over √area.
@@ -526,8 +531,9 @@ impl<'a> Alignment<'a> {
 
     /// Is the target a sensor's view — a surface with a border (a depth scan, a frame of a
     /// recording)? Its sampling and noise get the non-rigid step's robust data term and the
-    /// displacement term of the confidence; a whole surface keeps the plain ones (measured:
-    /// `docs/decisions/2026-12-03-scan-matching.md`).
+    /// region terms of the confidence; a whole surface keeps the plain ones (measured:
+    /// `docs/decisions/2026-12-03-scan-matching.md`,
+    /// `docs/decisions/2026-12-03-confidence-ranking.md`).
     fn is_scan(&self) -> bool {
         self.target.boundary.is_some_and(|b| b.contains(&true))
     }
@@ -647,9 +653,15 @@ fn initial_transforms(
     Ok((transforms, limit))
 }
 
-/// The non-rigid displacement (in √area) at which a match's confidence halves
-/// ([`final_map`]). Measured: `docs/decisions/2026-12-03-scan-matching.md`.
-const DISPLACEMENT_SCALE: f64 = 0.01;
+/// The RMS point-to-plane residual of a vertex's bones (in √area) at which a match's
+/// confidence halves ([`final_map`], module `confidence`). Chosen on half of the
+/// bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
+const RESIDUAL_SCALE: f64 = 0.001;
+
+/// The distance (in √area) between a vertex's fitted pose and its pose from the skeletons
+/// alone at which a match's confidence halves ([`final_map`], module `confidence`). Chosen on
+/// half of the bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
+const DISAGREEMENT_SCALE: f64 = 0.04;
 
 /// The dense map of [`articulated_match`], per template vertex.
 struct FinalMap {
@@ -660,10 +672,22 @@ struct FinalMap {
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
 /// when that pair holds at the final gate (`gate_end`). Its confidence is `1/(1 + d/gate)`
-/// from the final distance `d`, on a sensor's view ([`Alignment::is_scan`]) times
-/// `1/(1 + |s|/DISPLACEMENT_SCALE)` with `s` the non-rigid step's displacement of the vertex
-/// (`posed − skinned`): where the bones alone fitted, the map is surer than where a
-/// displacement field had to pull the surface in.
+/// from the final distance `d`; on a sensor's view ([`Alignment::is_scan`]) times two factors
+/// of the same form `1/(1 + x/scale)` that rank whole regions of the fit, which a vertex's own
+/// distance cannot (a forearm slid along its axis still lies on the scan; module
+/// `confidence`):
+///
+/// - `x = σ_v`, the RMS point-to-plane residual of the held pairs of the vertex's bones,
+///   blended by its skinning weights, scale [`RESIDUAL_SCALE`]: a bone the rigid fit could not
+///   lay on the scan;
+/// - `x = |skinned − skeletal|`, how far the fit moved the vertex from the pose the two
+///   skeletons alone give ([`bone_transforms`], [`skin`]), scale [`DISAGREEMENT_SCALE`]: a
+///   region the ICP had to pull far from its joints.
+///
+/// The non-rigid step's displacement is no factor: on the scored (shown) points it ranked
+/// backwards. The confidence only ranks: it changes no match and no counterpart decision.
+/// Measured (Table 1 rows, the terms tried and dropped):
+/// `docs/decisions/2026-12-03-confidence-ranking.md`.
 /// `hints`: the last nearest-neighbour answer before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
@@ -672,42 +696,66 @@ fn final_map(
     hints: &[(u32, f64)],
     skinned: &[Point3<f64>],
 ) -> Result<FinalMap, CorrespondError> {
-    // A whole surface keeps the distance alone (the displacement term measured no gain there).
-    let displacement_scale = if al.is_scan() {
-        DISPLACEMENT_SCALE * al.unit_len
-    } else {
-        f64::INFINITY
-    };
     let gate = al.options.gate_end * al.unit_len;
     let near = al.nearest(posed, posed_normals, None, Some(hints))?;
     let visible = al.visibility(posed, posed_normals);
     let reverse = al.reverse(posed, posed_normals, visible.as_deref());
-    let n = posed.len();
-    let mut has_counterpart = Vec::with_capacity(n);
-    let mut distance = Vec::with_capacity(n);
-    let pairs = near
+    let has_counterpart: Vec<bool> = near
         .iter()
         .enumerate()
         .map(|(v, &(q, _))| {
-            let d = (posed[v] - al.target_positions[q as usize]).norm();
-            has_counterpart.push(
-                visible.as_ref().is_none_or(|s| s[v])
-                    && al.holds(&posed[v], &posed_normals[v], q, gate)
-                    && al.reciprocal(reverse.as_ref(), v, q),
-            );
-            distance.push(d / al.unit_len);
-            Pair {
-                template: v as u32,
-                target: q,
-                confidence: 1.0
-                    / (1.0 + d / gate)
-                    / (1.0 + (posed[v] - skinned[v]).norm() / displacement_scale),
-            }
+            visible.as_ref().is_none_or(|s| s[v])
+                && al.holds(&posed[v], &posed_normals[v], q, gate)
+                && al.reciprocal(reverse.as_ref(), v, q)
+        })
+        .collect();
+    let distance: Vec<f64> = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, _))| (posed[v] - al.target_positions[q as usize]).norm())
+        .collect();
+    // The region terms; a whole surface keeps the distance alone (its distance already ranks,
+    // best 10 % 0.0000 on bodies20, and both terms made later entries of its row worse).
+    let regional: Vec<f64> = if al.is_scan() {
+        let residuals = confidence::bone_residuals(
+            al.weights,
+            posed,
+            (&al.target_positions, &al.target_normals),
+            &near,
+            &has_counterpart,
+        );
+        let (skeletal, _) = skin(
+            al.template.positions,
+            al.template.normals,
+            al.weights,
+            &bone_transforms(al.template.joints, al.target.joints),
+        );
+        let (rs, gs) = (
+            RESIDUAL_SCALE * al.unit_len,
+            DISAGREEMENT_SCALE * al.unit_len,
+        );
+        (0..posed.len())
+            .map(|v| {
+                let r = confidence::blend(al.weights, v, &residuals);
+                let g = (skinned[v] - skeletal[v]).norm();
+                1.0 / ((1.0 + r / rs) * (1.0 + g / gs))
+            })
+            .collect()
+    } else {
+        vec![1.0; posed.len()]
+    };
+    let pairs = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, _))| Pair {
+            template: v as u32,
+            target: q,
+            confidence: regional[v] / (1.0 + distance[v] / gate),
         })
         .collect();
     Ok(FinalMap {
         pairs,
-        distance,
+        distance: distance.iter().map(|d| d / al.unit_len).collect(),
         has_counterpart,
     })
 }
