@@ -10,7 +10,7 @@ use symcorr_correspond::{
     ArticulatedOptions, ArticulatedStart,
 };
 use symcorr_mesh::TriMesh;
-use symcorr_skeleton::{Joint, Skeleton};
+use symcorr_skeleton::{Joint, Segment, Skeleton};
 use symcorr_spectral::EdgeGraph;
 
 /// Euclidean distance between two stored mesh positions.
@@ -286,6 +286,112 @@ fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
     assert!(
         tp_on as f64 > 0.9 * tp_off as f64,
         "shown vertices given a counterpart: {tp_off} without the check, {tp_on} with it"
+    );
+}
+
+/// Seen from far along +z, the back of the body faces away from the camera. With the normal
+/// test, the border flags and the occlusion test all out of play, the facing test alone
+/// refuses the back's pairs and keeps the front's.
+#[test]
+fn the_facing_test_refuses_the_back_seen_from_the_viewpoint() {
+    let (a, b, att_a) = bodies();
+    let (scan, new_id) = front_view(&b.mesh, false);
+    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
+    let na = outward(&a.mesh, &att_a);
+    let ns = outward(&scan, &att_s);
+    let run = |min_facing_cosine| {
+        let options = ArticulatedOptions {
+            min_normal_cosine: -1.0,
+            gate_end: 0.1,
+            // Nothing is occluded by less than this: the occlusion test hides no vertex.
+            occlusion_tolerance: 100.0,
+            min_facing_cosine,
+            ..ArticulatedOptions::default()
+        };
+        let target = ArticulatedInputs {
+            viewpoint: Some(Point3::new(0.0, 1.0, 100.0)),
+            ..side(&scan, &att_s, &ns, None)
+        };
+        let out = articulated_match(
+            &side(&a.mesh, &att_a, &na, None),
+            &att_a.weights,
+            &target,
+            &EdgeGraph::new(&scan),
+            &options,
+            ArticulatedStart::Skeletons,
+        )
+        .unwrap();
+        let (mut tp, mut fp) = (0usize, 0usize);
+        for (m, &seen) in out.pairs.iter().zip(&out.has_counterpart) {
+            match (new_id[m.template as usize] != u32::MAX, seen) {
+                (true, true) => tp += 1,
+                (false, true) => fp += 1,
+                _ => {}
+            }
+        }
+        (tp, fp)
+    };
+    // A cosine of -1 lets every vertex through: no facing test.
+    let (tp_off, fp_off) = run(-1.0);
+    let (tp_on, fp_on) = run(0.0);
+    assert!(
+        fp_on * 4 < fp_off,
+        "hidden vertices given a counterpart: {fp_off} without the test, {fp_on} with it"
+    );
+    assert!(
+        tp_on as f64 > 0.9 * tp_off as f64,
+        "shown vertices given a counterpart: {tp_off} without the test, {tp_on} with it"
+    );
+}
+
+/// The confidence ranks a region the fit had to pull away from its joints below one where the
+/// joints and the surface agree: the scan's left wrist and hand joints are slid 4 cm along the
+/// forearm (the surface is not), so the skeletons pose the left forearm off the scan and the
+/// ICP moves it back. Each forearm's vertices lie on the scan after the fit, so their own
+/// distances hardly differ; the skeleton-pose disagreement and the bone residual do.
+#[test]
+fn a_forearm_pulled_away_from_its_joints_gets_the_lower_confidence() {
+    let (a, b, att_a) = bodies();
+    let (scan, _) = front_view(&b.mesh, false);
+    let na = outward(&a.mesh, &att_a);
+    let run = |slide: f64| {
+        let mut joints = b.skeleton.clone();
+        let (elbow, wrist) = (
+            joints.position(Joint::ElbowLeft),
+            joints.position(Joint::WristLeft),
+        );
+        let along = (wrist - elbow).normalize() * slide;
+        for j in [Joint::WristLeft, Joint::HandLeft] {
+            joints.positions[j.index()] += along;
+        }
+        let att_s = attach(&scan, &joints, &AttachOptions::default()).unwrap();
+        let ns = outward(&scan, &att_s);
+        let out = articulated_match(
+            &side(&a.mesh, &att_a, &na, None),
+            &att_a.weights,
+            &side(&scan, &att_s, &ns, Some(&scan.boundary_vertices())),
+            &EdgeGraph::new(&scan),
+            &ArticulatedOptions::default(),
+            ArticulatedStart::Skeletons,
+        )
+        .unwrap();
+        let mean = |segment: Segment| {
+            let c: Vec<f64> = out
+                .pairs
+                .iter()
+                .zip(&out.has_counterpart)
+                .filter(|(m, &seen)| seen && att_a.labels[m.template as usize] == segment)
+                .map(|(m, _)| m.confidence)
+                .collect();
+            assert!(c.len() > 20, "{} shown {segment:?} vertices", c.len());
+            c.iter().sum::<f64>() / c.len() as f64
+        };
+        mean(Segment::ForearmLeft) / mean(Segment::ForearmRight)
+    };
+    let (agreeing, slid) = (run(0.0), run(0.04));
+    assert!(
+        slid < 0.8 * agreeing,
+        "left/right forearm confidence: {agreeing} with the joints on the surface, {slid} with them slid"
     );
 }
 

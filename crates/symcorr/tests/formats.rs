@@ -1,6 +1,9 @@
 //! The typed `symcorr.correspondence/1` writer against golden files written by the writer it
 //! replaced (a `serde_json::json!` document; `fixtures/formats/`, generated once from the same
-//! inputs before the change): byte for byte the same text, and the files parse back.
+//! inputs before the change): byte for byte the same text, and the files parse back. The
+//! partial file's confidences were rewritten when the articulated confidence gained its region
+//! terms on scans (docs/decisions/2026-12-03-confidence-ranking.md; pairs and every other key
+//! unchanged).
 
 use std::path::Path;
 use symcorr::formats::CorrespondenceFile;

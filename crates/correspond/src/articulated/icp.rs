@@ -63,10 +63,10 @@ pub(super) fn articulated_icp(
     let iterations = rounds.iterations.max(1);
     let gate_start = rounds.gate_start.max(options.gate_end);
     let mut last: Option<Vec<(u32, f64)>> = None;
-    let mut visible = al.visibility(&posed);
+    let mut visible = al.visibility(&posed, &posed_normals);
     for it in 0..iterations {
         if it > 0 && rounds.occlusion == OcclusionTest::EveryRound {
-            visible = al.visibility(&posed);
+            visible = al.visibility(&posed, &posed_normals);
         }
         let frac = if iterations > 1 {
             it as f64 / (iterations - 1) as f64

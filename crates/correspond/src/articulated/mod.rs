@@ -28,7 +28,9 @@
 //!    [`ArticulatedOptions::gate_end`]), its normals agree
 //!    ([`ArticulatedOptions::min_normal_cosine`]: the template's back has no counterpart on a
 //!    front view) and its target point is not on the target's border beyond
-//!    [`ArticulatedOptions::boundary_gate`]. Each bone with at least 20 pairs of weight > 0.1 is
+//!    [`ArticulatedOptions::boundary_gate`]. With a target viewpoint, a posed vertex hidden
+//!    behind the posed template (module `visibility`) or facing away from the viewpoint
+//!    ([`ArticulatedOptions::min_facing_cosine`]) takes no pair. Each bone with at least 20 pairs of weight > 0.1 is
 //!    re-fitted by weighted Kabsch (Arun et al. 1987) to them plus its two joints as anchors
 //!    ([`ArticulatedOptions::joint_anchor`]), then the template is re-skinned (module `icp`).
 //! 5. **Non-rigid step** (needs the template's edge graph, [`ArticulatedInputs::neighbors`]):
@@ -40,16 +42,20 @@
 //!    [`ArticulatedOptions::nonrigid_gate_start`] to `gate_end` (module `nonrigid`).
 //! 6. **Map**: every template vertex takes the nearest target vertex of its pool; it *has a
 //!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
-//!    target with a border (a scan) times `1/(1 + |s|/0.01)`, `s` the vertex's non-rigid
-//!    displacement. Without [`ArticulatedOptions::guess_hidden`] only the vertices that can
-//!    have a counterpart are searched (the others get confidence 0).
+//!    target with a border (a scan) times `1/(1 + σ/0.001)` and `1/(1 + g/0.04)`: σ the RMS
+//!    point-to-plane residual of the vertex's bones, g how far the fit moved the vertex from
+//!    the pose of the skeletons alone (module `confidence`). It ranks the matches and decides
+//!    nothing. Without [`ArticulatedOptions::guess_hidden`] only the vertices that can have a
+//!    counterpart are searched (the others get confidence 0).
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
 //! `docs/decisions/2026-11-23-articulated-nonrigid-step.md`,
 //! `docs/decisions/2026-12-01-articulated-adjacent-pools.md`,
-//! `docs/decisions/2026-12-01-articulated-kdtrees.md`.
+//! `docs/decisions/2026-12-01-articulated-kdtrees.md`,
+//! `docs/decisions/2026-12-03-confidence-ranking.md`.
 
+mod confidence;
 mod icp;
 mod nonrigid;
 mod transforms;
@@ -118,11 +124,18 @@ pub struct ArticulatedOptions {
     /// At most this many template vertices (an even stride sample) drive the ICP fits.
     pub icp_points: usize,
     /// A pair whose target point lies on the target's boundary is rejected (and the template
-    /// point has no counterpart) when longer than this.
+    /// point has no counterpart) when longer than this; a target with a viewpoint uses
+    /// [`ArticulatedOptions::seen_boundary_gate`] instead.
     /// (0.015: a single-view scan has holes inside its silhouette as well, and at 0.01 one
     /// shown template point in 16 went to `no_counterpart`; a wider gate pairs the flanks
     /// beyond a silhouette. `docs/decisions/2026-12-03-scan-matching.md`.)
     pub boundary_gate: f64,
+    /// [`ArticulatedOptions::boundary_gate`] of a target with a viewpoint. (0.02: the fit's
+    /// error at a scan's border reaches 0.022; the flanks just beyond a silhouette, which a
+    /// wider gate pairs, face away from the camera and the facing test
+    /// ([`ArticulatedOptions::min_facing_cosine`]) leaves them out.
+    /// `docs/decisions/2026-12-03-facing-test.md`.)
+    pub seen_boundary_gate: f64,
     /// Rounds of the non-rigid step after the ICP (0: none).
     pub nonrigid_rounds: usize,
     /// Pair-rejection distance of the first non-rigid round; the rounds' gates shrink
@@ -135,6 +148,14 @@ pub struct ArticulatedOptions {
     /// template's nearest surface along its line of sight is occluded (no pair, no
     /// counterpart).
     pub occlusion_tolerance: f64,
+    /// With a target viewpoint: a posed template vertex whose normal makes a cosine below
+    /// this with its line of sight to the viewpoint is not visible (no pair, no counterpart),
+    /// like an occluded one. 0: a surface facing away from the camera cannot be seen by it —
+    /// near a silhouette the occlusion test misses such a vertex (no other triangle lies in
+    /// front of it by the tolerance) and the scan's grazing border normals pass the normal
+    /// test. A positive value also refuses shown points, the posed normals being 10–15° off
+    /// (`docs/decisions/2026-12-03-facing-test.md`).
+    pub min_facing_cosine: f64,
     /// ICP iterations from a warm start ([`ArticulatedStart::Warm`]).
     pub warm_iterations: usize,
     /// Pair-rejection distance of the first iteration from a warm start.
@@ -169,10 +190,12 @@ impl Default for ArticulatedOptions {
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
             boundary_gate: 0.015,
+            seen_boundary_gate: 0.02,
             nonrigid_rounds: 3,
             nonrigid_gate_start: 0.06,
             nonrigid_smoothing: 5.0,
             occlusion_tolerance: 0.01,
+            min_facing_cosine: 0.0,
             warm_iterations: 4,
             warm_gate_start: 0.05,
             reciprocal_radius: None,
@@ -208,7 +231,8 @@ pub const DEFAULT_ICP_POINTS: usize = 16_000;
 #[derive(Debug, Clone)]
 pub struct ArticulatedMatches {
     /// One pair per template vertex, in vertex order; `confidence` falls with the final
-    /// distance and the non-rigid displacement (`final_map`).
+    /// distance and, on a scan, with the residual of the vertex's bones and the fit's distance
+    /// from the skeletons' pose (`final_map`).
     pub pairs: Vec<crate::Pair>,
     /// Per template vertex, the final distance from the posed template point to its match,
     /// over √area.
@@ -362,7 +386,8 @@ pub(super) struct Alignment<'a> {
     unit_len: f64,
     /// β of the features, in length units.
     beta: f64,
-    /// [`ArticulatedOptions::boundary_gate`] in length units.
+    /// The border gate of this target ([`ArticulatedOptions::boundary_gate`] or, with a
+    /// viewpoint, [`ArticulatedOptions::seen_boundary_gate`]) in length units.
     boundary_gate: f64,
     /// The largest squared length of a target normal (1 for unit normals).
     longest_target_normal2: f64,
@@ -408,7 +433,12 @@ impl<'a> Alignment<'a> {
             // A template point whose nearest target point is on the target's border, and not
             // right at it, lies beyond what the target shows (the standard rejection of
             // partial ICP).
-            boundary_gate: options.boundary_gate * unit_len,
+            boundary_gate: unit_len
+                * if target.viewpoint.is_some() {
+                    options.seen_boundary_gate
+                } else {
+                    options.boundary_gate
+                },
         })
     }
 
@@ -479,23 +509,42 @@ impl<'a> Alignment<'a> {
             .nearest(self.pools, &f, Some(&searched), hints, within)
     }
 
-    /// Per posed template vertex, can the target show it: `None` when every vertex may be
-    /// shown (no target viewpoint or no template triangles), else the occlusion test of
-    /// module `visibility` from the target's viewpoint.
-    fn visibility(&self, posed: &[Point3<f64>]) -> Option<Vec<bool>> {
+    /// Per posed template vertex (positions and normals), can the target show it: `None` when
+    /// every vertex may be shown (no target viewpoint or no template triangles), else the
+    /// occlusion test of module `visibility` from the target's viewpoint and the facing test
+    /// ([`ArticulatedOptions::min_facing_cosine`]).
+    fn visibility(
+        &self,
+        posed: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+    ) -> Option<Vec<bool>> {
         let (eye, triangles) = (self.target.viewpoint?, self.template.triangles?);
-        Some(visibility::visible_from(
+        let mut visible = visibility::visible_from(
             &eye,
             posed,
             triangles,
             self.options.occlusion_tolerance * self.unit_len,
-        ))
+        );
+        for ((s, x), n) in visible.iter_mut().zip(posed).zip(normals) {
+            *s = *s && self.faces_viewpoint(x, n);
+        }
+        Some(visible)
+    }
+
+    /// Does the posed template point `x` with normal `n` face the target's viewpoint at a
+    /// cosine of at least [`ArticulatedOptions::min_facing_cosine`] (always, without one)?
+    fn faces_viewpoint(&self, x: &Point3<f64>, n: &Vector3<f64>) -> bool {
+        self.target.viewpoint.is_none_or(|eye| {
+            let sight = eye - x;
+            n.dot(&sight) >= self.options.min_facing_cosine * sight.norm()
+        })
     }
 
     /// Is the target a sensor's view — a surface with a border (a depth scan, a frame of a
     /// recording)? Its sampling and noise get the non-rigid step's robust data term and the
-    /// displacement term of the confidence; a whole surface keeps the plain ones (measured:
-    /// `docs/decisions/2026-12-03-scan-matching.md`).
+    /// region terms of the confidence; a whole surface keeps the plain ones (measured:
+    /// `docs/decisions/2026-12-03-scan-matching.md`,
+    /// `docs/decisions/2026-12-03-confidence-ranking.md`).
     fn is_scan(&self) -> bool {
         self.target.boundary.is_some_and(|b| b.contains(&true))
     }
@@ -691,9 +740,15 @@ fn initial_transforms(
     Ok((transforms, limit))
 }
 
-/// The non-rigid displacement (in √area) at which a match's confidence halves
-/// ([`final_map`]). Measured: `docs/decisions/2026-12-03-scan-matching.md`.
-const DISPLACEMENT_SCALE: f64 = 0.01;
+/// The RMS point-to-plane residual of a vertex's bones (in √area) at which a match's
+/// confidence halves ([`final_map`], module `confidence`). Chosen on half of the
+/// bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
+const RESIDUAL_SCALE: f64 = 0.001;
+
+/// The distance (in √area) between a vertex's fitted pose and its pose from the skeletons
+/// alone at which a match's confidence halves ([`final_map`], module `confidence`). Chosen on
+/// half of the bodies20_kinect pairs: `docs/decisions/2026-12-03-confidence-ranking.md`.
+const DISAGREEMENT_SCALE: f64 = 0.04;
 
 /// The dense map of [`articulated_match`], per template vertex.
 struct FinalMap {
@@ -704,10 +759,22 @@ struct FinalMap {
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
 /// when that pair holds at the final gate (`gate_end`). Its confidence is `1/(1 + d/gate)`
-/// from the final distance `d`, on a sensor's view ([`Alignment::is_scan`]) times
-/// `1/(1 + |s|/DISPLACEMENT_SCALE)` with `s` the non-rigid step's displacement of the vertex
-/// (`posed − skinned`): where the bones alone fitted, the map is surer than where a
-/// displacement field had to pull the surface in.
+/// from the final distance `d`; on a sensor's view ([`Alignment::is_scan`]) times two factors
+/// of the same form `1/(1 + x/scale)` that rank whole regions of the fit, which a vertex's own
+/// distance cannot (a forearm slid along its axis still lies on the scan; module
+/// `confidence`):
+///
+/// - `x = σ_v`, the RMS point-to-plane residual of the held pairs of the vertex's bones,
+///   blended by its skinning weights, scale [`RESIDUAL_SCALE`]: a bone the rigid fit could not
+///   lay on the scan;
+/// - `x = |skinned − skeletal|`, how far the fit moved the vertex from the pose the two
+///   skeletons alone give ([`bone_transforms`], [`skin`]), scale [`DISAGREEMENT_SCALE`]: a
+///   region the ICP had to pull far from its joints.
+///
+/// The non-rigid step's displacement is no factor: on the scored (shown) points it ranked
+/// backwards. The confidence only ranks: it changes no match and no counterpart decision.
+/// Measured (Table 1 rows, the terms tried and dropped):
+/// `docs/decisions/2026-12-03-confidence-ranking.md`.
 /// `hints`: the last nearest-neighbour answer before it (a search speed-up only).
 fn final_map(
     al: &Alignment<'_>,
@@ -716,14 +783,8 @@ fn final_map(
     hints: &[(u32, f64)],
     skinned: &[Point3<f64>],
 ) -> Result<FinalMap, CorrespondError> {
-    // A whole surface keeps the distance alone (the displacement term measured no gain there).
-    let displacement_scale = if al.is_scan() {
-        DISPLACEMENT_SCALE * al.unit_len
-    } else {
-        f64::INFINITY
-    };
     let gate = al.options.gate_end * al.unit_len;
-    let visible = al.visibility(posed);
+    let visible = al.visibility(posed, posed_normals);
     let (near, reverse) = if al.options.guess_hidden {
         let (near, reverse) = rayon::join(
             || al.nearest(posed, posed_normals, None, Some(hints)),
@@ -742,26 +803,63 @@ fn final_map(
             Some(hints),
         )?
     };
-    let held = al.held(
+    // Not searched (without guesses): no counterpart, no distance, no guess.
+    let unsearched = |d2: f64| !d2.is_finite() && !al.options.guess_hidden;
+    let has_counterpart = al.held(
         posed,
         posed_normals,
         &near,
         visible.as_deref(),
         gate,
         reverse.as_ref(),
-        false,
+        !al.options.guess_hidden,
     );
-    let n = posed.len();
-    let mut has_counterpart = Vec::with_capacity(n);
-    let mut distance = Vec::with_capacity(n);
+    let distance: Vec<f64> = near
+        .iter()
+        .enumerate()
+        .map(|(v, &(q, d2))| {
+            if unsearched(d2) {
+                f64::INFINITY
+            } else {
+                (posed[v] - al.target_positions[q as usize]).norm()
+            }
+        })
+        .collect();
+    // The region terms; a whole surface keeps the distance alone (its distance already ranks,
+    // best 10 % 0.0000 on bodies20, and both terms made later entries of its row worse).
+    let regional: Vec<f64> = if al.is_scan() {
+        let residuals = confidence::bone_residuals(
+            al.weights,
+            posed,
+            (&al.target_positions, &al.target_normals),
+            &near,
+            &has_counterpart,
+        );
+        let (skeletal, _) = skin(
+            al.template.positions,
+            al.template.normals,
+            al.weights,
+            &bone_transforms(al.template.joints, al.target.joints),
+        );
+        let (rs, gs) = (
+            RESIDUAL_SCALE * al.unit_len,
+            DISAGREEMENT_SCALE * al.unit_len,
+        );
+        (0..posed.len())
+            .map(|v| {
+                let r = confidence::blend(al.weights, v, &residuals);
+                let g = (skinned[v] - skeletal[v]).norm();
+                1.0 / ((1.0 + r / rs) * (1.0 + g / gs))
+            })
+            .collect()
+    } else {
+        vec![1.0; posed.len()]
+    };
     let pairs = near
         .iter()
         .enumerate()
         .map(|(v, &(q, d2))| {
-            if !d2.is_finite() && !al.options.guess_hidden {
-                // Not searched or nothing near enough: no counterpart, no guess.
-                has_counterpart.push(false);
-                distance.push(f64::INFINITY);
+            if unsearched(d2) {
                 let last = hints.get(v).filter(|h| h.1.is_finite()).map_or(0, |h| h.0);
                 return Pair {
                     template: v as u32,
@@ -769,11 +867,8 @@ fn final_map(
                     confidence: 0.0,
                 };
             }
-            let d = (posed[v] - al.target_positions[q as usize]).norm();
-            has_counterpart.push(held[v]);
-            distance.push(d / al.unit_len);
-            let confidence = if held[v] || al.options.guess_hidden {
-                1.0 / (1.0 + d / gate) / (1.0 + (posed[v] - skinned[v]).norm() / displacement_scale)
+            let confidence = if has_counterpart[v] || al.options.guess_hidden {
+                regional[v] / (1.0 + distance[v] / gate)
             } else {
                 0.0
             };
@@ -786,7 +881,7 @@ fn final_map(
         .collect();
     Ok(FinalMap {
         pairs,
-        distance,
+        distance: distance.iter().map(|d| d / al.unit_len).collect(),
         has_counterpart,
     })
 }

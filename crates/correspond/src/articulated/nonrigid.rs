@@ -60,7 +60,7 @@ pub(super) fn nonrigid_step(
             1.0
         };
         let round_gate = al.unit_len * g0 * (options.gate_end / g0).powf(frac);
-        let visible = al.visibility(posed);
+        let visible = al.visibility(posed, posed_normals);
         let (near, reverse) = al.candidates_and_reverse(
             posed,
             posed_normals,
