@@ -341,6 +341,8 @@ fn the_facing_test_refuses_the_back_seen_from_the_viewpoint() {
     assert!(
         tp_on as f64 > 0.9 * tp_off as f64,
         "shown vertices given a counterpart: {tp_off} without the test, {tp_on} with it"
+    );
+}
 
 /// The confidence ranks a region the fit had to pull away from its joints below one where the
 /// joints and the surface agree: the scan's left wrist and hand joints are slid 4 cm along the
