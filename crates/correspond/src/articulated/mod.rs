@@ -513,11 +513,7 @@ impl<'a> Alignment<'a> {
     /// every vertex may be shown (no target viewpoint or no template triangles), else the
     /// occlusion test of module `visibility` from the target's viewpoint and the facing test
     /// ([`ArticulatedOptions::min_facing_cosine`]).
-    fn visibility(
-        &self,
-        posed: &[Point3<f64>],
-        normals: &[Vector3<f64>],
-    ) -> Option<Vec<bool>> {
+    fn visibility(&self, posed: &[Point3<f64>], normals: &[Vector3<f64>]) -> Option<Vec<bool>> {
         let (eye, triangles) = (self.target.viewpoint?, self.template.triangles?);
         let mut visible = visibility::visible_from(
             &eye,
