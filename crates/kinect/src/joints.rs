@@ -16,7 +16,7 @@
 use crate::error::KinectError;
 use crate::mapping::{normalise_name, Partial, SkeletonKind, KINECT_V2_NECK};
 use nalgebra::Point3;
-use serde::de::{self, MapAccess, Visitor};
+use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::error::Category;
@@ -334,7 +334,10 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
         message,
     };
     let text = text.trim_start_matches('\u{feff}');
-    let root: JointsFile<serde_json::Value> = serde_json::from_str(text).map_err(|e| {
+    // Two passes: the header and the shape of the file first (the frames skipped), then each
+    // frame checked and converted as soon as it is parsed (`FrameSeq`), so that a long log
+    // never exists as one JSON tree (tens of bytes of tree per byte of text).
+    let root: JointsFile<de::IgnoredAny> = serde_json::from_str(text).map_err(|e| {
         json_err(match e.classify() {
             // serde would also read a struct from an array.
             Category::Data if !text.trim_start().starts_with('{') => {
@@ -369,30 +372,106 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
             )))
         }
     };
-    let frames = root
+    let count = root
         .frames
-        .ok_or_else(|| json_err("missing \"frames\" (an array)".into()))?;
-    if frames.is_empty() {
+        .ok_or_else(|| json_err("missing \"frames\" (an array)".into()))?
+        .len();
+    if count == 0 {
         return Err(KinectError::NoBody {
             file: file.to_string(),
             message: "the joint file has no frames".into(),
         });
     }
-    let out = frames
-        .into_iter()
-        .enumerate()
-        .map(|(fi, frame)| {
-            frame_from_json(frame, fi, kind, unit_scale).map_err(|message| KinectError::Frame {
-                file: file.to_string(),
-                frame: fi,
-                message,
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut frames = Vec::with_capacity(count);
+    let mut failed = None;
+    let reader = RootFrames(FrameSeq {
+        kind,
+        unit_scale,
+        out: &mut frames,
+        failed: &mut failed,
+    });
+    let parsed = reader.deserialize(&mut serde_json::Deserializer::from_str(text));
+    if let Some((frame, message)) = failed {
+        return Err(KinectError::Frame {
+            file: file.to_string(),
+            frame,
+            message,
+        });
+    }
+    // The first pass read the same text without error.
+    parsed.map_err(|e| json_err(format!("invalid JSON: {e}")))?;
     Ok(JointLog {
         skeleton_kind: kind,
-        frames: out,
+        frames,
     })
+}
+
+/// The `frames` array of a `symcorr.joints/1` file, every other key skipped
+/// ([`parse_joints_json`]'s second pass).
+struct RootFrames<'a>(FrameSeq<'a>);
+
+impl<'de> DeserializeSeed<'de> for RootFrames<'_> {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for RootFrames<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a symcorr.joints/1 object")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let mut seq = Some(self.0);
+        while let Some(key) = map.next_key::<String>()? {
+            match (key.as_str(), seq.take()) {
+                ("frames", Some(frames)) => map.next_value_seed(frames)?,
+                (_, rest) => {
+                    seq = rest;
+                    map.next_value::<de::IgnoredAny>()?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The frames of a `symcorr.joints/1` file, each checked and converted ([`frame_from_json`])
+/// as soon as it is parsed; the first bad frame stops the parse and is kept in `failed` as
+/// (frame index, message).
+struct FrameSeq<'a> {
+    kind: SkeletonKind,
+    unit_scale: f64,
+    out: &'a mut Vec<JointFrame>,
+    failed: &'a mut Option<(usize, String)>,
+}
+
+impl<'de> DeserializeSeed<'de> for FrameSeq<'_> {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for FrameSeq<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("an array of frames")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        while let Some(frame) = seq.next_element::<serde_json::Value>()? {
+            let fi = self.out.len();
+            match frame_from_json(frame, fi, self.kind, self.unit_scale) {
+                Ok(f) => self.out.push(f),
+                Err(message) => {
+                    *self.failed = Some((fi, message));
+                    return Err(de::Error::custom("a bad frame"));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Frame `fi` of a `symcorr.joints/1` file on the canonical skeleton; the error is the message.

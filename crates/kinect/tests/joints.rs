@@ -3,7 +3,8 @@
 use approx::assert_abs_diff_eq;
 use std::path::PathBuf;
 use symcorr_kinect::joints::{
-    parse_joints, parse_joints_as, read_ntu_skeleton, to_json_string, BodySelect, JointFormat,
+    parse_joints, parse_joints_as, parse_joints_json, read_ntu_skeleton, to_json_string,
+    BodySelect, JointFormat,
 };
 use symcorr_kinect::sdk_text::{parse_kinect_text, to_kinect_text};
 use symcorr_kinect::{
@@ -633,4 +634,26 @@ fn a_first_line_of_control_characters_is_quoted_briefly() {
         "{quoted:?}"
     );
     assert!(m.chars().count() < 300, "{m}");
+}
+
+/// The frames are converted as they are parsed, after a first pass has read the header: a file
+/// whose `frames` come before `skeleton` and `units` reads like one in the written order.
+#[test]
+fn frames_before_the_header_read_the_same() {
+    let frame = format!(
+        r#"{{"time_s":0.5,"joints":{{{}}}}}"#,
+        full_joints_except("")
+    );
+    let written = format!(
+        r#"{{"format":"symcorr.joints/1","skeleton":"kinect_v1","units":"mm","frames":[{frame},{frame}]}}"#
+    );
+    let reordered = format!(
+        r#"{{"frames":[{frame},{frame}],"units":"mm","format":"symcorr.joints/1","skeleton":"kinect_v1"}}"#
+    );
+    let a = parse_joints_json(&written, "a.json").unwrap();
+    let b = parse_joints_json(&reordered, "b.json").unwrap();
+    assert_eq!(a, b);
+    assert_eq!(a.frames.len(), 2);
+    // Millimetres: 2.0 mm is 0.002 m.
+    assert_abs_diff_eq!(a.frames[1].skeleton.position(Joint::Head).z, 0.002);
 }
