@@ -7,7 +7,7 @@ use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::{
     articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
-    ArticulatedOptions, ArticulatedStart,
+    ArticulatedMatches, ArticulatedOptions, ArticulatedStart,
 };
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Segment, Skeleton};
@@ -184,6 +184,20 @@ fn front_view(mesh: &TriMesh, reverse: bool) -> (TriMesh, Vec<u32>) {
     (scan, new_id)
 }
 
+/// Template vertices given a counterpart that the front view shows (true positives) and that it
+/// does not (false positives); `new_id` as from [`front_view`].
+fn counterparts(out: &ArticulatedMatches, new_id: &[u32]) -> (usize, usize) {
+    let (mut tp, mut fp) = (0usize, 0usize);
+    for (m, &seen) in out.pairs.iter().zip(&out.has_counterpart) {
+        match (new_id[m.template as usize] != u32::MAX, seen) {
+            (true, true) => tp += 1,
+            (false, true) => fp += 1,
+            _ => {}
+        }
+    }
+    (tp, fp)
+}
+
 #[test]
 fn a_front_view_reports_the_back_as_without_counterpart() {
     let (a, b, att_a) = bodies();
@@ -267,15 +281,7 @@ fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
             ArticulatedStart::Skeletons,
         )
         .unwrap();
-        let (mut tp, mut fp) = (0usize, 0usize);
-        for (m, &seen) in out.pairs.iter().zip(&out.has_counterpart) {
-            match (new_id[m.template as usize] != u32::MAX, seen) {
-                (true, true) => tp += 1,
-                (false, true) => fp += 1,
-                _ => {}
-            }
-        }
-        (tp, fp)
+        counterparts(&out, &new_id)
     };
     let (tp_off, fp_off) = run(None);
     let (tp_on, fp_on) = run(Some(0.03));
@@ -321,15 +327,7 @@ fn the_facing_test_refuses_the_back_seen_from_the_viewpoint() {
             ArticulatedStart::Skeletons,
         )
         .unwrap();
-        let (mut tp, mut fp) = (0usize, 0usize);
-        for (m, &seen) in out.pairs.iter().zip(&out.has_counterpart) {
-            match (new_id[m.template as usize] != u32::MAX, seen) {
-                (true, true) => tp += 1,
-                (false, true) => fp += 1,
-                _ => {}
-            }
-        }
-        (tp, fp)
+        counterparts(&out, &new_id)
     };
     // A cosine of -1 lets every vertex through: no facing test.
     let (tp_off, fp_off) = run(-1.0);

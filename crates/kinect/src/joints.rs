@@ -382,7 +382,9 @@ pub fn parse_joints_json(text: &str, file: &str) -> Result<JointLog, KinectError
             message: "the joint file has no frames".into(),
         });
     }
-    let mut frames = Vec::with_capacity(count);
+    // Not `with_capacity(count)`: a hostile file of tiny non-frames would ask for hundreds of
+    // bytes per byte of text; the first of them stops the second pass instead.
+    let mut frames = Vec::new();
     let mut failed = None;
     let reader = RootFrames(FrameSeq {
         kind,
