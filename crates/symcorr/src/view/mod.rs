@@ -363,8 +363,8 @@ pub fn pair_page(view: &PairView<'_>) -> Result<String, ViewError> {
 
     let truth = view.truth.map(|t| {
         json!({
-            "target": b64_i32(t.true_target.iter().map(|x| x.map_or(-1, |v| v as i32))),
-            "error": b64_f32(t.error.iter().map(|e| e.map_or(f32::NAN, |e| e as f32))),
+            "target": b64(t.true_target.iter().map(|x| x.map_or(-1, |v| v as i32))),
+            "error": b64(t.error.iter().map(|e| e.map_or(f32::NAN, |e| e as f32))),
             "unit": t.unit,
         })
     });
@@ -378,12 +378,12 @@ pub fn pair_page(view: &PairView<'_>) -> Result<String, ViewError> {
         },
         "pairs": {
             "count": corr.pairs.len(),
-            "template": b64_u32(corr.pairs.iter().map(|p| p.0)),
-            "target": b64_u32(corr.pairs.iter().map(|p| p.1)),
-            "confidence": b64_f32(corr.pairs.iter().map(|p| p.2 as f32)),
+            "template": b64(corr.pairs.iter().map(|p| p.0)),
+            "target": b64(corr.pairs.iter().map(|p| p.1)),
+            "confidence": b64(corr.pairs.iter().map(|p| p.2 as f32)),
         },
         "truth": truth,
-        "noCounterpart": b64_u32(missing.iter().copied()),
+        "noCounterpart": b64(missing.iter().copied()),
     });
     Ok(page(file, &data))
 }
@@ -471,10 +471,10 @@ fn mesh_json(path: &str, mesh: &TriMesh, segments: &[u8], nearest: &[i32]) -> Va
     json!({
         "path": path,
         "vertices": mesh.num_vertices(),
-        "positions": b64_f32(mesh.positions.iter().flatten().map(|&x| x as f32)),
-        "triangles": b64_u32(mesh.triangles.iter().flatten().copied()),
+        "positions": b64(mesh.positions.iter().flatten().map(|&x| x as f32)),
+        "triangles": b64(mesh.triangles.iter().flatten().copied()),
         "segments": base64(segments),
-        "nearestPair": b64_i32(nearest.iter().copied()),
+        "nearestPair": b64(nearest.iter().copied()),
     })
 }
 
@@ -566,23 +566,31 @@ fn html_escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-fn b64_f32(values: impl Iterator<Item = f32>) -> String {
-    let bytes: Vec<u8> = values.flat_map(f32::to_le_bytes).collect();
-    base64(&bytes)
+/// A number the page reads back from a little-endian typed array (`Float32Array`,
+/// `Uint32Array`, `Int32Array`, `Uint16Array`).
+pub(super) trait LittleEndian: Copy {
+    /// Appends the number's little-endian bytes.
+    fn push_le(self, out: &mut Vec<u8>);
 }
 
-fn b64_u32(values: impl Iterator<Item = u32>) -> String {
-    let bytes: Vec<u8> = values.flat_map(u32::to_le_bytes).collect();
-    base64(&bytes)
+macro_rules! little_endian {
+    ($($t:ty),*) => {$(
+        impl LittleEndian for $t {
+            fn push_le(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+        }
+    )*};
 }
+little_endian!(f32, u32, i32, u16);
 
-fn b64_i32(values: impl Iterator<Item = i32>) -> String {
-    let bytes: Vec<u8> = values.flat_map(i32::to_le_bytes).collect();
-    base64(&bytes)
-}
-
-fn b64_u16(values: impl Iterator<Item = u16>) -> String {
-    let bytes: Vec<u8> = values.flat_map(u16::to_le_bytes).collect();
+/// The numbers as one base64 string of their little-endian bytes: what the page decodes into a
+/// typed array.
+pub(super) fn b64<T: LittleEndian>(values: impl IntoIterator<Item = T>) -> String {
+    let mut bytes = Vec::new();
+    for v in values {
+        v.push_le(&mut bytes);
+    }
     base64(&bytes)
 }
 
@@ -628,6 +636,15 @@ mod tests {
             assert_eq!(base64(plain.as_bytes()), coded);
         }
         assert_eq!(base64(&[0xff, 0xfe, 0xfd]), "//79");
+    }
+
+    #[test]
+    fn b64_writes_each_number_little_endian() {
+        assert_eq!(b64([1u16, 0x0203]), base64(&[1, 0, 3, 2]));
+        assert_eq!(b64([0x0102_0304u32]), base64(&[4, 3, 2, 1]));
+        assert_eq!(b64([-2i32]), base64(&[0xfe, 0xff, 0xff, 0xff]));
+        assert_eq!(b64([1.0f32]), base64(&[0, 0, 0x80, 0x3f]));
+        assert_eq!(b64(Vec::<u32>::new()), "");
     }
 
     /// A flat grid of about `n` vertices.

@@ -1,6 +1,6 @@
 //! The track page's data: a `symcorr track` output folder read into what the page embeds.
 
-use super::{b64_u16, b64_u32, ViewError};
+use super::{b64, ViewError};
 use crate::npy::{NpyReader, NpyType};
 use serde_json::{json, Value};
 use std::path::Path;
@@ -140,14 +140,14 @@ impl TrackView {
             "segments": super::segment_legend(),
             "track": {
                 "vertices": self.vertices,
-                "triangles": b64_u32(self.triangles.iter().flatten().copied()),
+                "triangles": b64(self.triangles.iter().flatten().copied()),
                 "frames": frames,
                 "summary": self.summary,
                 "poses": {
                     "count": self.poses.len(),
                     "min": lo,
                     "max": hi,
-                    "data": b64_u16(quantised),
+                    "data": b64(quantised),
                 },
             },
         })
