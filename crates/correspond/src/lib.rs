@@ -64,8 +64,8 @@ mod refined;
 
 pub use articulated::{
     articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
-    ArticulatedMatches, ArticulatedOptions, ArticulatedStart, BoneTransforms, DEFAULT_ICP_POINTS,
-    MAX_HEAD_TWIST_DEG, TWISTS,
+    ArticulatedMatches, ArticulatedOptions, ArticulatedStart, BoneTransforms,
+    DEFAULT_HEAD_TWIST_PRIOR, DEFAULT_ICP_POINTS, MAX_HEAD_TWIST_DEG, TWISTS,
 };
 pub use paper::{
     assign_confidence, base_profile, candidates, explain_point, farthest_point_sample,

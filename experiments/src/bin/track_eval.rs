@@ -72,12 +72,15 @@ struct Args {
     #[arg(long)]
     reciprocal_radius: Option<f64>,
     /// Temporal check: largest move of a match against its posed vertex between frames,
-    /// metres (default: the tracker's; 0 turns it off).
+    /// metres (default: the method's; 0 turns it off).
     #[arg(long)]
     max_match_shift: Option<f64>,
     /// Weight of the joint anchors in a bone's fit (default: the method's).
     #[arg(long)]
     joint_anchor: Option<f64>,
+    /// Weight of the head twist prior (default: the method's; 0 turns it off).
+    #[arg(long)]
+    head_twist_prior: Option<f64>,
     /// Per frame, also print the flips and jumps per template segment and how far that
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
@@ -119,6 +122,9 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     a.warm_iterations = args.warm_iterations.unwrap_or(a.warm_iterations);
     a.nonrigid_rounds = args.nonrigid_rounds.unwrap_or(a.nonrigid_rounds);
     a.joint_anchor = args.joint_anchor.unwrap_or(a.joint_anchor);
+    if let Some(w) = args.head_twist_prior {
+        a.head_twist_prior = (w > 0.0).then_some(w);
+    }
     let pipeline = Pipeline::new(options);
     let template = pipeline.prepare(mesh, &sk)?;
     let index: Vec<usize> = template.labels().iter().map(|l| l.index()).collect();

@@ -2,7 +2,7 @@
 //! anchored by its two joints, then the template re-skinned (DESIGN.md, Algorithm 7, step 4).
 
 use super::transforms::{kabsch, skin, BoneTransforms, FitPair};
-use super::twist::TwistLimit;
+use super::twist::{TwistLimit, TwistPrior};
 use super::Alignment;
 use crate::CorrespondError;
 use nalgebra::{Point3, Vector3};
@@ -56,6 +56,7 @@ pub(super) fn articulated_icp(
     sample: &[Vec<u32>],
     rounds: Rounds,
     limit: Option<&TwistLimit>,
+    prior: Option<&TwistPrior>,
 ) -> Result<Posed, CorrespondError> {
     let (template, target, options) = (&al.template, &al.target, al.options);
     let (mut posed, mut posed_normals) =
@@ -104,6 +105,11 @@ pub(super) fn articulated_icp(
                 }
             }
         }
+        // The prior's pairs from this round's pose, before the bones move.
+        let prior_pairs = prior.map(|pr| {
+            let wsum: f64 = per_bone[pr.bone].iter().map(|p| p.2).sum();
+            (pr.bone, pr.pairs(transforms, wsum))
+        });
         transforms
             .par_iter_mut()
             .zip(per_bone.into_par_iter())
@@ -122,6 +128,11 @@ pub(super) fn articulated_icp(
                         target.joints.position(j),
                         anchor,
                     ));
+                }
+                if let Some((pb, extra)) = &prior_pairs {
+                    if *pb == b {
+                        pairs.extend_from_slice(extra);
+                    }
                 }
                 if let Some(fit) = kabsch(&pairs) {
                     *tr = match limit {

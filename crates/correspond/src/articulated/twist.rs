@@ -6,7 +6,7 @@ use super::transforms::{isometry, kabsch, unit};
 use super::Alignment;
 use crate::CorrespondError;
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
-use symcorr_skeleton::BONES;
+use symcorr_skeleton::{Skeleton, BONES};
 
 /// Largest twist of the head about its bone against the pose the chest gives it, degrees.
 /// A neck turns about ±80° (range of motion of cervical rotation); every fit of the head —
@@ -71,6 +71,81 @@ impl TwistLimit {
         let r = held.to_rotation_matrix() * self.reference.rotation;
         let x = fit * self.pivot;
         isometry(*r.matrix(), x.coords - r * self.pivot.coords)
+    }
+}
+
+/// A soft hold on a bone's twist against its parent bone's fitted pose: the bone keeps the
+/// rotation it has in its parent's frame at rest unless its pairs say otherwise. A round
+/// head's visible side does not pin its twist — seen turning into profile, the fitted head
+/// lagged the body by 12–25° and its far eye socket paired across the nose; a head turns
+/// with the chest unless the neck turns it. `docs/decisions/2026-12-03-head-twist-prior.md`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TwistPrior {
+    /// The bone (index into [`BONES`]).
+    pub bone: usize,
+    /// Its parent bone (the one ending at its parent joint).
+    parent: usize,
+    /// The bone's unit direction at rest (template), parent → child joint.
+    template_axis: Vector3<f64>,
+    /// The target bone's unit direction.
+    target_axis: Vector3<f64>,
+    /// The bone's midpoint at rest.
+    mid: Point3<f64>,
+    /// Four template-frame offsets from `mid`, normal to the bone, one bone length long.
+    offsets: [Vector3<f64>; 4],
+    /// The weight of each of the four prior pairs, relative to the bone's total pair weight.
+    weight: f64,
+}
+
+impl TwistPrior {
+    /// The prior of bone `b` (template skeleton at rest, target skeleton) with `weight`
+    /// ([`ArticulatedOptions::head_twist_prior`](super::ArticulatedOptions::head_twist_prior));
+    /// `None` for a bone without a parent bone or without length.
+    pub fn new(
+        template: &Skeleton,
+        target: &Skeleton,
+        b: usize,
+        weight: f64,
+    ) -> Option<TwistPrior> {
+        let (p, c) = (BONES[b].parent, BONES[b].child);
+        let parent = BONES.iter().position(|pb| pb.child == p)?;
+        let (tp, tc) = (template.position(p), template.position(c));
+        let template_axis = unit(tc - tp)?;
+        let target_axis = unit(target.position(c) - target.position(p))?;
+        let helper = if template_axis.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        let e1 = unit(template_axis.cross(&helper))? * (tc - tp).norm();
+        let e2 = template_axis.cross(&e1);
+        Some(TwistPrior {
+            bone: b,
+            parent,
+            template_axis,
+            target_axis,
+            mid: Point3::from((tp.coords + tc.coords) * 0.5),
+            offsets: [e1, -e1, e2, -e2],
+            weight: weight / 4.0,
+        })
+    }
+
+    /// The prior's four pairs for the bone's weighted rigid fit in `transforms` (the round's
+    /// current pose), `pair_weight` the bone's total pair weight: the offsets from the bone's
+    /// midpoint, each pulled to where the parent's current rotation, swung onto the target
+    /// bone's direction (the bone's pose from the joints, [`bone_transforms`](crate::bone_transforms)),
+    /// carries it about the bone's current midpoint. Centred on the midpoint, they act on
+    /// the rotation alone.
+    pub fn pairs(
+        &self,
+        transforms: &super::transforms::BoneTransforms,
+        pair_weight: f64,
+    ) -> [super::transforms::FitPair; 4] {
+        let parent = transforms[self.parent].rotation.matrix();
+        let r = super::transforms::swing(parent * self.template_axis, self.target_axis) * parent;
+        let mid = transforms[self.bone] * self.mid;
+        let w = self.weight * pair_weight;
+        self.offsets.map(|d| (self.mid + d, mid + r * d, w))
     }
 }
 
@@ -195,4 +270,60 @@ pub(super) fn twist_search(
         }
     }
     Ok(best.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::transforms::{bone_transforms, kabsch};
+    use super::*;
+    use symcorr_skeleton::{Bone, Joint};
+
+    /// The head bone's index in [`BONES`].
+    fn head() -> usize {
+        let h = Bone::new(Joint::ShoulderCenter, Joint::Head);
+        BONES.iter().position(|&b| b == h).unwrap()
+    }
+
+    /// The prior's pairs alone fit the head to its rest pose against the chest: a whole body
+    /// turned by 70° about the vertical with the head left facing the camera (the lag the
+    /// prior is for) gets its head turned by the same 70°.
+    #[test]
+    fn the_prior_alone_turns_the_head_with_the_chest() {
+        let rest = symcorr_attach::testbody::t_pose(1.0);
+        let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), 70f64.to_radians());
+        let turned = rest.map_positions(|x| turn * x);
+        let h = head();
+        let prior = TwistPrior::new(&rest, &turned, h, 1.0).unwrap();
+        let mut transforms = bone_transforms(&rest, &turned);
+        let chest = transforms[prior.parent].rotation;
+        approx::assert_relative_eq!(chest.matrix(), turn.matrix(), epsilon = 1e-9);
+        // The head lags: still at rest, moved only onto the target's neck.
+        transforms[h] = IsometryMatrix3::from_parts(
+            nalgebra::Translation3::from(
+                turn * rest.position(Joint::ShoulderCenter).coords
+                    - rest.position(Joint::ShoulderCenter).coords,
+            ),
+            Rotation3::identity(),
+        );
+        let fit = kabsch(&prior.pairs(&transforms, 10.0)).unwrap();
+        approx::assert_relative_eq!(fit.rotation.matrix(), turn.matrix(), epsilon = 1e-9);
+        // Centred on the bone's midpoint: the head's midpoint stays where it was.
+        approx::assert_relative_eq!(fit * prior.mid, transforms[h] * prior.mid, epsilon = 1e-9);
+    }
+
+    /// A head tilted against the chest by the joints keeps the joints' direction: the prior
+    /// holds the twist, not the swing.
+    #[test]
+    fn the_prior_follows_the_target_head_direction() {
+        let rest = symcorr_attach::testbody::t_pose(1.0);
+        let mut tilted = rest.clone();
+        let neck = rest.position(Joint::ShoulderCenter);
+        let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians());
+        tilted.positions[Joint::Head.index()] = neck + tilt * (rest.position(Joint::Head) - neck);
+        let h = head();
+        let prior = TwistPrior::new(&rest, &tilted, h, 1.0).unwrap();
+        let transforms = [IsometryMatrix3::identity(); Bone::COUNT];
+        let fit = kabsch(&prior.pairs(&transforms, 1.0)).unwrap();
+        approx::assert_relative_eq!(fit.rotation.matrix(), tilt.matrix(), epsilon = 1e-9);
+    }
 }

@@ -75,6 +75,11 @@ pub struct TrackArgs {
         allow_hyphen_values = true
     )]
     pub joint_offset: f64,
+    /// Weight of the head twist prior, which holds the head's twist at the chest's where one
+    /// view does not pin it (a body turning into profile); 0 turns it off for a subject who
+    /// turns the head against the body.
+    #[arg(long, value_name = "W", default_value_t = symcorr_correspond::DEFAULT_HEAD_TWIST_PRIOR)]
+    pub head_twist_prior: f64,
     /// Worker threads (default: every core).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -175,6 +180,7 @@ fn journal_header(args: &TrackArgs, frames: &[usize], template: &str, vertices: 
         "template_vertices": vertices,
         "frames": frames,
         "joint_offset_s": args.joint_offset,
+        "head_twist_prior": args.head_twist_prior,
         "scans": args.scans,
     })
 }
@@ -229,6 +235,12 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             .build_global()
             .map_err(|e| CliError(format!("--threads {n}: {e}")))?;
     }
+    if !(args.head_twist_prior >= 0.0 && args.head_twist_prior.is_finite()) {
+        return Err(CliError(format!(
+            "--head-twist-prior {}: expected a finite weight ≥ 0",
+            args.head_twist_prior
+        )));
+    }
     if args.out.exists() && !args.out.is_dir() {
         return Err(CliError(format!(
             "{}: --out must be a folder",
@@ -246,10 +258,13 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let frames = frame_list(args.frames.as_deref(), args.every, recording.len())?;
     let log = symcorr_kinect::read_joints(&args.joints).map_err(|e| CliError(e.to_string()))?;
     let joints = JointTrack::new(log, 0.0).map_err(|e| CliError::with(args.joints.display(), e))?;
-    let pipeline = Pipeline::new(PipelineOptions {
+    let mut options = PipelineOptions {
         mode: symcorr::Mode::Dense,
         ..PipelineOptions::default()
-    });
+    };
+    options.articulated.head_twist_prior =
+        (args.head_twist_prior > 0.0).then_some(args.head_twist_prior);
+    let pipeline = Pipeline::new(options);
     let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
     let n = template.input_mesh().num_vertices();
     let header = journal_header(&args, &frames, &template_name, n);
