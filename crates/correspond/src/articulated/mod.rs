@@ -32,7 +32,7 @@
 //!    behind the posed template (module `visibility`) or facing away from the viewpoint
 //!    ([`ArticulatedOptions::min_facing_cosine`]) takes no pair. Each bone with at least 20 pairs of weight > 0.1 is
 //!    re-fitted by weighted Kabsch (Arun et al. 1987) to them plus its two joints as anchors
-//!//!    ([`ArticulatedOptions::joint_anchor`]); with a target viewpoint the head's fit also pulls
+//!    ([`ArticulatedOptions::joint_anchor`]); with a target viewpoint the head's fit also pulls
 //!    its twist towards the chest's ([`ArticulatedOptions::head_twist_prior`]: one view of a
 //!    round head barely pins it). Then the template is re-skinned (module `icp`).
 //! 5. **Non-rigid step** (needs the template's edge graph, [`ArticulatedInputs::neighbors`]):
