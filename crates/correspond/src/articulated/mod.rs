@@ -742,7 +742,7 @@ fn initial_transforms(
         .options
         .head_twist_prior
         .filter(|&w| w > 0.0 && al.target.viewpoint.is_some())
-        .and_then(|w| TwistPrior::new(al.template.joints, al.target.joints, head_bone, w));
+        .and_then(|w| TwistPrior::new(al.template.joints, head_bone, w));
     let transforms = match start {
         ArticulatedStart::Skeletons => {
             let mut t = from_skeletons;

@@ -87,8 +87,6 @@ pub(super) struct TwistPrior {
     parent: usize,
     /// The bone's unit direction at rest (template), parent → child joint.
     template_axis: Vector3<f64>,
-    /// The target bone's unit direction.
-    target_axis: Vector3<f64>,
     /// The bone's midpoint at rest.
     mid: Point3<f64>,
     /// Four template-frame offsets from `mid`, normal to the bone, one bone length long.
@@ -98,20 +96,14 @@ pub(super) struct TwistPrior {
 }
 
 impl TwistPrior {
-    /// The prior of bone `b` (template skeleton at rest, target skeleton) with `weight`
+    /// The prior of bone `b` of the `template` skeleton (at rest) with `weight`
     /// ([`ArticulatedOptions::head_twist_prior`](super::ArticulatedOptions::head_twist_prior));
     /// `None` for a bone without a parent bone or without length.
-    pub fn new(
-        template: &Skeleton,
-        target: &Skeleton,
-        b: usize,
-        weight: f64,
-    ) -> Option<TwistPrior> {
+    pub fn new(template: &Skeleton, b: usize, weight: f64) -> Option<TwistPrior> {
         let (p, c) = (BONES[b].parent, BONES[b].child);
         let parent = BONES.iter().position(|pb| pb.child == p)?;
         let (tp, tc) = (template.position(p), template.position(c));
         let template_axis = unit(tc - tp)?;
-        let target_axis = unit(target.position(c) - target.position(p))?;
         let helper = if template_axis.x.abs() < 0.9 {
             Vector3::x()
         } else {
@@ -123,7 +115,6 @@ impl TwistPrior {
             bone: b,
             parent,
             template_axis,
-            target_axis,
             mid: Point3::from((tp.coords + tc.coords) * 0.5),
             offsets: [e1, -e1, e2, -e2],
             weight: weight / 4.0,
@@ -132,17 +123,19 @@ impl TwistPrior {
 
     /// The prior's four pairs for the bone's weighted rigid fit in `transforms` (the round's
     /// current pose), `pair_weight` the bone's total pair weight: the offsets from the bone's
-    /// midpoint, each pulled to where the parent's current rotation, swung onto the target
-    /// bone's direction (the bone's pose from the joints, [`bone_transforms`](crate::bone_transforms)),
-    /// carries it about the bone's current midpoint. Centred on the midpoint, they act on
-    /// the rotation alone.
+    /// midpoint, each pulled to where the parent's current rotation, swung onto the bone's
+    /// current direction, carries it about the bone's current midpoint. Centred on the
+    /// midpoint and keeping the bone's direction, they act on its twist alone; the swing is
+    /// left to the pairs and the joint anchors.
     pub fn pairs(
         &self,
         transforms: &super::transforms::BoneTransforms,
         pair_weight: f64,
     ) -> [super::transforms::FitPair; 4] {
         let parent = transforms[self.parent].rotation.matrix();
-        let r = super::transforms::swing(parent * self.template_axis, self.target_axis) * parent;
+        // The bone's current direction: the prior holds the twist about it, not the swing.
+        let current = transforms[self.bone].rotation.matrix() * self.template_axis;
+        let r = super::transforms::swing(parent * self.template_axis, current) * parent;
         let mid = transforms[self.bone] * self.mid;
         let w = self.weight * pair_weight;
         self.offsets.map(|d| (self.mid + d, mid + r * d, w))
@@ -293,7 +286,7 @@ mod tests {
         let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), 70f64.to_radians());
         let turned = rest.map_positions(|x| turn * x);
         let h = head();
-        let prior = TwistPrior::new(&rest, &turned, h, 1.0).unwrap();
+        let prior = TwistPrior::new(&rest, h, 1.0).unwrap();
         let mut transforms = bone_transforms(&rest, &turned);
         let chest = transforms[prior.parent].rotation;
         approx::assert_relative_eq!(chest.matrix(), turn.matrix(), epsilon = 1e-9);
@@ -311,18 +304,19 @@ mod tests {
         approx::assert_relative_eq!(fit * prior.mid, transforms[h] * prior.mid, epsilon = 1e-9);
     }
 
-    /// A head tilted against the chest by the joints keeps the joints' direction: the prior
-    /// holds the twist, not the swing.
+    /// A head tilted and twisted against the chest keeps its tilt and loses its twist: the
+    /// prior holds the twist, not the swing.
     #[test]
-    fn the_prior_follows_the_target_head_direction() {
+    fn the_prior_holds_the_twist_not_the_tilt() {
         let rest = symcorr_attach::testbody::t_pose(1.0);
-        let mut tilted = rest.clone();
-        let neck = rest.position(Joint::ShoulderCenter);
-        let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians());
-        tilted.positions[Joint::Head.index()] = neck + tilt * (rest.position(Joint::Head) - neck);
         let h = head();
-        let prior = TwistPrior::new(&rest, &tilted, h, 1.0).unwrap();
-        let transforms = [IsometryMatrix3::identity(); Bone::COUNT];
+        let prior = TwistPrior::new(&rest, h, 1.0).unwrap();
+        let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians());
+        let axis = nalgebra::Unit::new_normalize(prior.template_axis);
+        let twist = Rotation3::from_axis_angle(&axis, 40f64.to_radians());
+        let mut transforms = [IsometryMatrix3::identity(); Bone::COUNT];
+        transforms[h] =
+            IsometryMatrix3::from_parts(nalgebra::Translation3::identity(), tilt * twist);
         let fit = kabsch(&prior.pairs(&transforms, 1.0)).unwrap();
         approx::assert_relative_eq!(fit.rotation.matrix(), tilt.matrix(), epsilon = 1e-9);
     }
