@@ -1064,3 +1064,43 @@ fn track_stops_cleanly_on_ctrl_c_and_resumes() {
         "{skipped:?} {lost:?}"
     );
 }
+
+/// `--head-twist-prior`: a weight that is not a finite number ≥ 0 is refused before anything is
+/// written; 0 turns the prior off and the run says so; a run is resumed only with its own
+/// weight.
+#[test]
+fn track_head_twist_prior_is_checked_recorded_and_kept_on_resume() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sequence_recording(dir.path());
+    let log = fixtures().join("../sequence/joints.json");
+    let out = dir.path().join("track");
+    let track = |extra: &[&str]| {
+        run(bin()
+            .args([
+                "track",
+                rec.to_str().unwrap(),
+                "--frames",
+                "0..1",
+                "--joints",
+            ])
+            .arg(&log)
+            .arg("--out")
+            .arg(&out)
+            .args(extra))
+    };
+    for bad in ["-1", "NaN", "inf"] {
+        let o = track(&["--head-twist-prior", bad]);
+        let e = assert_one_line_error(&o);
+        assert!(e.contains("--head-twist-prior"), "{e}");
+        assert!(!out.exists(), "{bad}: {}", out.display());
+    }
+    assert!(track(&["--head-twist-prior", "0"]).status.success());
+    let doc = read_json(&out.join("track.json"));
+    assert_eq!(doc["run"]["head_twist_prior"], 0.0);
+    // The default weight is another run: --resume refuses to mix the two.
+    let e = assert_one_line_error(&track(&["--resume"]));
+    assert!(e.contains("cannot resume"), "{e}");
+    assert!(track(&["--resume", "--head-twist-prior", "0"])
+        .status
+        .success());
+}

@@ -72,7 +72,7 @@ struct Args {
     #[arg(long)]
     reciprocal_radius: Option<f64>,
     /// Temporal check: largest move of a match against its posed vertex between frames,
-    /// metres (default: the method's; 0 turns it off).
+    /// metres (default: the tracker's; 0 turns it off).
     #[arg(long)]
     max_match_shift: Option<f64>,
     /// Weight of the joint anchors in a bone's fit (default: the method's).

@@ -185,7 +185,7 @@ pub struct ArticulatedOptions {
     /// head lagged the body by 12–25° and its far eye socket paired across the nose. The
     /// prior assumes the head turns with the chest, and pulls a head turned against it back
     /// by a few degrees; a whole surface shows the face and is fitted without it (there it
-    /// only biased the turned heads of bodies20's random poses: 0.0025 → 0.0033 mean error).
+    /// only biased the turned heads of bodies20's random poses: 0.0025 → 0.0031 mean error).
     /// (0.1, [`DEFAULT_HEAD_TWIST_PRIOR`]: `docs/decisions/2026-12-03-head-twist-prior.md`.)
     pub head_twist_prior: Option<f64>,
 }
@@ -722,8 +722,8 @@ fn feature(x: &Point3<f64>, n: &Vector3<f64>, beta: f64) -> [f64; 6] {
 /// that holds the head's twist near the chest's pose ([`twist::MAX_HEAD_TWIST_DEG`]) in every
 /// later fit.
 /// From a warm start, the earlier transforms moved by their bones' motion instead (no twist
-/// search), the head held within the same limit, and the head's twist prior from the earlier
-/// fit ([`ArticulatedOptions::head_twist_prior`]).
+/// search), the head held within the same limit. From either start, the head's twist prior
+/// when the target has a viewpoint ([`ArticulatedOptions::head_twist_prior`]).
 fn initial_transforms(
     al: &Alignment<'_>,
     start: ArticulatedStart<'_>,

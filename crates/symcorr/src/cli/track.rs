@@ -78,7 +78,12 @@ pub struct TrackArgs {
     /// Weight of the head twist prior, which holds the head's twist at the chest's where one
     /// view does not pin it (a body turning into profile); 0 turns it off for a subject who
     /// turns the head against the body.
-    #[arg(long, value_name = "W", default_value_t = symcorr_correspond::DEFAULT_HEAD_TWIST_PRIOR)]
+    #[arg(
+        long,
+        value_name = "W",
+        default_value_t = symcorr_correspond::DEFAULT_HEAD_TWIST_PRIOR,
+        allow_hyphen_values = true
+    )]
     pub head_twist_prior: f64,
     /// Worker threads (default: every core).
     #[arg(long, value_name = "N")]
@@ -214,7 +219,7 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
     let (first, frames, complete) = parse_journal(&text).map_err(err)?;
     if &first != header {
         return Err(err(
-            "it was written for another recording, template, joints or frame list".into(),
+            "it was written for another recording, template, joints, frame list or options".into(),
         ));
     }
     if complete < text.len() {
