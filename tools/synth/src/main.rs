@@ -194,6 +194,10 @@ enum Cmd {
         /// Largest turn about the vertical axis, reached halfway (degrees; 90 = profile).
         #[arg(long, default_value_t = 90.0, allow_negative_numbers = true)]
         max_turn_deg: f64,
+        /// Largest turn of the head against the chest (degrees, a look left and right every
+        /// 3 s; 0: the head turns with the chest).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        head_turn_deg: f64,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -475,6 +479,7 @@ fn run(cli: Cli) -> Result<()> {
             width,
             height,
             max_turn_deg,
+            head_turn_deg,
             out,
             oni,
         } => {
@@ -487,6 +492,7 @@ fn run(cli: Cli) -> Result<()> {
                 frames,
                 fps,
                 max_turn_deg,
+                head_turn_deg,
                 seed: view.seed,
                 // Without the binary's path, so that the manifest does not depend on the build.
                 command: std::iter::once("symcorr-synth".to_string())

@@ -4,8 +4,9 @@
 //!
 //! Motion: the body walks in place ([`walk_pose`]) while turning about the vertical axis from
 //! facing the camera to `max_turn_deg` (profile at 90°) and back: turn(t) = max ·
-//! (1 − cos 2πt/T)/2 over the recording's duration T. Each depth frame is rendered by the
-//! virtual Kinect ([`render`]) with the given realism; frame `f` uses noise stream `f`.
+//! (1 − cos 2πt/T)/2 over the recording's duration T; with `head_turn_deg` the head also turns
+//! against the chest (a subject looking around: [`head_turn_deg`]). Each depth frame is rendered
+//! by the virtual Kinect ([`render`]) with the given realism; frame `f` uses noise stream `f`.
 //!
 //! Folder (other tools write the same layout):
 //! * `intrinsics.json` — `symcorr.intrinsics/1` ([`symcorr_kinect::Intrinsics`]);
@@ -117,6 +118,7 @@ pub fn fixture_recording() -> Result<(RecordingSpec, Camera, Realism)> {
         frames: 60,
         fps: 30.0,
         max_turn_deg: 90.0,
+        head_turn_deg: 0.0,
         seed: 7,
         command: FIXTURE_COMMAND.into(),
     };
@@ -135,6 +137,9 @@ pub struct RecordingSpec {
     pub fps: f64,
     /// Largest turn about the vertical axis, reached halfway (degrees; 90 = profile).
     pub max_turn_deg: f64,
+    /// Largest turn of the head against the chest, about the neck (degrees; 0: the head turns
+    /// with the chest), as [`head_turn_deg`].
+    pub head_turn_deg: f64,
     /// Seed of the joint-log corruptions and of the depth-time jitter.
     pub seed: u64,
     /// The command that generated the recording (stored in the manifest).
@@ -188,6 +193,17 @@ pub fn turn_deg(t_s: f64, duration_s: f64, max_turn_deg: f64) -> f64 {
     max_turn_deg * (1.0 - (2.0 * std::f64::consts::PI * u).cos()) / 2.0
 }
 
+/// A subject looking left and right: how far the head is turned against the chest at true time
+/// `t_s`, degrees — `max · sin(2πt / HEAD_TURN_PERIOD_S)`, shared equally by the neck and the
+/// head bones as a twist about each (the head joint moves by millimetres: a turn of the head
+/// about its own axis is what a skeleton tracker cannot report).
+pub fn head_turn_deg(t_s: f64, max_deg: f64) -> f64 {
+    max_deg * (2.0 * std::f64::consts::PI * t_s / HEAD_TURN_PERIOD_S).sin()
+}
+
+/// Period of [`head_turn_deg`], seconds: a look to one side and the other.
+pub const HEAD_TURN_PERIOD_S: f64 = 3.0;
+
 /// σ of the joint jitter per coordinate (metres) for a joint at depth `z_m`: 1 cm up to 2 m,
 /// rising linearly to 3 cm at 4 m and beyond; doubled for an inferred joint.
 pub fn jitter_sigma_m(z_m: f64, inferred: bool) -> f64 {
@@ -216,7 +232,15 @@ fn body_at(
 ) -> Result<(TriMesh, Skeleton, f64)> {
     let duration = spec.frames as f64 / spec.fps;
     let turn = turn_deg(t_s, duration, spec.max_turn_deg);
-    let posed = body.pose(&walk_pose(walk, t_s / WALK_PERIOD_S))?;
+    let mut pose = walk_pose(walk, t_s / WALK_PERIOD_S);
+    if spec.head_turn_deg != 0.0 {
+        let half = head_turn_deg(t_s, spec.head_turn_deg).to_radians() / 2.0;
+        // Euler y: the twist about the bone (a rig bone's y axis runs along it).
+        for bone in ["neck_01", "head"] {
+            pose.rotations.entry(bone.into()).or_insert([0.0; 3])[1] += half;
+        }
+    }
+    let posed = body.pose(&pose)?;
     let joints = kinect_joints(body, &posed)?;
     let mut mesh = posed.mesh;
     for p in mesh.positions.iter_mut() {
@@ -319,6 +343,11 @@ pub fn write_recording(
     if spec.frames == 0 || !(spec.fps.is_finite() && spec.fps > 0.0) {
         return Err(SynthError::Invalid(
             "a recording needs ≥ 1 frame and a frame rate > 0".into(),
+        ));
+    }
+    if !(spec.head_turn_deg.is_finite() && spec.head_turn_deg.abs() <= 80.0) {
+        return Err(SynthError::Invalid(
+            "the head's turn against the chest must be within ±80° (a neck's range)".into(),
         ));
     }
     if !(spec.max_turn_deg.is_finite() && spec.max_turn_deg.abs() <= 180.0) {
@@ -452,7 +481,7 @@ fn write_manifest(
     s: &RecordingSummary,
 ) -> Result<()> {
     let round3 = |x: f64| (x * 1000.0).round() / 1000.0;
-    let manifest = json!({
+    let mut manifest = json!({
         "format": RECORDING_FORMAT,
         "frames": s.frames,
         "fps": spec.fps,
@@ -486,6 +515,11 @@ fn write_manifest(
         "realism_seed": realism.seed,
         "command": spec.command,
     });
+    if spec.head_turn_deg != 0.0 {
+        // Only when the head turns: the recordings made before it stay byte for byte the same.
+        manifest["head_turn_deg"] = json!(spec.head_turn_deg);
+        manifest["head_turn_period_s"] = json!(HEAD_TURN_PERIOD_S);
+    }
     let text =
         serde_json::to_string_pretty(&manifest).map_err(|e| SynthError::Invalid(e.to_string()))?;
     write_text(&out.join("recording.json"), &(text + "\n"))

@@ -348,3 +348,64 @@ fn the_recording_converts_to_an_oni_file_with_its_times() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("intrinsics.json"));
     assert!(!bad.exists());
 }
+
+/// `head_turn_deg`: the subject looks left and right — the depth images change where the head
+/// is, the exact joints barely (a turn about the head's own axis), the manifest says so; a turn
+/// beyond a neck's range is refused.
+#[test]
+fn a_head_turned_against_the_chest_shows_in_the_depth_not_in_the_joints() {
+    let model = symcorr_synth::Model::new(
+        symcorr_synth::Assets::load(&symcorr_synth::Assets::default_dir()).unwrap(),
+    )
+    .unwrap();
+    let body = model.body(&symcorr_synth::Shape::default()).unwrap();
+    let (mut spec, mut camera, realism) = fixture_recording().unwrap();
+    // 24 frames: the head's largest turn is at 0.75 s, frame 22 or 23.
+    spec.frames = 24;
+    camera.intrinsics = symcorr_synth::recording::kinect_v1_intrinsics(160, 120).unwrap();
+    let write = |spec: &symcorr_synth::recording::RecordingSpec| {
+        let out = tempfile::tempdir().unwrap();
+        write_recording(
+            out.path(),
+            &body,
+            model.assets.walk.as_ref(),
+            spec,
+            &camera,
+            &realism,
+        )
+        .unwrap();
+        out
+    };
+    let still = write(&spec);
+    spec.head_turn_deg = 40.0;
+    let looking = write(&spec);
+    let (a, b) = (
+        read_joints(still.path().join("truth/joints.json")).unwrap(),
+        read_joints(looking.path().join("truth/joints.json")).unwrap(),
+    );
+    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+        for j in Joint::ALL {
+            let d = (fa.skeleton.position(j) - fb.skeleton.position(j)).norm();
+            let limit = if j == Joint::Head { 0.005 } else { 1e-9 };
+            assert!(d <= limit, "{j:?}: {d}");
+        }
+    }
+    let depth =
+        |dir: &Path, f: usize| std::fs::read(dir.join(format!("depth/{f:06}.png"))).unwrap();
+    assert!(depth(still.path(), 22) != depth(looking.path(), 22));
+    let text = std::fs::read_to_string(looking.path().join("recording.json")).unwrap();
+    let m: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(m["head_turn_deg"], 40.0);
+    spec.head_turn_deg = 100.0;
+    let out = tempfile::tempdir().unwrap();
+    let e = write_recording(
+        out.path(),
+        &body,
+        model.assets.walk.as_ref(),
+        &spec,
+        &camera,
+        &realism,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("±80°"), "{e}");
+}
