@@ -151,6 +151,38 @@ fn a_skinned_copy_is_matched_to_itself() {
     assert_eq!(crossed, 0);
 }
 
+/// The setup of the single-view checks: the capsule body `a` (template) with its attachment and
+/// outward normals, and the front view of the second body (vertex ids kept, `new_id`) with its
+/// attachment and outward normals.
+struct FrontScan {
+    a: Body,
+    att_a: symcorr_attach::Attachment,
+    scan: TriMesh,
+    new_id: Vec<u32>,
+    att_s: symcorr_attach::Attachment,
+    na: Vec<[f64; 3]>,
+    ns: Vec<[f64; 3]>,
+}
+
+impl FrontScan {
+    fn new() -> FrontScan {
+        let (a, b, att_a) = bodies();
+        let (scan, new_id) = front_view(&b.mesh, false);
+        let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
+        let na = outward(&a.mesh, &att_a);
+        let ns = outward(&scan, &att_s);
+        FrontScan {
+            a,
+            att_a,
+            scan,
+            new_id,
+            att_s,
+            na,
+            ns,
+        }
+    }
+}
+
 /// The front view of `mesh`: its triangles facing +z (the camera) as a mesh of their own, and
 /// per body vertex its id in that mesh (`u32::MAX`: not in view). `reverse` numbers the kept
 /// vertices in reverse order.
@@ -257,11 +289,15 @@ fn a_front_view_reports_the_back_as_without_counterpart() {
 /// template's front) and keeps the front.
 #[test]
 fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
-    let (a, b, att_a) = bodies();
-    let (scan, new_id) = front_view(&b.mesh, false);
-    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
-    let na = outward(&a.mesh, &att_a);
-    let ns = outward(&scan, &att_s);
+    let FrontScan {
+        a,
+        att_a,
+        scan,
+        new_id,
+        att_s,
+        na,
+        ns,
+    } = FrontScan::new();
     let run = |reciprocal_radius| {
         // A gate wider than a limb, no normal test, no border: the back of an arm pairs with
         // its front.
@@ -300,11 +336,15 @@ fn the_reciprocal_check_refuses_the_back_of_a_limb_without_the_normal_test() {
 /// refuses the back's pairs and keeps the front's.
 #[test]
 fn the_facing_test_refuses_the_back_seen_from_the_viewpoint() {
-    let (a, b, att_a) = bodies();
-    let (scan, new_id) = front_view(&b.mesh, false);
-    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
-    let na = outward(&a.mesh, &att_a);
-    let ns = outward(&scan, &att_s);
+    let FrontScan {
+        a,
+        att_a,
+        scan,
+        new_id,
+        att_s,
+        na,
+        ns,
+    } = FrontScan::new();
     let run = |min_facing_cosine| {
         let options = ArticulatedOptions {
             min_normal_cosine: -1.0,
@@ -397,11 +437,15 @@ fn a_forearm_pulled_away_from_its_joints_gets_the_lower_confidence() {
 /// same counterparts and the same pairs for them as the full map; the others get confidence 0.
 #[test]
 fn the_map_without_guesses_keeps_every_counterpart_and_its_pair() {
-    let (a, b, att_a) = bodies();
-    let (scan, _) = front_view(&b.mesh, false);
-    let att_s = attach(&scan, &b.skeleton, &AttachOptions::default()).unwrap();
-    let na = outward(&a.mesh, &att_a);
-    let ns = outward(&scan, &att_s);
+    let FrontScan {
+        a,
+        att_a,
+        scan,
+        att_s,
+        na,
+        ns,
+        ..
+    } = FrontScan::new();
     let neighbors = a.mesh.vertex_neighbors();
     let boundary = scan.boundary_vertices();
     let run = |guess_hidden| {

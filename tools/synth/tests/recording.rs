@@ -9,9 +9,9 @@ use symcorr_kinect::joints::{read_joints, JointLog};
 use symcorr_kinect::{read_depth_png16, Intrinsics};
 use symcorr_skeleton::{Joint, Skeleton};
 use symcorr_synth::recording::{
-    fixture_recording, write_recording, DEPTH_TIME_JITTER_S, INFERRED_CONFIDENCE,
-    INFERRED_MIN_TURN_DEG, JOINT_CLOCK_OFFSET_S, LEG_PAIRS, RECORDING_FORMAT, SWAP_FRAMES,
-    SWAP_MIN_TURN_DEG,
+    fixture_recording, write_recording, RecordingSpec, RecordingSummary, DEPTH_TIME_JITTER_S,
+    INFERRED_CONFIDENCE, INFERRED_MIN_TURN_DEG, JOINT_CLOCK_OFFSET_S, LEG_PAIRS, RECORDING_FORMAT,
+    SWAP_FRAMES, SWAP_MIN_TURN_DEG,
 };
 
 /// Vertices of the bundled body model.
@@ -19,6 +19,34 @@ const BODY_VERTICES: u32 = 13_380;
 
 fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth/recording")
+}
+
+/// The bundled body model (the repository's assets).
+fn bundled_model() -> symcorr_synth::Model {
+    symcorr_synth::Model::new(
+        symcorr_synth::Assets::load(&symcorr_synth::Assets::default_dir()).unwrap(),
+    )
+    .unwrap()
+}
+
+/// The recording `spec` of `model`'s default body, written into a fresh temporary folder.
+fn record(
+    model: &symcorr_synth::Model,
+    spec: &RecordingSpec,
+    camera: &symcorr_synth::render::Camera,
+    realism: &symcorr_synth::render::Realism,
+) -> symcorr_synth::Result<(tempfile::TempDir, RecordingSummary)> {
+    let body = model.body(&symcorr_synth::Shape::default())?;
+    let out = tempfile::tempdir().unwrap();
+    let summary = write_recording(
+        out.path(),
+        &body,
+        model.assets.walk.as_ref(),
+        spec,
+        camera,
+        realism,
+    )?;
+    Ok((out, summary))
 }
 
 fn manifest() -> serde_json::Value {
@@ -267,22 +295,8 @@ fn truth_images_name_body_vertices() {
 
 #[test]
 fn committed_recording_regenerates_bit_for_bit() {
-    let model = symcorr_synth::Model::new(
-        symcorr_synth::Assets::load(&symcorr_synth::Assets::default_dir()).unwrap(),
-    )
-    .unwrap();
-    let body = model.body(&symcorr_synth::Shape::default()).unwrap();
     let (spec, camera, realism) = fixture_recording().unwrap();
-    let out = tempfile::tempdir().unwrap();
-    let summary = write_recording(
-        out.path(),
-        &body,
-        model.assets.walk.as_ref(),
-        &spec,
-        &camera,
-        &realism,
-    )
-    .unwrap();
+    let (out, summary) = record(&bundled_model(), &spec, &camera, &realism).unwrap();
     assert_eq!(summary.frames, frames());
     let mut files = 0;
     let mut stack = vec![PathBuf::new()];
@@ -354,31 +368,15 @@ fn the_recording_converts_to_an_oni_file_with_its_times() {
 /// beyond a neck's range is refused.
 #[test]
 fn a_head_turned_against_the_chest_shows_in_the_depth_not_in_the_joints() {
-    let model = symcorr_synth::Model::new(
-        symcorr_synth::Assets::load(&symcorr_synth::Assets::default_dir()).unwrap(),
-    )
-    .unwrap();
-    let body = model.body(&symcorr_synth::Shape::default()).unwrap();
+    let model = bundled_model();
     let (mut spec, mut camera, realism) = fixture_recording().unwrap();
     // 24 frames: the head's largest turn is at 0.75 s, frame 22 or 23.
     spec.frames = 24;
     camera.intrinsics = symcorr_synth::recording::kinect_v1_intrinsics(160, 120).unwrap();
-    let write = |spec: &symcorr_synth::recording::RecordingSpec| {
-        let out = tempfile::tempdir().unwrap();
-        write_recording(
-            out.path(),
-            &body,
-            model.assets.walk.as_ref(),
-            spec,
-            &camera,
-            &realism,
-        )
-        .unwrap();
-        out
-    };
-    let still = write(&spec);
+    let write = |spec: &RecordingSpec| record(&model, spec, &camera, &realism).map(|r| r.0);
+    let still = write(&spec).unwrap();
     spec.head_turn_deg = 40.0;
-    let looking = write(&spec);
+    let looking = write(&spec).unwrap();
     let (a, b) = (
         read_joints(still.path().join("truth/joints.json")).unwrap(),
         read_joints(looking.path().join("truth/joints.json")).unwrap(),
@@ -397,15 +395,6 @@ fn a_head_turned_against_the_chest_shows_in_the_depth_not_in_the_joints() {
     let m: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(m["head_turn_deg"], 40.0);
     spec.head_turn_deg = 100.0;
-    let out = tempfile::tempdir().unwrap();
-    let e = write_recording(
-        out.path(),
-        &body,
-        model.assets.walk.as_ref(),
-        &spec,
-        &camera,
-        &realism,
-    )
-    .unwrap_err();
+    let e = write(&spec).unwrap_err();
     assert!(e.to_string().contains("±80°"), "{e}");
 }
