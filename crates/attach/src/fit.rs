@@ -9,7 +9,13 @@
 //!   the bones must run through the whole mesh.
 //! * `outside` — fraction of points along the bones (each joint and three points per bone)
 //!   that lie outside the surface, by the outward normal of their nearest vertex. Closed
-//!   surfaces only (a single-view scan has no inside); skipped otherwise.
+//!   surfaces, and depth scans in their camera's space ([`camera_side`]): the
+//!   camera saw the space in front of the surface and beside its silhouette empty, so a bone
+//!   there is outside the body (the visual hull; the normals turned to the camera). Skipped on
+//!   other open surfaces. The rotation search ranks its placements by the closed surface's
+//!   outside depth, on open surfaces by the joints' distance to the surface (on scans the
+//!   outside depth recovered fewer turned skeletons:
+//!   `docs/decisions/2026-12-03-turned-skeletons-on-scans.md`).
 //! * `facing_conflict` — the skeleton's own facing cues (ankle → foot joints, knee bend) against
 //!   the mesh's (the surface around the ankles reaches forward, to the toes): a rigidly turned
 //!   skeleton keeps its own cues but contradicts the mesh's. `min(|skeleton|, |mesh|)` when the
@@ -23,9 +29,10 @@
 //! measured on generated bodies with exact and noisy (σ = 3 cm) joints against turned, flipped,
 //! other-pose and other-body joints: `docs/decisions/2026-12-02-attach-fit-quality.md`.
 
+use crate::bvh::TriangleBvh;
 use crate::geom::{bone_segments, distance_to_bones, Joints};
 use crate::refine::torso_frame;
-use crate::MirrorCheck;
+use crate::{Joint, MirrorCheck, Skeleton};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use symcorr_mesh::TriMesh;
 
@@ -51,7 +58,7 @@ pub enum FitCheckKind {
     SurfaceDistance,
     /// Median vertex-to-bone distance (skeleton heights).
     Coverage,
-    /// Fraction of points along the bones outside a closed surface.
+    /// Fraction of points along the bones outside a closed surface or a depth scan's visual hull.
     Outside,
     /// Disagreement between the skeleton's and the mesh's facing cues.
     FacingConflict,
@@ -182,13 +189,18 @@ impl FitQuality {
 pub(crate) struct FitMesh {
     positions: Vec<Point3<f64>>,
     normals: Vec<Vector3<f64>>,
-    /// Outward sign of the normals for a closed surface (`None`: open, no inside).
+    /// Outward sign of the normals for a closed surface, or towards the camera for a depth scan
+    /// seen from the origin (`None`: another open surface, no inside).
     outward: Option<f64>,
+    /// True for a closed surface.
+    closed: bool,
     components: (Vec<u32>, usize),
 }
 
 impl FitMesh {
-    pub(crate) fn new(mesh: &TriMesh) -> FitMesh {
+    /// The mesh as the checks see it; `p` (the given placement's joints, `usable` ones) decides
+    /// whether a depth scan is seen from the origin ([`camera_side`]).
+    pub(crate) fn new(mesh: &TriMesh, p: &Joints, usable: &[bool; 20]) -> FitMesh {
         let positions: Vec<Point3<f64>> = mesh.positions.iter().map(|&p| Point3::from(p)).collect();
         let normals = mesh
             .vertex_normals()
@@ -197,20 +209,32 @@ impl FitMesh {
             .collect();
         // A surface with boundary edges longer than a few √area is a partial view; a closed
         // body (or one with small holes at the eyes or soles) has an inside. Its normals point
-        // out when its signed volume is positive.
+        // out when its signed volume is positive. A partial view in its camera's space (a
+        // depth scan facing the origin) has an outside too: the space between the camera and
+        // the surface, and beside the silhouette, is seen empty — a body's bones cannot lie
+        // there (the visual hull); its "outward" normals face the camera.
         let area = mesh.total_area();
         let closed = mesh.boundary_length() < 0.5 * area.sqrt();
-        let outward = closed.then(|| {
-            if signed_volume(mesh) >= 0.0 {
+        let outward = if closed {
+            Some(if signed_volume(mesh) >= 0.0 {
                 1.0
             } else {
                 -1.0
-            }
-        });
+            })
+        } else {
+            camera_side_of(
+                mesh,
+                TORSO
+                    .iter()
+                    .filter(|j| usable[j.index()])
+                    .map(|j| p[j.index()]),
+            )
+        };
         FitMesh {
             positions,
             normals,
             outward,
+            closed,
             components: mesh.connected_components(),
         }
     }
@@ -233,6 +257,78 @@ impl FitMesh {
             .map(|(i, d)| (i, d.sqrt()))
     }
 }
+
+/// The side of `mesh` that faces its camera, when `mesh` is a depth scan in that camera's space
+/// (the camera at the origin) and `joints` its body's: `Some(1.0)` when the triangles' winding
+/// normals face the camera, `Some(-1.0)` when they face away from it, `None` for any other mesh.
+///
+/// A depth scan faces its camera all one way, from a distance
+/// ([`TriMesh::origin_facing_side`]), and shows the body's near side: the torso's joints, inside
+/// the body, lie beyond the surface along their lines of sight. The origin is refused as the
+/// camera when more of them lie clearly in front of the surface ([`BEHIND_MARGIN`]) than beyond
+/// it.
+/// The second test tells a scan from a partial mesh whose origin lies *behind* it (the front
+/// half of a body in a frame whose origin is 2 m behind the body faces the origin all one way
+/// as well).
+///
+/// ```
+/// use nalgebra::Point3;
+/// use symcorr_mesh::TriMesh;
+/// // A square 2 m in front of the origin, facing it; a body behind it and one in front of it.
+/// let square = TriMesh::new(
+///     vec![[-0.5, -0.5, 2.0], [-0.5, 0.5, 2.0], [0.5, 0.5, 2.0], [0.5, -0.5, 2.0]],
+///     vec![[0, 1, 2], [0, 2, 3]],
+/// )?;
+/// let mut body = symcorr_attach::testbody::t_pose(0.5);
+/// body.positions.iter_mut().for_each(|p| *p = Point3::new(p.x, p.y - 0.6, 2.1));
+/// assert_eq!(symcorr_attach::camera_side(&square, &body), Some(1.0));
+/// body.positions.iter_mut().for_each(|p| p.z = 1.9);
+/// assert_eq!(symcorr_attach::camera_side(&square, &body), None);
+/// # Ok::<(), symcorr_mesh::MeshError>(())
+/// ```
+pub fn camera_side(mesh: &TriMesh, joints: &Skeleton) -> Option<f64> {
+    camera_side_of(
+        mesh,
+        TORSO
+            .iter()
+            .map(|j| joints.position(*j))
+            .filter(|p| p.coords.iter().all(|x| x.is_finite())),
+    )
+}
+
+/// The joints that vote in [`camera_side`]: on the torso's axis, where a body turned about the
+/// vertical keeps them at their depth (a skeleton turned by 180° puts its limbs' joints in front
+/// of a scan, which the fit checks must still see).
+const TORSO: [Joint; 3] = [Joint::HipCenter, Joint::Spine, Joint::ShoulderCenter];
+
+fn camera_side_of(mesh: &TriMesh, joints: impl Iterator<Item = Point3<f64>>) -> Option<f64> {
+    let side = mesh.origin_facing_side()?;
+    let (lo, hi) = mesh.bounding_box();
+    let diagonal = (Vector3::from(hi) - Vector3::from(lo)).norm();
+    let margin = BEHIND_MARGIN * diagonal;
+    let bvh = TriangleBvh::new(mesh);
+    // Each torso joint whose line of sight crosses the surface votes: beyond the surface (or
+    // less than the margin in front of it: joint noise), or clearly in front of it.
+    let (mut beyond, mut in_front) = (0usize, 0usize);
+    for x in joints {
+        let Some(u) = x.coords.try_normalize(0.0) else {
+            continue;
+        };
+        let x = x + u * margin;
+        if bvh.segment_blocked(&Point3::origin(), &x, u32::MAX) {
+            beyond += 1;
+        } else if bvh.segment_blocked(&x, &(x + u * 2.0 * diagonal), u32::MAX) {
+            in_front += 1;
+        }
+    }
+    (in_front <= beyond).then_some(side)
+}
+
+/// How far in front of a scan (in diagonals of its bounding box, 10 cm on a body) a torso joint
+/// must lie to count against the origin being the scan's camera ([`camera_side`]): tracker noise
+/// (2–3 cm) never puts the torso that far out; the origin behind a partial body puts it a torso's
+/// half-depth (10–15 cm) in front.
+const BEHIND_MARGIN: f64 = 0.05;
 
 fn signed_volume(mesh: &TriMesh) -> f64 {
     (0..mesh.num_triangles())
@@ -346,13 +442,13 @@ pub(crate) fn measure(
 /// A rigid placement `x ↦ r·x + t` of the joints.
 pub(crate) type Placement = (Rotation3<f64>, Vector3<f64>);
 
-/// The search's objective: mean depth of the bone samples beyond the surface (0 inside; on an
-/// open surface the joints' distance to it) plus a tenth of the median vertex-to-bone distance,
+/// The search's objective: mean depth of the bone samples beyond a closed surface (0 inside; on
+/// an open surface, a depth scan too, the joints' distance to it) plus a tenth of the median vertex-to-bone distance,
 /// in skeleton heights. Zero-ish for a skeleton inside its body.
 fn objective(fm: &FitMesh, p: &Joints, usable: &[bool; 20], h: f64) -> f64 {
     let samples = bone_samples(p, usable);
     let n = samples.len().max(1) as f64;
-    let depth: f64 = match fm.outward {
+    let depth: f64 = match fm.outward.filter(|_| fm.closed) {
         Some(sign) => samples
             .iter()
             .map(|x| fm.outside_depth(x, sign).max(0.0))
@@ -481,7 +577,8 @@ fn candidates(p: &Joints, usable: &[bool; 20], mesh_centroid: &Point3<f64>) -> V
 
 #[cfg(test)]
 mod tests {
-    use crate::{attach, AttachError, AttachOptions, FitCheckKind, PoorFitPolicy};
+    use crate::{attach, AttachError, AttachOptions, FitCheckKind, Joint, PoorFitPolicy};
+    use nalgebra::{Point3, Vector3};
     use symcorr_mesh::TriMesh;
 
     #[test]
@@ -542,6 +639,93 @@ mod tests {
         };
         let a = attach(&mesh, &sk, &accept).unwrap();
         assert!(a.diagnostics.fit.accepted_poor_fit && !a.diagnostics.fit.passed());
+    }
+
+    /// The capsule body 2.5 m in front of a camera at the origin, facing it, as a depth camera
+    /// sees it: the triangles that face the camera, in the camera's space; and its skeleton.
+    fn front_view() -> (TriMesh, crate::Skeleton) {
+        let (body, mut sk) = crate::doc_example();
+        let shift = Vector3::new(0.0, -1.0, -2.5);
+        for p in sk.positions.iter_mut() {
+            *p += shift;
+        }
+        let moved: Vec<Point3<f64>> = body
+            .positions
+            .iter()
+            .map(|&p| Point3::from(p) + shift)
+            .collect();
+        let mut id = vec![u32::MAX; moved.len()];
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        for t in &body.triangles {
+            let [a, b, c] = t.map(|v| moved[v as usize]);
+            if (b - a).cross(&(c - a)).dot(&(Point3::origin() - a)) <= 0.0 {
+                continue;
+            }
+            triangles.push(t.map(|v| {
+                if id[v as usize] == u32::MAX {
+                    id[v as usize] = positions.len() as u32;
+                    positions.push(moved[v as usize].into());
+                }
+                id[v as usize]
+            }));
+        }
+        (TriMesh::new(positions, triangles).unwrap(), sk)
+    }
+
+    #[test]
+    fn a_depth_scan_has_an_outside_in_front_of_its_surface() {
+        let (scan, sk) = front_view();
+        assert_eq!(scan.origin_facing_side(), Some(1.0));
+        let measure = AttachOptions {
+            align: false,
+            poor_fit: PoorFitPolicy::Accept,
+            ..AttachOptions::default()
+        };
+        let a = attach(&scan, &sk, &measure).unwrap();
+        let inside = a.diagnostics.fit.check(FitCheckKind::Outside).unwrap();
+        assert!(inside.value < 0.05, "{inside:?}");
+        // The arms' joints 10 cm towards the camera: the arms hover in front of the body, in
+        // the space the camera saw empty, while every joint stays near the surface.
+        let mut hovering = sk.clone();
+        for j in [
+            Joint::ShoulderLeft,
+            Joint::ElbowLeft,
+            Joint::WristLeft,
+            Joint::HandLeft,
+            Joint::ShoulderRight,
+            Joint::ElbowRight,
+            Joint::WristRight,
+            Joint::HandRight,
+        ] {
+            hovering.positions[j.index()].z += 0.1;
+        }
+        let a = attach(&scan, &hovering, &measure).unwrap();
+        let fit = &a.diagnostics.fit;
+        let outside = fit.check(FitCheckKind::Outside).unwrap();
+        assert!(outside.value > outside.limit, "{outside:?}");
+        assert!(
+            fit.check(FitCheckKind::SurfaceDistance).unwrap().passed,
+            "{fit:?}"
+        );
+        // The same surface away from its camera has no outside to test.
+        let mut elsewhere = scan.clone();
+        for p in elsewhere.positions.iter_mut() {
+            p[0] += 5.0;
+        }
+        assert_eq!(elsewhere.origin_facing_side(), None);
+        // Seen from behind (the origin 2.5 m behind the body, not its camera): the surface
+        // faces the origin all one way, but the joints lie in front of it.
+        let mut behind = scan.clone();
+        let mut sk_behind = sk.clone();
+        for p in behind.positions.iter_mut() {
+            p[2] = -5.0 - p[2];
+        }
+        for p in sk_behind.positions.iter_mut() {
+            p.z = -5.0 - p.z;
+        }
+        assert!(behind.origin_facing_side().is_some());
+        assert_eq!(crate::camera_side(&behind, &sk_behind), None);
+        assert_eq!(crate::camera_side(&scan, &sk), Some(1.0));
     }
 
     fn e_has_newline(s: &str) -> bool {

@@ -69,7 +69,7 @@ pub use convention::{
     SIDE_MARGIN,
 };
 pub use error::AttachError;
-pub use fit::{FitCheck, FitCheckKind, FitQuality, FIT_THRESHOLD, REACH};
+pub use fit::{camera_side, FitCheck, FitCheckKind, FitQuality, FIT_THRESHOLD, REACH};
 pub use handedness::{handedness_verdict, Handedness, HandednessReport};
 pub use symcorr_skeleton::{
     BodySide, Bone, Joint, Plane, SagittalPlanes, Segment, Skeleton, BONES,
@@ -488,7 +488,7 @@ pub(crate) fn attach_with_usable(
     let (mut positions, mut usable, mut mirror) =
         mirror_step(mesh, positions, rep.usable, height, options.mirror)?;
     lap("mirror", &mut clock);
-    let fit_mesh = fit::FitMesh::new(mesh);
+    let fit_mesh = fit::FitMesh::new(mesh, &positions, &usable);
     let mut fit = fit::measure(&fit_mesh, &positions, &usable, height, &mirror);
     if !fit.passed() && options.align {
         let unmirrored = if mirror.swapped {

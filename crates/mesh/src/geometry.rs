@@ -4,6 +4,18 @@ use nalgebra::{Point3, Vector3};
 
 use crate::TriMesh;
 
+/// Fraction of a surface's area that must face the origin, all one way, for the origin to be
+/// taken as its camera centre ([`TriMesh::origin_facing_side`]). A depth scan in camera space
+/// faces its camera everywhere; a partial mesh in any other frame faces the origin from both
+/// sides.
+pub const ORIGIN_FACING_FRACTION: f64 = 0.95;
+
+/// How far from the origin, in diagonals of its bounding box, a surface must lie for the origin
+/// to be its camera ([`TriMesh::origin_facing_side`]). A depth camera sees a whole body from
+/// 1.5–4 m (a diagonal of about 2 m, ratio ≥ 0.7) and a close-up of a torso from 0.5 m (a
+/// diagonal of 0.6 m, 0.8); the origin of a body-centred frame lies within its body (≤ 0.1).
+pub const CAMERA_STANDOFF: f64 = 0.25;
+
 /// Closest point to `p` on the segment `a–b`, and its distance.
 ///
 /// ```
@@ -174,6 +186,68 @@ impl TriMesh {
                 }
             })
             .collect()
+    }
+
+    /// The side of a camera-space depth scan that faces its camera, the origin: `Some(1.0)` when
+    /// at least [`ORIGIN_FACING_FRACTION`] of the surface faces the origin along the triangles'
+    /// winding normals, `Some(-1.0)` when that much faces it against them, `None` otherwise
+    /// (a closed body, or a partial view in any other frame, faces the origin from both sides).
+    /// A depth scan faces its camera everywhere: its triangles come from one depth image.
+    /// Each triangle counts by its area times its distance along the line of sight; over one
+    /// scan's depth range that is near even. The camera also stands off the surface: no vertex
+    /// nearer the origin than [`CAMERA_STANDOFF`] × the diagonal of the mesh's bounding box
+    /// (the front half of a body in a frame centred on the body faces the origin from behind,
+    /// all one way too, and is no depth scan).
+    ///
+    /// ```
+    /// use symcorr_mesh::TriMesh;
+    /// // A square 2 m in front of the origin, wound towards it.
+    /// let square = TriMesh::new(
+    ///     vec![[0.0, 0.0, 2.0], [0.0, 1.0, 2.0], [1.0, 1.0, 2.0], [1.0, 0.0, 2.0]],
+    ///     vec![[0, 1, 2], [0, 2, 3]],
+    /// )?;
+    /// assert_eq!(square.origin_facing_side(), Some(1.0));
+    /// let mut turned = square.clone();
+    /// turned.triangles = vec![[0, 2, 1], [0, 3, 2]];
+    /// assert_eq!(turned.origin_facing_side(), Some(-1.0));
+    /// // The same square 0.2 m from the origin: no camera stands that close to what it sees.
+    /// let mut close = square.clone();
+    /// close.positions.iter_mut().for_each(|p| p[2] = 0.2);
+    /// assert_eq!(close.origin_facing_side(), None);
+    /// # Ok::<(), symcorr_mesh::MeshError>(())
+    /// ```
+    pub fn origin_facing_side(&self) -> Option<f64> {
+        let (mut towards, mut away) = (0.0, 0.0);
+        for t in 0..self.num_triangles() {
+            let [a, b, c] = self.corners(t);
+            // Twice the area along the normal, against the direction from the origin.
+            let facing = corner_cross(a, b, c)
+                .dot(&(Vector3::from(a) + Vector3::from(b) + Vector3::from(c)));
+            if facing < 0.0 {
+                towards -= facing;
+            } else {
+                away += facing;
+            }
+        }
+        let (lo, hi) = self.bounding_box();
+        let diagonal = (Vector3::from(hi) - Vector3::from(lo)).norm();
+        let nearest = self
+            .positions
+            .iter()
+            .map(|&p| Vector3::from(p).norm())
+            .fold(f64::INFINITY, f64::min);
+        let stands_off = nearest >= CAMERA_STANDOFF * diagonal;
+        if !stands_off {
+            return None;
+        }
+        let total = towards + away;
+        if total > 0.0 && towards >= ORIGIN_FACING_FRACTION * total {
+            Some(1.0)
+        } else if total > 0.0 && away >= ORIGIN_FACING_FRACTION * total {
+            Some(-1.0)
+        } else {
+            None
+        }
     }
 
     /// Area-weighted unit vertex normals (zero vector for an isolated vertex).

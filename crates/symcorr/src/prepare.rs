@@ -25,11 +25,7 @@ use symcorr_spectral::{
 /// stays far below 5.
 pub const PARTIAL_BOUNDARY_RATIO: f64 = 5.0;
 
-/// Fraction of a partial view's area that must face the origin (all one way) for the origin to
-/// be taken as its camera centre ([`PreparedMesh::view_point`]). A depth scan in camera space
-/// faces its camera everywhere (its triangles come from one depth image); a partial mesh in
-/// any other frame faces the origin from both sides.
-pub const ORIGIN_FACING_FRACTION: f64 = 0.95;
+pub use symcorr_mesh::geometry::ORIGIN_FACING_FRACTION;
 
 /// Metres per unit for a skeleton `height` units tall ([`PreparedMesh::metres_per_unit`]).
 pub fn metres_per_unit(height: f64) -> f64 {
@@ -252,30 +248,14 @@ impl PreparedMesh {
 
     /// Where this mesh was seen from: [`PreparedMesh::viewpoint`] when set; else, for a
     /// partial view ([`PreparedMesh::is_partial`]), the origin when it looks like a
-    /// camera-space depth scan (what `symcorr scan` writes): at least
-    /// [`ORIGIN_FACING_FRACTION`] of its area faces the origin, all from the same side.
-    /// `None` otherwise.
+    /// camera-space depth scan (what `symcorr scan` writes, [`symcorr_attach::camera_side`]): at
+    /// least [`ORIGIN_FACING_FRACTION`] of its area faces the origin, all from the same side,
+    /// from a distance, with the body's joints beyond the surface. `None` otherwise.
     pub fn view_point(&self) -> Option<Point3<f64>> {
         if self.viewpoint.is_some() || !self.is_partial() {
             return self.viewpoint;
         }
-        let p = &self.mesh.positions;
-        let (mut towards, mut away) = (0.0, 0.0);
-        for t in &self.mesh.triangles {
-            let [a, b, c] = t.map(|v| Point3::from(p[v as usize]));
-            // Twice the area along the normal, against the direction from the origin.
-            let facing = (b - a)
-                .cross(&(c - a))
-                .dot(&(a.coords + b.coords + c.coords));
-            if facing < 0.0 {
-                towards -= facing;
-            } else {
-                away += facing;
-            }
-        }
-        let total = towards + away;
-        // `facing` weighs area by distance too; over one scan's depth range that is near even.
-        (total > 0.0 && towards.max(away) >= ORIGIN_FACING_FRACTION * total).then(Point3::origin)
+        symcorr_attach::camera_side(&self.mesh, &self.attachment.joints).map(|_| Point3::origin())
     }
 
     /// True when the mesh is a partial view of a body (a single-view scan): its boundary is

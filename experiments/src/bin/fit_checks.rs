@@ -1,7 +1,8 @@
 //! The measurements behind symcorr-attach's fit checks (`FitQuality`): on every body of a
 //! dataset (meshes/, joints/, labels/ as in fixtures/synth/bodies), the checks' values and the
 //! labels' agreement with the reference labels for the body's own joints (exact and with
-//! Gaussian noise), the joints turned about the vertical axis, turned upside down, the joints of
+//! Gaussian noise), its left and right exchanged, the joints turned about the vertical axis through
+//! the hip centre, turned upside down, the joints of
 //! another pose of the same subject and of another subject in the same pose.
 //!
 //! ```text
@@ -17,14 +18,15 @@ use nalgebra::{Point3, Rotation3, Vector3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use symcorr_attach::{
-    attach, AttachError, AttachOptions, FitCheckKind, PoorFitPolicy, Segment, Skeleton,
+    attach, AttachError, AttachOptions, FitCheckKind, Joint, PoorFitPolicy, Segment, Skeleton,
 };
 use symcorr_mesh::TriMesh;
 
 /// Fit-check values on good and wrong joints.
 #[derive(Parser, Debug)]
 struct Args {
-    /// A dataset folder: meshes/NAME.ply, joints/NAME.json, labels/NAME.txt.
+    /// A dataset folder: meshes/NAME.ply, joints/NAME.json, labels/NAME.txt (a scan NAME_scan:
+    /// truth/NAME_scan.txt and its body's labels).
     #[arg(long)]
     bodies: PathBuf,
     /// Standard deviation of the joint noise case, in mesh units.
@@ -36,7 +38,7 @@ struct Args {
     /// Only bodies whose name contains this.
     #[arg(long)]
     only: Option<String>,
-    /// Turn angles about the vertical (y) axis through the origin, in degrees.
+    /// Turn angles about the vertical (y) axis through the skeleton's hip centre, in degrees.
     #[arg(long, value_delimiter = ',', default_values_t = vec![30.0, 90.0, 180.0])]
     turns: Vec<f64>,
 }
@@ -44,7 +46,8 @@ struct Args {
 struct Body {
     mesh: TriMesh,
     joints: Skeleton,
-    labels: Vec<Segment>,
+    /// Per vertex, the reference label (none: a scan pixel that shows no body vertex).
+    labels: Vec<Option<Segment>>,
 }
 
 fn load(dir: &Path) -> Result<BTreeMap<String, Body>, String> {
@@ -61,15 +64,39 @@ fn load(dir: &Path) -> Result<BTreeMap<String, Body>, String> {
         let joints =
             symcorr::io::read_skeleton(&dir.join("joints").join(format!("{name}.json")), None)
                 .map_err(|e| e.to_string())?;
-        let text = std::fs::read_to_string(dir.join("labels").join(format!("{name}.txt")))
-            .map_err(|e| e.to_string())?;
+        // A scan (NAME_scan) has no labels of its own: its truth names the body vertex each
+        // scan vertex shows, and that vertex's label is the scan vertex's.
+        let body_name = name.strip_suffix("_scan").unwrap_or(&name);
+        let read =
+            |p: PathBuf| std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()));
+        let mut text = read(dir.join("labels").join(format!("{body_name}.txt")))?;
+        if body_name != name {
+            let body_labels: Vec<&str> = text.split_whitespace().collect();
+            let truth = read(dir.join("truth").join(format!("{name}.txt")))?;
+            text = truth
+                .split_whitespace()
+                .map(|t| match t.parse::<i64>() {
+                    // −1: a pixel that shows no body vertex (a flying pixel); never agrees.
+                    Ok(-1) => Ok("-"),
+                    Ok(i) => usize::try_from(i)
+                        .ok()
+                        .and_then(|i| body_labels.get(i).copied())
+                        .ok_or_else(|| format!("{name}: bad truth {t}")),
+                    Err(_) => Err(format!("{name}: bad truth {t}")),
+                })
+                .collect::<Result<Vec<_>, _>>()?
+                .join(" ");
+        }
         let labels = text
             .split_whitespace()
-            .map(|t| {
-                t.parse::<usize>()
+            .map(|t| match t {
+                "-" => Ok(None),
+                _ => t
+                    .parse::<usize>()
                     .ok()
                     .and_then(|i| Segment::ALL.get(i).copied())
-                    .ok_or_else(|| format!("{name}: bad label {t}"))
+                    .map(Some)
+                    .ok_or_else(|| format!("{name}: bad label {t}")),
             })
             .collect::<Result<Vec<_>, _>>()?;
         out.insert(
@@ -146,14 +173,14 @@ fn run_case(body: &Body, case: &str, joints: &Skeleton) {
         .labels
         .iter()
         .zip(&body.labels)
-        .filter(|(x, y)| x == y)
+        .filter(|(x, y)| Some(**x) == **y)
         .count() as f64
         / n;
     let mirror = a
         .labels
         .iter()
         .zip(&body.labels)
-        .filter(|(x, y)| **y != y.mirror() && **x == y.mirror())
+        .filter(|(x, y)| y.is_some_and(|y| y != y.mirror() && **x == y.mirror()))
         .count() as f64
         / n;
     let outcome = match fit.worst() {
@@ -198,12 +225,18 @@ fn main() {
             p + Vector3::new(noise.gauss(), noise.gauss(), noise.gauss()) * args.noise
         });
         run_case(body, "noisy", &noisy);
+        // Left and right exchanged, as a tracker that took the body's back for its front.
+        run_case(body, "sides swapped", &body.joints.swap_sides());
+        // Turned about the vertical through the skeleton's own hip centre, as a tracker that
+        // misjudged the facing reports it (for a body at the origin, about the origin).
+        let hip = body.joints.position(Joint::HipCenter);
+        let pivot = Vector3::new(hip.x, 0.0, hip.z);
         for &deg in &args.turns {
             let r = Rotation3::from_axis_angle(&Vector3::y_axis(), deg.to_radians());
             run_case(
                 body,
                 &format!("turned {deg}"),
-                &transformed(&body.joints, |p| r * p),
+                &transformed(&body.joints, |p| r * (p - pivot) + pivot),
             );
         }
         let flip = Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI);
