@@ -266,10 +266,8 @@ impl FitMesh {
 /// ([`TriMesh::origin_facing_side`]), and shows the body's near side: the torso's joints, inside
 /// the body, lie beyond the surface along their lines of sight. The origin is refused as the
 /// camera when more of them lie clearly in front of the surface ([`BEHIND_MARGIN`]) than beyond
-/// it.
-/// The second test tells a scan from a partial mesh whose origin lies *behind* it (the front
-/// half of a body in a frame whose origin is 2 m behind the body faces the origin all one way
-/// as well).
+/// it: this tells a scan from a partial mesh whose origin lies *behind* it (the front half of a
+/// body in a frame whose origin is 2 m behind the body faces the origin all one way as well).
 ///
 /// ```
 /// use nalgebra::Point3;
@@ -443,8 +441,8 @@ pub(crate) fn measure(
 pub(crate) type Placement = (Rotation3<f64>, Vector3<f64>);
 
 /// The search's objective: mean depth of the bone samples beyond a closed surface (0 inside; on
-/// an open surface, a depth scan too, the joints' distance to it) plus a tenth of the median vertex-to-bone distance,
-/// in skeleton heights. Zero-ish for a skeleton inside its body.
+/// an open surface, a depth scan too, the joints' distance to it) plus a tenth of the median
+/// vertex-to-bone distance, in skeleton heights. Zero-ish for a skeleton inside its body.
 fn objective(fm: &FitMesh, p: &Joints, usable: &[bool; 20], h: f64) -> f64 {
     let samples = bone_samples(p, usable);
     let n = samples.len().max(1) as f64;
