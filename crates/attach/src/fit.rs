@@ -199,8 +199,13 @@ pub(crate) struct FitMesh {
 
 impl FitMesh {
     /// The mesh as the checks see it; `p` (the given placement's joints, `usable` ones) decides
-    /// whether a depth scan is seen from the origin ([`camera_side`]).
-    pub(crate) fn new(mesh: &TriMesh, p: &Joints, usable: &[bool; 20]) -> FitMesh {
+    /// whether a depth scan is seen from the origin ([`camera_side`]); `bvh` is the mesh's.
+    pub(crate) fn new(
+        mesh: &TriMesh,
+        bvh: &TriangleBvh,
+        p: &Joints,
+        usable: &[bool; 20],
+    ) -> FitMesh {
         let positions: Vec<Point3<f64>> = mesh.positions.iter().map(|&p| Point3::from(p)).collect();
         let normals = mesh
             .vertex_normals()
@@ -224,6 +229,7 @@ impl FitMesh {
         } else {
             camera_side_of(
                 mesh,
+                bvh,
                 TORSO
                     .iter()
                     .filter(|j| usable[j.index()])
@@ -287,6 +293,7 @@ impl FitMesh {
 pub fn camera_side(mesh: &TriMesh, joints: &Skeleton) -> Option<f64> {
     camera_side_of(
         mesh,
+        &TriangleBvh::new(mesh),
         TORSO
             .iter()
             .map(|j| joints.position(*j))
@@ -299,12 +306,16 @@ pub fn camera_side(mesh: &TriMesh, joints: &Skeleton) -> Option<f64> {
 /// of a scan, which the fit checks must still see).
 const TORSO: [Joint; 3] = [Joint::HipCenter, Joint::Spine, Joint::ShoulderCenter];
 
-fn camera_side_of(mesh: &TriMesh, joints: impl Iterator<Item = Point3<f64>>) -> Option<f64> {
+/// [`camera_side`] with the mesh's `bvh` at hand (attachment builds one for the bone heat too).
+fn camera_side_of(
+    mesh: &TriMesh,
+    bvh: &TriangleBvh,
+    joints: impl Iterator<Item = Point3<f64>>,
+) -> Option<f64> {
     let side = mesh.origin_facing_side()?;
     let (lo, hi) = mesh.bounding_box();
     let diagonal = (Vector3::from(hi) - Vector3::from(lo)).norm();
     let margin = BEHIND_MARGIN * diagonal;
-    let bvh = TriangleBvh::new(mesh);
     // Each torso joint whose line of sight crosses the surface votes: beyond the surface (or
     // less than the margin in front of it: joint noise), or clearly in front of it.
     let (mut beyond, mut in_front) = (0usize, 0usize);

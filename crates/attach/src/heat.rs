@@ -132,8 +132,10 @@ fn facing(normal: &Vector3<f64>, x: &Point3<f64>, q: &Point3<f64>) -> bool {
 const FRONT: f64 = 0.0;
 
 /// Computes bone-heat weights for `active` bones (indices into [`BONES`]) with joints `p`.
+/// `bvh` is `mesh`'s ([`TriangleBvh::new`]).
 pub(crate) fn bone_heat(
     mesh: &TriMesh,
+    bvh: &TriangleBvh,
     p: &Joints,
     active: &[usize],
     reach: &[f64; 19],
@@ -193,7 +195,6 @@ pub(crate) fn bone_heat(
             triangles: sub_tris,
         };
         let m = sub_mesh.num_vertices();
-        let bvh = TriangleBvh::new(mesh);
         let mut normals = sub_mesh.vertex_normals();
         // The facing test needs outward normals; a mesh wound the other way round (or a scan
         // meshed facing away) is recognised by its nearest bones lying in front of most
@@ -218,7 +219,7 @@ pub(crate) fn bone_heat(
             .enumerate()
             .map(|(i, (d, _))| {
                 let x = Point3::from(sub_mesh.positions[i]);
-                sources(x, normals[i].into(), old_id[i], d, &bvh)
+                sources(x, normals[i].into(), old_id[i], d, bvh)
             })
             .collect();
         let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;

@@ -488,7 +488,9 @@ pub(crate) fn attach_with_usable(
     let (mut positions, mut usable, mut mirror) =
         mirror_step(mesh, positions, rep.usable, height, options.mirror)?;
     lap("mirror", &mut clock);
-    let fit_mesh = fit::FitMesh::new(mesh, &positions, &usable);
+    // One BVH of the mesh serves the fit checks and the bone heat's visibility rays.
+    let bvh = bvh::TriangleBvh::new(mesh);
+    let fit_mesh = fit::FitMesh::new(mesh, &bvh, &positions, &usable);
     let mut fit = fit::measure(&fit_mesh, &positions, &usable, height, &mirror);
     if !fit.passed() && options.align {
         let unmirrored = if mirror.swapped {
@@ -558,6 +560,7 @@ pub(crate) fn attach_with_usable(
     }
     let heat = heat::bone_heat(
         mesh,
+        &bvh,
         &positions,
         &active,
         &reach,

@@ -250,7 +250,7 @@ impl PreparedMesh {
     /// partial view ([`PreparedMesh::is_partial`]), the origin when it looks like a
     /// camera-space depth scan (what `symcorr scan` writes, [`symcorr_attach::camera_side`]): at
     /// least [`ORIGIN_FACING_FRACTION`] of its area faces the origin, all from the same side,
-    /// from a distance, with the body's joints beyond the surface. `None` otherwise.
+    /// from a distance, with the torso's joints not in front of the surface. `None` otherwise.
     pub fn view_point(&self) -> Option<Point3<f64>> {
         if self.viewpoint.is_some() || !self.is_partial() {
             return self.viewpoint;
