@@ -67,6 +67,30 @@ impl Skeleton {
         out
     }
 
+    /// The skeleton turned by `angle` radians about its spine — the axis through the hip
+    /// centre towards the shoulder centre — right-handed about that axis (confidence and
+    /// provenance kept). Turned by π, a skeleton facing the camera faces away from it: what a
+    /// log in a frame turned about the vertical, or a tracker that took a back for a front,
+    /// reports. `None` when the hip and shoulder centres coincide.
+    ///
+    /// ```
+    /// use approx::assert_relative_eq;
+    /// use symcorr_skeleton::{Joint, Skeleton};
+    /// let mut xyz = [[0.0, 1.0, 3.0]; Joint::COUNT];
+    /// xyz[Joint::HipCenter.index()] = [0.0, 0.0, 3.0];
+    /// xyz[Joint::ShoulderCenter.index()] = [0.0, 0.5, 3.0];
+    /// xyz[Joint::FootLeft.index()] = [0.1, -0.9, 2.9]; // toes towards the camera at the origin
+    /// let s = Skeleton::from_arrays(xyz).turned_about_spine(std::f64::consts::PI).unwrap();
+    /// let foot = s.position(Joint::FootLeft);
+    /// assert_relative_eq!(foot.coords, nalgebra::Vector3::new(-0.1, -0.9, 3.1), epsilon = 1e-12);
+    /// ```
+    pub fn turned_about_spine(&self, angle: f64) -> Option<Skeleton> {
+        let pivot = self.position(Joint::HipCenter);
+        let axis = nalgebra::Unit::try_new(self.position(Joint::ShoulderCenter) - pivot, 1e-12)?;
+        let r = nalgebra::Rotation3::from_axis_angle(&axis, angle);
+        Some(self.map_positions(|p| pivot + r * (p - pivot)))
+    }
+
     /// The skeleton with every position mapped by `f` (confidence and provenance kept).
     pub fn map_positions(&self, f: impl Fn(Point3<f64>) -> Point3<f64>) -> Skeleton {
         Skeleton {

@@ -169,6 +169,9 @@ pub enum MethodReport {
         /// template point at all (`false`: no counterpart; the pair is then only the nearest
         /// guess). `None` for a whole surface, where every point has one.
         has_counterpart: Option<Vec<bool>>,
+        /// A target seen from a viewpoint: the fraction of the template points the final pose
+        /// shows to it that found a counterpart ([`ArticulatedMatches::view_held`]).
+        view_held: Option<f64>,
         /// The template posed onto the target (final skinning plus the non-rigid step), per
         /// template vertex of its prepared mesh, in the target's frame and unit.
         posed: Vec<[f64; 3]>,
@@ -258,6 +261,16 @@ impl Correspondence {
                 })
                 .collect(),
         )
+    }
+
+    /// A target seen from a viewpoint, the articulated method: the fraction of the template
+    /// points its fit shows to the viewpoint that found a counterpart
+    /// ([`ArticulatedMatches::view_held`]); `None` otherwise.
+    pub fn view_held(&self) -> Option<f64> {
+        match self.report {
+            MethodReport::Articulated { view_held, .. } => view_held,
+            _ => None,
+        }
     }
 
     /// Per pair, whether the target shows the template point (partial targets of the
@@ -611,6 +624,7 @@ fn run_articulated(
         .collect();
     let report = MethodReport::Articulated {
         coverage: coverage(&shown, target.num_vertices()),
+        view_held: out.view_held(),
         has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
         posed: out.posed.iter().map(|p| p.coords.into()).collect(),
         transforms: Box::new(out.transforms),

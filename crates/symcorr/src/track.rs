@@ -32,6 +32,11 @@
 //!    would take the near one), and a warm-started frame drops a match that moved more than
 //!    [`TrackOptions::max_match_shift_m`] against its posed vertex since the previous frame
 //!    (it slid to another part of the surface).
+//!    A fit that holds less than [`TURN_RETRY_BELOW`] of what it shows the camera
+//!    ([`crate::Correspondence::view_held`]) may stand on a skeleton facing away from the
+//!    camera: the frame is prepared and fitted again with the joints turned half a turn about
+//!    their spine, and the fit that holds more is kept. A kept fit that holds less than
+//!    [`MIN_VIEW_HELD`] skips the frame — never matched to garbage.
 //!
 //! Steps 1–4 ([`Observer`]) follow the joint log and the depth frames only, never a match;
 //! step 5 ([`Fitter`]) follows the previous fit. The two can run on two threads, frame k + 1
@@ -45,8 +50,8 @@
 pub mod animation;
 
 use crate::{
-    ArticulatedStart, ArticulatedTables, BoneTransforms, Method, MethodReport, Pipeline,
-    PipelineError, PreparedMesh,
+    ArticulatedStart, ArticulatedTables, BoneTransforms, Correspondence, Method, MethodReport,
+    Pipeline, PipelineError, PreparedMesh,
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
@@ -112,6 +117,20 @@ pub const RECIPROCAL_RADIUS: f64 = 0.03;
 /// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
 pub const MAX_MATCH_SHIFT_M: f64 = 0.03;
 
+/// A frame's fit that holds less than this fraction of its view
+/// ([`crate::Correspondence::view_held`]) is tried again with the joints turned half a turn
+/// about their spine, and the fit that holds more is kept. Measured 2026-12-03: good fits hold
+/// 0.66–0.99 (bodies20_kinect, its tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on
+/// two synthetic recordings), fits on a skeleton turned away from the camera 0.27–0.70
+/// (docs/decisions/2026-12-03-track-turned-skeletons.md). Below the threshold a good fit only
+/// costs the second fit, which holds less and is dropped.
+pub const TURN_RETRY_BELOW: f64 = 0.75;
+
+/// A frame whose kept fit holds less than this fraction of its view
+/// ([`crate::Correspondence::view_held`]) is skipped, never written as a match: the template
+/// does not lie on the scan (docs/decisions/2026-12-03-track-turned-skeletons.md).
+pub const MIN_VIEW_HELD: f64 = 0.5;
+
 /// Something the tracker corrected in a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Correction {
@@ -128,6 +147,9 @@ pub enum Correction {
     SidesSwapped,
     /// The skeleton failed a fit check and was used anyway.
     PoorFitAccepted,
+    /// The skeleton was turned half a turn about its spine: as logged, it faced away from the
+    /// side of the body the scan shows (its fit held less of its view than the turned one's).
+    SkeletonTurned,
 }
 
 impl Correction {
@@ -140,6 +162,7 @@ impl Correction {
             Correction::ArmsSwapped => "arms_swap_fixed",
             Correction::SidesSwapped => "sides_swap_fixed",
             Correction::PoorFitAccepted => "poor_fit_accepted",
+            Correction::SkeletonTurned => "skeleton_turn_fixed",
         }
     }
 }
@@ -160,6 +183,10 @@ pub struct MatchedFrame {
     pub mean_confidence: f64,
     /// The target skeleton's fit score ([`symcorr_attach::FitQuality::score`]).
     pub fit_score: f64,
+    /// The fraction of the template points the fit shows to the camera that found a
+    /// counterpart ([`crate::Correspondence::view_held`]; `None` for the methods that pose no
+    /// template).
+    pub view_held: Option<f64>,
     /// The scan, its vertex ids being those of `target_of`.
     pub scan: ScanMesh,
     /// Per template input vertex, the template posed onto this frame (camera space, metres):
@@ -492,12 +519,7 @@ impl Observer {
                 .iter()
                 .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
         );
-        if d.mirror.swapped {
-            corrections.push(Correction::SidesSwapped);
-        }
-        if d.fit.accepted_poor_fit {
-            corrections.push(Correction::PoorFitAccepted);
-        }
+        corrections.extend(attachment_corrections(&target));
         // Continuity is judged against what was used, the corrected and smoothed joints.
         self.previous = Some(skeleton);
         Ok(Observation {
@@ -531,15 +553,13 @@ impl Fitter<'_> {
         }
     }
 
-    fn fit_inner(&mut self, observation: Observation) -> Result<MatchedFrame, String> {
-        let Observation {
-            corrections,
-            scan,
-            target,
-            tables,
-            mut timings,
-        } = observation;
-        let t = Instant::now();
+    /// The match of `target`, warm-started from the previous fit unless there is none or a
+    /// joint jumped more than [`TrackOptions::max_warm_jump_m`]; whether it was warm.
+    fn run_match(
+        &self,
+        target: &PreparedMesh,
+        tables: Option<&ArticulatedTables>,
+    ) -> Result<(Correspondence, bool), String> {
         let warm = self.previous_fit.as_ref().filter(|(_, joints)| {
             self.options.warm_start
                 && largest_joint_motion(joints, &target.attachment.joints)
@@ -549,16 +569,82 @@ impl Fitter<'_> {
             Some((transforms, joints)) => ArticulatedStart::Warm { transforms, joints },
             None => ArticulatedStart::Skeletons,
         };
-        let was_warm = warm.is_some();
         let corr = self
             .pipeline
             .run_with(
                 self.template,
-                &target,
+                target,
                 start,
-                tables.as_ref().map(|t| (&self.template_tables, t)),
+                tables.map(|t| (&self.template_tables, t)),
             )
             .map_err(|e: PipelineError| e.to_string())?;
+        Ok((corr, warm.is_some()))
+    }
+
+    /// The frame's scan prepared with its joints turned half a turn about their spine
+    /// ([`Skeleton::turned_about_spine`]), and its tables.
+    fn turned(
+        &self,
+        scan: &ScanMesh,
+        target: &PreparedMesh,
+    ) -> Result<(PreparedMesh, Option<ArticulatedTables>), String> {
+        let joints = target
+            .attachment
+            .joints
+            .turned_about_spine(std::f64::consts::PI)
+            .ok_or("the skeleton's hip and shoulder centres coincide")?;
+        let turned = self
+            .pipeline
+            .prepare(scan.mesh.clone(), &joints)
+            .map_err(|e| e.to_string())?
+            .seen_from(nalgebra::Point3::origin());
+        let tables = (self.pipeline.options.method == Method::Articulated)
+            .then(|| ArticulatedTables::target(&turned));
+        Ok((turned, tables))
+    }
+
+    fn fit_inner(&mut self, observation: Observation) -> Result<MatchedFrame, String> {
+        let Observation {
+            mut corrections,
+            scan,
+            mut target,
+            tables,
+            mut timings,
+        } = observation;
+        let t = Instant::now();
+        let (mut corr, mut was_warm) = self.run_match(&target, tables.as_ref())?;
+        // A fit that leaves most of what it shows the camera without a counterpart may stand on
+        // a skeleton turned away from the camera: the template then shows the scan its back.
+        // The joints turned half a turn get their own fit, and the fit that holds more of its
+        // view is kept.
+        // A turned fit that cannot be made leaves the frame to the first.
+        if corr.view_held().is_some_and(|h| h < TURN_RETRY_BELOW) {
+            if let Ok((turned, turned_tables)) = self.turned(&scan, &target) {
+                if let Ok((turned_corr, turned_warm)) =
+                    self.run_match(&turned, turned_tables.as_ref())
+                {
+                    if turned_corr.view_held() > corr.view_held() {
+                        (corr, was_warm, target) = (turned_corr, turned_warm, turned);
+                        // The attachment's own corrections are now the turned skeleton's.
+                        corrections.retain(|c| {
+                            !matches!(c, Correction::SidesSwapped | Correction::PoorFitAccepted)
+                        });
+                        corrections.extend(attachment_corrections(&target));
+                        corrections.push(Correction::SkeletonTurned);
+                    }
+                }
+            }
+        }
+        if let Some(h) = corr.view_held().filter(|&h| h < MIN_VIEW_HELD) {
+            return Err(format!(
+                "the template does not fit the frame: {:.0} % of the template points the fit \
+                 shows the camera lie on the scan (at least {:.0} % expected), with the joints \
+                 as logged and turned half a turn; the joints may belong to another frame, \
+                 another body or another camera",
+                100.0 * h,
+                100.0 * MIN_VIEW_HELD
+            ));
+        }
         let t_match = t.elapsed().as_secs_f64();
         let posed = match &corr.report {
             MethodReport::Articulated {
@@ -618,6 +704,7 @@ impl Fitter<'_> {
             coverage: matched as f64 / n.max(1) as f64,
             mean_confidence,
             fit_score: target.attachment.diagnostics.fit.score,
+            view_held: corr.view_held(),
             target_of,
             confidence,
             corrections,
@@ -628,6 +715,20 @@ impl Fitter<'_> {
             timings,
         })
     }
+}
+
+/// What the attachment of a frame's scan corrected: the skeleton's sides swapped to fit the
+/// scan, a poor fit accepted.
+fn attachment_corrections(target: &PreparedMesh) -> Vec<Correction> {
+    let d = &target.attachment.diagnostics;
+    let mut out = Vec::new();
+    if d.mirror.swapped {
+        out.push(Correction::SidesSwapped);
+    }
+    if d.fit.accepted_poor_fit {
+        out.push(Correction::PoorFitAccepted);
+    }
+    out
 }
 
 /// Per template input vertex, its match's position minus its posed position (`None` where it

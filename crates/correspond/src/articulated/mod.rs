@@ -255,6 +255,10 @@ pub struct ArticulatedMatches {
     pub distance: Vec<f64>,
     /// Per template vertex: does the target show it (within the final gate, same facing)?
     pub has_counterpart: Vec<bool>,
+    /// A target seen from a viewpoint (a depth scan): per template vertex, does the final pose
+    /// show it to the viewpoint (the occlusion and facing tests)? `None` for a target without
+    /// a viewpoint. [`ArticulatedMatches::view_held`] compares it with `has_counterpart`.
+    pub in_view: Option<Vec<bool>>,
     /// The template posed onto the target (the final skinning and the non-rigid step).
     pub posed: Vec<Point3<f64>>,
     /// The final bone transforms (template frame → target frame), one per bone of
@@ -263,6 +267,26 @@ pub struct ArticulatedMatches {
     /// Seconds per stage: `segment_pools`, `articulated_icp` (with the k-d trees and the head's
     /// twist search), `nonrigid`, `map`.
     pub timings: Vec<(&'static str, f64)>,
+}
+
+impl ArticulatedMatches {
+    /// A target seen from a viewpoint: the fraction of the template points the final pose
+    /// shows to the viewpoint ([`ArticulatedMatches::in_view`]) that found a counterpart on
+    /// the target. A fit that lies on the scan holds most of what it says the camera sees
+    /// (0.66–0.99 on the virtual-Kinect scan sets and recordings measured); a template posed on
+    /// a skeleton turned away from the camera shows the camera its back, which the scan's front
+    /// does not hold (0.27–0.70). `None` without a viewpoint or with nothing in view.
+    /// (`docs/decisions/2026-12-03-track-turned-skeletons.md`.)
+    pub fn view_held(&self) -> Option<f64> {
+        let in_view = self.in_view.as_ref()?;
+        let shown = in_view.iter().filter(|&&s| s).count();
+        let held = in_view
+            .iter()
+            .zip(&self.has_counterpart)
+            .filter(|&(&s, &h)| s && h)
+            .count();
+        (shown > 0).then(|| held as f64 / shown as f64)
+    }
 }
 
 /// Matches every template vertex onto a (possibly partial) target by skeleton-driven
@@ -324,6 +348,7 @@ pub fn articulated_match(
         pairs: map.pairs,
         distance: map.distance,
         has_counterpart: map.has_counterpart,
+        in_view: map.in_view,
         posed,
         transforms,
         timings,
@@ -779,6 +804,7 @@ struct FinalMap {
     pairs: Vec<Pair>,
     distance: Vec<f64>,
     has_counterpart: Vec<bool>,
+    in_view: Option<Vec<bool>>,
 }
 
 /// Every template vertex takes the nearest target vertex of its pool; it has a counterpart
@@ -907,5 +933,6 @@ fn final_map(
         pairs,
         distance: distance.iter().map(|d| d / al.unit_len).collect(),
         has_counterpart,
+        in_view: visible,
     })
 }

@@ -87,6 +87,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "match_seconds": p.match_seconds,
                 "skeleton_filter_fallbacks": p.correspondence.filter_stats().fallbacks,
                 "target_vertices_hit": p.correspondence.coverage(),
+                "view_held": p.correspondence.view_held(),
                 "scan": p.scan.map(scan_json),
             })
         })

@@ -381,6 +381,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
                     "coverage": m.coverage,
                     "mean_confidence": m.mean_confidence,
                     "fit_score": m.fit_score,
+                    "view_held": m.view_held,
                     "posed": m.posed.is_some(),
                     "scan_vertices": m.scan.mesh.num_vertices(),
                     "timings_s": m.timings.iter().map(|(s, t)| (s.to_string(), json!(t))).collect::<serde_json::Map<_, _>>(),

@@ -31,12 +31,17 @@ pub(super) struct FrameDigest {
     pub mean_confidence: Option<f64>,
     /// Wall seconds from reading the frame to writing its rows.
     pub seconds: Option<f64>,
-    /// Legs, arms and whole-skeleton swaps fixed.
-    pub fixed: [bool; 3],
+    /// Legs, arms and whole-skeleton swaps fixed, and a skeleton turned back.
+    pub fixed: [bool; 4],
 }
 
 /// The corrections the summary counts, in [`FrameDigest::fixed`]'s order.
-const FIXES: [&str; 3] = ["legs_swap_fixed", "arms_swap_fixed", "sides_swap_fixed"];
+const FIXES: [&str; 4] = [
+    "legs_swap_fixed",
+    "arms_swap_fixed",
+    "sides_swap_fixed",
+    "skeleton_turn_fixed",
+];
 
 impl FrameDigest {
     /// The digest of a journal frame line.
@@ -80,6 +85,7 @@ pub(super) fn summary(done: &[FrameDigest], total: usize) -> Value {
         "legs_swap_fixed": fixed(0),
         "arms_swap_fixed": fixed(1),
         "sides_swap_fixed": fixed(2),
+        "skeleton_turn_fixed": fixed(3),
         "mean_coverage": mean(|e| e.coverage),
         "mean_confidence": mean(|e| e.mean_confidence),
     })
