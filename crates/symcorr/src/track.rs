@@ -500,14 +500,7 @@ impl Observer {
             .map_err(|e| e.to_string())?;
         let t_scan = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let target = self
-            .pipeline
-            .prepare(scan.mesh.clone(), &skeleton)
-            .map_err(|e| e.to_string())?
-            // The scan is in camera space: its camera sits at the origin.
-            .seen_from(nalgebra::Point3::origin());
-        let tables = (self.pipeline.options.method == Method::Articulated)
-            .then(|| ArticulatedTables::target(&target));
+        let (target, tables) = prepare_scan(&self.pipeline, &scan, &skeleton)?;
         let t_prepare = t.elapsed().as_secs_f64();
         let d = &target.attachment.diagnostics;
         let mut timings = vec![
@@ -593,14 +586,7 @@ impl Fitter<'_> {
             .joints
             .turned_about_spine(std::f64::consts::PI)
             .ok_or("the skeleton's hip and shoulder centres coincide")?;
-        let turned = self
-            .pipeline
-            .prepare(scan.mesh.clone(), &joints)
-            .map_err(|e| e.to_string())?
-            .seen_from(nalgebra::Point3::origin());
-        let tables = (self.pipeline.options.method == Method::Articulated)
-            .then(|| ArticulatedTables::target(&turned));
-        Ok((turned, tables))
+        prepare_scan(&self.pipeline, scan, &joints)
     }
 
     fn fit_inner(&mut self, observation: Observation) -> Result<MatchedFrame, String> {
@@ -715,6 +701,23 @@ impl Fitter<'_> {
             timings,
         })
     }
+}
+
+/// A frame's scan prepared with `skeleton` by `pipeline`, seen from the origin (the scan is in
+/// camera space: its camera sits there), and its articulated tables (`None` for the other
+/// methods).
+fn prepare_scan(
+    pipeline: &Pipeline,
+    scan: &ScanMesh,
+    skeleton: &Skeleton,
+) -> Result<(PreparedMesh, Option<ArticulatedTables>), String> {
+    let target = pipeline
+        .prepare(scan.mesh.clone(), skeleton)
+        .map_err(|e| e.to_string())?
+        .seen_from(nalgebra::Point3::origin());
+    let tables = (pipeline.options.method == Method::Articulated)
+        .then(|| ArticulatedTables::target(&target));
+    Ok((target, tables))
 }
 
 /// What the attachment of a frame's scan corrected: the skeleton's sides swapped to fit the
