@@ -215,6 +215,8 @@ pub enum FrameOutcome {
 /// A frame observed and not yet matched ([`Observer::observe`]): the joints used at its time,
 /// what was corrected in them, and its scan, prepared.
 pub struct Observation {
+    /// What the observer corrected in the joints; the attachment's corrections are added from
+    /// the prepared scan the fitter keeps.
     corrections: Vec<Correction>,
     scan: ScanMesh,
     target: PreparedMesh,
@@ -512,7 +514,6 @@ impl Observer {
                 .iter()
                 .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
         );
-        corrections.extend(attachment_corrections(&target));
         // Continuity is judged against what was used, the corrected and smoothed joints.
         self.previous = Some(skeleton);
         Ok(Observation {
@@ -574,19 +575,22 @@ impl Fitter<'_> {
         Ok((corr, warm.is_some()))
     }
 
-    /// The frame's scan prepared with its joints turned half a turn about their spine
-    /// ([`Skeleton::turned_about_spine`]), and its tables.
-    fn turned(
+    /// The frame's scan prepared anew with its joints turned half a turn about their spine
+    /// ([`Skeleton::turned_about_spine`]), and its match ([`Fitter::run_match`]): the
+    /// prepared scan, the match and whether it was warm.
+    fn turned_match(
         &self,
         scan: &ScanMesh,
         target: &PreparedMesh,
-    ) -> Result<(PreparedMesh, Option<ArticulatedTables>), String> {
+    ) -> Result<(PreparedMesh, Correspondence, bool), String> {
         let joints = target
             .attachment
             .joints
             .turned_about_spine(std::f64::consts::PI)
             .ok_or("the skeleton's hip and shoulder centres coincide")?;
-        prepare_scan(&self.pipeline, scan, &joints)
+        let (turned, tables) = prepare_scan(&self.pipeline, scan, &joints)?;
+        let (corr, warm) = self.run_match(&turned, tables.as_ref())?;
+        Ok((turned, corr, warm))
     }
 
     fn fit_inner(&mut self, observation: Observation) -> Result<MatchedFrame, String> {
@@ -602,24 +606,20 @@ impl Fitter<'_> {
         // A fit that leaves most of what it shows the camera without a counterpart may stand on
         // a skeleton turned away from the camera: the template then shows the scan its back.
         // The joints turned half a turn get their own fit, and the fit that holds more of its
-        // view is kept.
-        // A turned fit that cannot be made leaves the frame to the first.
+        // view is kept (a turned fit that cannot be made leaves the frame to the first).
+        let mut turned_back = false;
         if corr.view_held().is_some_and(|h| h < TURN_RETRY_BELOW) {
-            if let Ok((turned, turned_tables)) = self.turned(&scan, &target) {
-                if let Ok((turned_corr, turned_warm)) =
-                    self.run_match(&turned, turned_tables.as_ref())
-                {
-                    if turned_corr.view_held() > corr.view_held() {
-                        (corr, was_warm, target) = (turned_corr, turned_warm, turned);
-                        // The attachment's own corrections are now the turned skeleton's.
-                        corrections.retain(|c| {
-                            !matches!(c, Correction::SidesSwapped | Correction::PoorFitAccepted)
-                        });
-                        corrections.extend(attachment_corrections(&target));
-                        corrections.push(Correction::SkeletonTurned);
-                    }
+            if let Ok((turned, turned_corr, turned_warm)) = self.turned_match(&scan, &target) {
+                if turned_corr.view_held() > corr.view_held() {
+                    (target, corr, was_warm) = (turned, turned_corr, turned_warm);
+                    turned_back = true;
                 }
             }
+        }
+        // What the attachment corrected is the kept skeleton's.
+        corrections.extend(attachment_corrections(&target));
+        if turned_back {
+            corrections.push(Correction::SkeletonTurned);
         }
         if let Some(h) = corr.view_held().filter(|&h| h < MIN_VIEW_HELD) {
             return Err(format!(
