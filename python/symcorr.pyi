@@ -50,6 +50,10 @@ class Correspondence:
     """``(k, 3)``: per pair the corners (target ids) of the target triangle its template point reaches; the articulated method only."""
     surface_weights: Optional[npt.NDArray[np.float64]]
     """``(k, 3)``: the barycentric weights of that point on the triangle."""
+    view_held: Optional[float]
+    """A single-view target (articulated method): the fraction of the template points the fit shows the camera that lie on the scan; ``None`` elsewhere."""
+    turned_about_spine: bool
+    """The target's joints faced away from the camera and were turned half a turn about their spine before the match."""
     def __init__(
         self,
         pairs: npt.NDArray[np.int64],
@@ -60,6 +64,8 @@ class Correspondence:
         coverage: Optional[float],
         surface_corners: Optional[npt.NDArray[np.int64]] = None,
         surface_weights: Optional[npt.NDArray[np.float64]] = None,
+        view_held: Optional[float] = None,
+        turned_about_spine: bool = False,
     ) -> None: ...
     def __len__(self) -> int: ...
 
@@ -123,6 +129,8 @@ class Frame:
     fit_score: Optional[float]
     warm: Optional[bool]
     timings: Optional[Dict[str, float]]
+    view_held: Optional[float]
+    """The fraction of the template points the fit shows the camera that lie on the scan."""
 
 class FrameIterator(Iterator[Frame]):
     def __iter__(self) -> "FrameIterator": ...

@@ -453,10 +453,35 @@ fn usage_errors_exit_2_and_help_has_examples() {
     );
 }
 
+/// Every frame of a joint log (`symcorr.joints/1`) turned half a turn about its spine, the axis
+/// through the hip centre towards the shoulder centre: a skeleton facing away from the camera.
+fn turn_about_spine(log: &mut Value) {
+    for f in log["frames"].as_array_mut().unwrap() {
+        let at = |j: &str| -> [f64; 3] {
+            let p = f["joints"][j].as_array().unwrap();
+            [0, 1, 2].map(|k| p[k].as_f64().unwrap())
+        };
+        let (h, s) = (at("hip_center"), at("shoulder_center"));
+        let a = [s[0] - h[0], s[1] - h[1], s[2] - h[2]];
+        let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        let a = a.map(|x| x / len);
+        let joints = f["joints"].as_object_mut().unwrap();
+        for p in joints.values_mut() {
+            let q = p.as_array().unwrap();
+            let d = [0, 1, 2].map(|k| q[k].as_f64().unwrap() - h[k]);
+            let along = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
+            // Half a turn about the spine: d' = 2 (a·d) a − d.
+            *p = serde_json::json!([0, 1, 2].map(|k| h[k] + 2.0 * along * a[k] - d[k]));
+        }
+    }
+}
+
 /// A single-view scan as the target (`symcorr scan` from the bundled depth frame of
 /// s0_walk-10, then `match` against the whole s0_rest): the default method treats it as a
 /// partial view, every template vertex is either a pair or listed under `no_counterpart`, and
-/// the view shows roughly half of the body.
+/// the view shows roughly half of the body. With the scan's joints turned half a turn about
+/// their spine (facing away from the camera) `match` turns them back: the output says so and
+/// its matches land where those of the joints as given land.
 #[test]
 fn scan_target_reports_template_points_without_counterpart() {
     let dir = tempfile::tempdir().unwrap();
@@ -473,18 +498,22 @@ fn scan_target_reports_template_points_without_counterpart() {
         .arg("--out")
         .arg(&scan));
     assert!(out.status.success());
+    // `match` of s0_rest onto the scan with these joints, dense unless `extra` says otherwise.
+    let match_scan = |target_joints: &Path, out: &Path, extra: &str| {
+        run(bin()
+            .arg("match")
+            .arg(mesh("s0_rest"))
+            .arg(&scan)
+            .arg("--template-joints")
+            .arg(joints("s0_rest"))
+            .arg("--target-joints")
+            .arg(target_joints)
+            .arg(extra)
+            .arg("--out")
+            .arg(out))
+    };
     let corr = dir.path().join("corr.json");
-    let out = run(bin()
-        .arg("match")
-        .arg(mesh("s0_rest"))
-        .arg(&scan)
-        .arg("--template-joints")
-        .arg(joints("s0_rest"))
-        .arg("--target-joints")
-        .arg(scan_dir.join("joints.json"))
-        .arg("--dense")
-        .arg("--out")
-        .arg(&corr));
+    let out = match_scan(&scan_dir.join("joints.json"), &corr, "--dense");
     assert!(out.status.success());
     let doc = read_json(&corr);
     let n = doc["template"]["vertices"].as_u64().unwrap() as usize;
@@ -498,6 +527,59 @@ fn scan_target_reports_template_points_without_counterpart() {
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("partial target"), "{stdout}");
+    let parsed: CorrespondenceFile = serde_json::from_value(doc.clone()).unwrap();
+    let fit = parsed.fit.as_ref().unwrap();
+    assert!(!fit.target.turned_about_spine);
+    assert!(fit.target.view_held.unwrap() >= symcorr::TURN_RETRY_BELOW);
+
+    let mut log = read_json(&scan_dir.join("joints.json"));
+    turn_about_spine(&mut log);
+    let turned_joints = dir.path().join("turned.json");
+    std::fs::write(&turned_joints, log.to_string()).unwrap();
+    let turned_corr = dir.path().join("turned_corr.json");
+    let out = match_scan(&turned_joints, &turned_corr, "--dense");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("turned half a turn"), "{stdout}");
+    let turned: CorrespondenceFile = serde_json::from_value(read_json(&turned_corr)).unwrap();
+    let fit = turned.fit.as_ref().unwrap();
+    assert!(fit.target.turned_about_spine);
+    assert!(fit.target.view_held.unwrap() >= symcorr::TURN_RETRY_BELOW);
+    // Template points matched both ways land within 3 cm of each other (a template posed with
+    // its back to the scan matches its left side onto the scan's right).
+    let points = symcorr_mesh::io::read(&scan).unwrap().mesh.positions;
+    let given: std::collections::HashMap<u32, u32> =
+        parsed.pairs.iter().map(|&(t, u, _)| (t, u)).collect();
+    let (mut both, mut near) = (0, 0);
+    for &(t, u, _) in &turned.pairs {
+        if let Some(&g) = given.get(&t) {
+            both += 1;
+            let (p, q) = (points[g as usize], points[u as usize]);
+            let d2: f64 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
+            near += usize::from(d2 < 0.03 * 0.03);
+        }
+    }
+    assert!(
+        both as f64 > 0.9 * given.len() as f64,
+        "{both} of {}",
+        given.len()
+    );
+    assert!(
+        near as f64 > 0.9 * both as f64,
+        "{near} of {both} within 3 cm"
+    );
+
+    // The joints of another pose, used despite the fit checks: the fit holds too little of the
+    // scan either way round and is refused, with nothing written.
+    let refused = dir.path().join("refused.json");
+    let o = match_scan(&joints("s0_random-7"), &refused, "--accept-poor-fit");
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("does not fit the scan"), "{e}");
+    assert!(!refused.exists());
 }
 
 /// Outputs never destroy an input, are written through symlinks and into devices in place, and
@@ -983,24 +1065,7 @@ fn track_turns_back_a_skeleton_logged_facing_away() {
     let rec = sequence_recording(dir.path());
     let log_path = fixtures().join("../sequence/joints.json");
     let mut log = read_json(&log_path);
-    for f in log["frames"].as_array_mut().unwrap() {
-        let at = |j: &str| -> [f64; 3] {
-            let p = f["joints"][j].as_array().unwrap();
-            [0, 1, 2].map(|k| p[k].as_f64().unwrap())
-        };
-        let (h, s) = (at("hip_center"), at("shoulder_center"));
-        let a = [s[0] - h[0], s[1] - h[1], s[2] - h[2]];
-        let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        let a = a.map(|x| x / len);
-        let joints = f["joints"].as_object_mut().unwrap();
-        for p in joints.values_mut() {
-            let q = p.as_array().unwrap();
-            let d = [0, 1, 2].map(|k| q[k].as_f64().unwrap() - h[k]);
-            let along = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-            // Half a turn about the spine: d' = 2 (a·d) a − d.
-            *p = serde_json::json!([0, 1, 2].map(|k| h[k] + 2.0 * along * a[k] - d[k]));
-        }
-    }
+    turn_about_spine(&mut log);
     let turned_path = dir.path().join("turned.json");
     std::fs::write(&turned_path, log.to_string()).unwrap();
     let mut posed = Vec::new();

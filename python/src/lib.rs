@@ -459,7 +459,12 @@ fn pipeline_for(
 /// target), `timings` (seconds per stage), `method` and `coverage` (fraction of target vertices
 /// hit; `None` for the paper's method); the articulated method adds the matches as points of
 /// the target's surface, `surface_corners` (`int64 (k, 3)`, a triangle's corners, target ids)
-/// and `surface_weights` (`float64 (k, 3)`, barycentric), `None` for the other methods.
+/// and `surface_weights` (`float64 (k, 3)`, barycentric), `None` for the other methods. On a
+/// single-view target (articulated method), `view_held` is the fraction of the template points
+/// the fit shows the camera that lie on the scan (`None` elsewhere), and `turned_about_spine`
+/// says that the target's joints faced away from the camera and were turned half a turn about
+/// their spine before the match (as ``symcorr match`` does; a fit that holds under half of its
+/// view either way is a ``ValueError``).
 #[pyclass(module = "symcorr", frozen, get_all)]
 struct Correspondence {
     pairs: Py<PyAny>,
@@ -470,12 +475,14 @@ struct Correspondence {
     coverage: Option<f64>,
     surface_corners: Py<PyAny>,
     surface_weights: Py<PyAny>,
+    view_held: Option<f64>,
+    turned_about_spine: bool,
 }
 
 #[pymethods]
 impl Correspondence {
     #[new]
-    #[pyo3(signature = (pairs, confidence, no_counterpart, timings, method, coverage, surface_corners=None, surface_weights=None))]
+    #[pyo3(signature = (pairs, confidence, no_counterpart, timings, method, coverage, surface_corners=None, surface_weights=None, view_held=None, turned_about_spine=false))]
     #[allow(clippy::too_many_arguments)] // the attributes, in order, as pickling passes them
     fn new(
         py: Python<'_>,
@@ -487,6 +494,8 @@ impl Correspondence {
         coverage: Option<f64>,
         surface_corners: Option<Py<PyAny>>,
         surface_weights: Option<Py<PyAny>>,
+        view_held: Option<f64>,
+        turned_about_spine: bool,
     ) -> Self {
         Correspondence {
             pairs,
@@ -497,6 +506,8 @@ impl Correspondence {
             coverage,
             surface_corners: surface_corners.unwrap_or_else(|| py.None()),
             surface_weights: surface_weights.unwrap_or_else(|| py.None()),
+            view_held,
+            turned_about_spine,
         }
     }
 
@@ -510,6 +521,8 @@ impl Correspondence {
             self.coverage,
             self.surface_corners.clone_ref(py),
             self.surface_weights.clone_ref(py),
+            self.view_held,
+            self.turned_about_spine,
         )
             .into_pyobject(py)
     }
@@ -534,11 +547,11 @@ impl Correspondence {
 fn correspondence_out(
     py: Python<'_>,
     template: &PreparedMesh,
-    target: &PreparedMesh,
-    corr: &symcorr::Correspondence,
+    matched: (&PreparedMesh, &symcorr::ViewMatch),
     method: Method,
     timings: Vec<(String, f64)>,
 ) -> PyResult<Correspondence> {
+    let (target, corr) = (matched.1.target(matched.0), &matched.1.correspondence);
     // The ids of the inputs, as the correspondence file writes them; template points a partial
     // target does not show are listed apart.
     let shown = corr.has_counterpart();
@@ -594,6 +607,8 @@ fn correspondence_out(
         coverage: corr.coverage(),
         surface_corners,
         surface_weights,
+        view_held: corr.view_held(),
+        turned_about_spine: matched.1.turned_target.is_some(),
     })
 }
 
@@ -819,13 +834,14 @@ fn match_<'py>(
         );
         let pa = pa.map_err(|e| (e, Some("template")))?;
         let pb = pb.map_err(|e| (e, Some("target")))?;
-        let corr = pipeline.run(&pa, &pb).map_err(|e| (e, None))?;
-        Ok::<_, (PipelineError, Option<&str>)>((pa, pb, corr))
+        let matched = pipeline.run_on_view(&pa, &pb).map_err(|e| (e, None))?;
+        Ok::<_, (PipelineError, Option<&str>)>((pa, pb, matched))
     });
-    let (pa, pb, corr) = out.map_err(|(e, side)| py_err(e, side))?;
-    let mut timings = symcorr::output::pair_timings(&pa, &pb, &corr);
+    let (pa, pb, matched) = out.map_err(|(e, side)| py_err(e, side))?;
+    let mut timings =
+        symcorr::output::pair_timings(&pa, matched.target(&pb), &matched.correspondence);
     timings.push(("total".into(), start.elapsed().as_secs_f64()));
-    correspondence_out(py, &pa, &pb, &corr, pipeline.options.method, timings)
+    correspondence_out(py, &pa, (&pb, &matched), pipeline.options.method, timings)
 }
 
 /// A template prepared once (repair, skeleton attachment, and the spectral data the method
@@ -873,27 +889,26 @@ impl Prepared {
     fn match_(&self, py: Python<'_>, target: &Bound<'_, PyAny>) -> PyResult<Correspondence> {
         let start = Instant::now();
         let b = body_in(target, "target")?;
-        let (pb, corr) = py
+        let (pb, matched) = py
             .detach(|| {
                 let pb = self
                     .pipeline
                     .prepare((*b.mesh).clone(), &b.skeleton)
                     .map_err(|e| (e, Some("target")))?;
-                let corr = self
+                let matched = self
                     .pipeline
-                    .run(&self.template, &pb)
+                    .run_on_view(&self.template, &pb)
                     .map_err(|e| (e, None))?;
-                Ok::<_, (PipelineError, Option<&str>)>((pb, corr))
+                Ok::<_, (PipelineError, Option<&str>)>((pb, matched))
             })
             .map_err(|(e, side)| py_err(e, side))?;
-        let mut timings: Vec<(String, f64)> = pb.timings.clone();
-        timings.extend(corr.timings.iter().cloned());
+        let mut timings: Vec<(String, f64)> = matched.target(&pb).timings.clone();
+        timings.extend(matched.correspondence.timings.iter().cloned());
         timings.push(("total".into(), start.elapsed().as_secs_f64()));
         correspondence_out(
             py,
             &self.template,
-            &pb,
-            &corr,
+            (&pb, &matched),
             self.pipeline.options.method,
             timings,
         )
@@ -1098,8 +1113,9 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrins
 /// (``int32 (n,)``: per template vertex the scan vertex it matches, −1 where the frame does not
 /// show it), ``confidence`` (``float32 (n,)``), ``posed`` (``float32 (n, 3)``: the template
 /// posed onto the frame, camera space, metres), ``scan`` (``(V, F)`` of the frame's scan),
-/// ``corrections``, ``coverage``, ``mean_confidence``, ``fit_score``, ``warm`` and ``timings``
-/// (``None`` for a skipped frame).
+/// ``corrections``, ``coverage``, ``mean_confidence``, ``fit_score``, ``warm``, ``timings`` and
+/// ``view_held`` (the fraction of the template points the fit shows the camera that lie on the
+/// scan) (``None`` for a skipped frame).
 #[pyclass(module = "symcorr", frozen, get_all)]
 struct Frame {
     index: usize,
@@ -1116,6 +1132,7 @@ struct Frame {
     fit_score: Option<f64>,
     warm: Option<bool>,
     timings: Py<PyAny>,
+    view_held: Option<f64>,
 }
 
 #[pymethods]
@@ -1137,6 +1154,7 @@ impl Frame {
         fit_score: Option<f64>,
         warm: Option<bool>,
         timings: Py<PyAny>,
+        view_held: Option<f64>,
     ) -> Self {
         Frame {
             index,
@@ -1153,6 +1171,7 @@ impl Frame {
             fit_score,
             warm,
             timings,
+            view_held,
         }
     }
 
@@ -1172,6 +1191,7 @@ impl Frame {
             self.fit_score.into_pyobject(py)?,
             self.warm.into_pyobject(py)?.into_any(),
             self.timings.bind(py).clone(),
+            self.view_held.into_pyobject(py)?,
         ];
         PyTuple::new(py, items)
     }
@@ -1254,6 +1274,7 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
         fit_score: None,
         warm: None,
         timings: py.None(),
+        view_held: None,
     };
     let m = match r.outcome {
         FrameOutcome::Skipped(reason) => return Ok(skipped(reason)),
@@ -1287,6 +1308,7 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
         fit_score: Some(m.fit_score),
         warm: Some(m.warm),
         timings: timings.into_any().unbind(),
+        view_held: m.view_held,
     })
 }
 

@@ -179,6 +179,18 @@ def test_scan_equals_the_command_line_and_matches_as_a_partial_target(rest, cli,
     assert corr.no_counterpart is not None
     assert len(corr.pairs) + len(corr.no_counterpart) == 13380
     assert 0 < len(corr.no_counterpart) < 13380
+    assert corr.view_held >= 0.75 and not corr.turned_about_spine
+    # The joints turned half a turn about their spine (facing away from the camera) are turned
+    # back, as `symcorr match` does.
+    h = np.array(joints["hip_center"])
+    a = np.array(joints["shoulder_center"]) - h
+    a /= np.linalg.norm(a)
+    turned = {n: h + 2 * np.dot(a, np.array(p) - h) * a - (np.array(p) - h)
+              for n, p in joints.items()}
+    back = symcorr.match(rest, (v, f, turned), dense=False, samples=300)
+    assert back.turned_about_spine and back.view_held >= 0.75
+    again = pickle.loads(pickle.dumps(back))
+    assert again.turned_about_spine and again.view_held == back.view_held
 
 
 def test_track_equals_the_command_line(cli, tmp_path):
@@ -191,6 +203,7 @@ def test_track_equals_the_command_line(cli, tmp_path):
     assert f0.target_of.shape == (13380,) and f0.target_of.dtype == np.int32
     assert f0.posed.shape == (13380, 3) and f0.scan[0].shape[1] == 3
     assert f0.target_of.max() < len(f0.scan[0]) and (f0.target_of >= 0).any()
+    assert all(0.5 <= f.view_held <= 1 for f in frames)
     assert pickle.loads(pickle.dumps(f0)).index == 0
     out = tmp_path / "track"
     subprocess.run([cli, "track", RECORDING, "--joints", RECORDING / "joints.json", "--out", out,

@@ -20,8 +20,12 @@ pub struct PairResult {
     pub template: String,
     /// Target name.
     pub target: String,
-    /// The correspondence.
+    /// The correspondence ([`Pipeline::run_on_view`], as `symcorr match` runs it).
     pub correspondence: Correspondence,
+    /// The target prepared anew on its joints turned half a turn about their spine, when
+    /// [`Pipeline::run_on_view`] kept that fit ([`crate::ViewMatch::turned_target`]); the
+    /// correspondence then refers to it.
+    pub turned_target: Option<PreparedMesh>,
     /// Per-match errors and flips.
     pub evaluation: Evaluation,
     /// Table 1 row of this pair.
@@ -334,11 +338,13 @@ pub fn run_bench(
         .map(|(a, b)| {
             let (ta, tb) = (&prepared[index[a.as_str()]], &prepared[index[b.as_str()]]);
             let t = Instant::now();
-            let corr = pipeline.run(&ta.1, &tb.1)?;
+            let matched = pipeline.run_on_view(&ta.1, &tb.1)?;
             let match_seconds = t.elapsed().as_secs_f64();
+            let (corr, turned_target) = (matched.correspondence, matched.turned_target);
+            let target = turned_target.as_ref().unwrap_or(&tb.1);
             let (evaluation, conf) = evaluate_pair(
                 &ta.1,
-                &tb.1,
+                target,
                 truths.get(b.as_str()).map(Vec::as_slice),
                 &graphs[&graph_of(a, b)],
                 &corr,
@@ -347,7 +353,7 @@ pub fn run_bench(
             let row = table1_row(&evaluation.errors, &conf);
             let surface_errors = evaluate_surface_points(
                 &ta.1,
-                &tb.1,
+                target,
                 truths.get(b.as_str()).map(Vec::as_slice),
                 &graphs[&graph_of(a, b)],
                 &corr,
@@ -365,6 +371,7 @@ pub fn run_bench(
                 template: a.clone(),
                 target: b.clone(),
                 correspondence: corr,
+                turned_target,
                 evaluation,
                 table1_row: row,
                 scan,

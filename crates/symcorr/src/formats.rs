@@ -202,6 +202,16 @@ pub struct FitEntry {
     pub score: f64,
     /// Vertices in components no bone reaches (labelled `null`, never matched).
     pub unreached_vertices: usize,
+    /// The target of a correspondence seen from one viewpoint (articulated method): the
+    /// fraction of the template points the fit shows the camera that lie on the scan
+    /// (`Correspondence::view_held`). Absent elsewhere.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub view_held: Option<f64>,
+    /// The target's joints were turned half a turn about their spine before the match: the
+    /// fit on them as given held less than `TURN_RETRY_BELOW` of its view, the fit on the
+    /// turned joints held more (`Pipeline::run_on_view`). Absent when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub turned_about_spine: bool,
 }
 
 /// One fit check of a [`FitEntry`].

@@ -15,6 +15,10 @@
 //!   template vertex takes the nearest target vertex of its segment pool. It needs no spectral
 //!   stage, handles single-view scans ([`PreparedMesh::is_partial`]) and says which template
 //!   points a scan does not show ([`Correspondence::has_counterpart`]).
+//!   [`Pipeline::run_on_view`] is `run` guarded for a scan: a fit that holds too little of its
+//!   view ([`Correspondence::view_held`]) is tried with the scan's joints turned half a turn
+//!   about their spine (a skeleton facing away from the camera), and a fit that holds under
+//!   half is refused; `symcorr match`, `bench` and the Python package run it.
 //!   [`Method::Refined`]: skeleton landmark coordinates + si-HKS within segment pools, then
 //!   segment-constrained ZoomOut. [`Method::Paper`]: the paper's si-HKS candidates, skeleton
 //!   filter and eq. 8 selection (DESIGN.md, Algorithms 1–6).
@@ -79,7 +83,7 @@ pub mod view;
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
     ArticulatedTables, Correspondence, Method, MethodReport, Mode, Pipeline, PipelineOptions,
-    SurfacePoint, DEFAULT_SAMPLES,
+    SurfacePoint, ViewMatch, DEFAULT_SAMPLES, MIN_VIEW_HELD, TURN_RETRY_BELOW,
 };
 pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
@@ -147,6 +151,21 @@ pub enum PipelineError {
     /// for the methods it is given).
     #[error("the mesh was not prepared for the {0:?} method")]
     NotPreparedFor(Method),
+    /// A target seen from one viewpoint whose fit holds less than [`MIN_VIEW_HELD`] of the
+    /// template points it shows the camera, with the joints as given and turned half a turn
+    /// about their spine ([`Pipeline::run_on_view`]).
+    #[error(
+        "the template does not fit the scan: {:.0} % of the template points the fit shows the \
+         camera lie on the scan (at least {:.0} % expected), with the joints as given and \
+         turned half a turn about their spine; the joints may belong to another frame, another \
+         body or another camera",
+        100.0 * held,
+        100.0 * MIN_VIEW_HELD
+    )]
+    ViewNotHeld {
+        /// The fraction of its view the kept fit holds.
+        held: f64,
+    },
     /// A file other than a mesh or joint file (dataset list, output) is wrong.
     #[error("{file}: {message}")]
     File {

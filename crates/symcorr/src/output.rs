@@ -91,7 +91,10 @@ pub fn correspondence_json(
     let f = corr.filter_stats();
     CorrespondenceFile {
         fit: Some(MeshPair {
-            target: fit_entry(&target.attachment.diagnostics.fit, target.unreached),
+            target: FitEntry {
+                view_held: corr.view_held().map(round6),
+                ..fit_entry(&target.attachment.diagnostics.fit, target.unreached)
+            },
             template: fit_entry(&template.attachment.diagnostics.fit, template.unreached),
         }),
         format: CORRESPONDENCE_FORMAT.to_string(),
@@ -139,6 +142,8 @@ pub fn fit_entry(fit: &symcorr_attach::FitQuality, unreached: usize) -> FitEntry
             .collect(),
         score: round6(fit.score),
         unreached_vertices: unreached.max(fit.unreached.len()),
+        view_held: None,
+        turned_about_spine: false,
     }
 }
 

@@ -588,6 +588,107 @@ impl Pipeline {
     }
 }
 
+/// A fit on one view ([`Correspondence::view_held`]) that holds less than this fraction of the
+/// template points it shows the camera may stand on a skeleton turned away from the camera
+/// (the template then shows the scan its back): [`Pipeline::run_on_view`] and `symcorr track`
+/// fit it again with the joints turned half a turn about their spine and keep the fit that
+/// holds more. Measured 2026-12-03: good fits hold 0.66–0.99 (bodies20_kinect, its
+/// tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on two synthetic recordings), fits on
+/// a skeleton turned away from the camera 0.27–0.70
+/// (docs/decisions/2026-12-03-track-turned-skeletons.md). Below the threshold a good fit only
+/// costs the second fit, which holds less and is dropped.
+pub const TURN_RETRY_BELOW: f64 = 0.75;
+
+/// A fit on one view whose kept fit holds less than this fraction of its view
+/// ([`Correspondence::view_held`]) is refused ([`PipelineError::ViewNotHeld`]), never returned
+/// as a match: the template does not lie on the scan
+/// (docs/decisions/2026-12-03-track-turned-skeletons.md).
+pub const MIN_VIEW_HELD: f64 = 0.5;
+
+/// What [`Pipeline::run_on_view`] kept.
+#[derive(Debug, Clone)]
+pub struct ViewMatch {
+    /// The correspondence, onto [`ViewMatch::turned_target`] when that is set, else onto the
+    /// target as given (the vertex ids are the same: only the skeleton differs).
+    pub correspondence: Correspondence,
+    /// `Some`: the fit on the given joints held too little of its view, and the target was
+    /// prepared anew on its joints turned half a turn about their spine
+    /// ([`Skeleton::turned_about_spine`](symcorr_attach::Skeleton::turned_about_spine)), whose
+    /// fit held more.
+    pub turned_target: Option<PreparedMesh>,
+}
+
+impl ViewMatch {
+    /// The target the correspondence refers to: the turned one, or `given`.
+    pub fn target<'a>(&'a self, given: &'a PreparedMesh) -> &'a PreparedMesh {
+        self.turned_target.as_ref().unwrap_or(given)
+    }
+}
+
+impl Pipeline {
+    /// [`Pipeline::run`], guarded against a target skeleton that faces away from the camera.
+    /// On a target seen from one viewpoint (a depth scan, [`PreparedMesh::view_point`]) a
+    /// skeleton turned half a turn about its spine — a log in a frame turned about the
+    /// vertical, a tracker that took a back for a front — mirrors its limbs and passes the
+    /// attachment's checks on about half of the frontal scans measured; the template posed on
+    /// it shows the camera its back, which the scan does not hold. A fit that holds less than
+    /// [`TURN_RETRY_BELOW`] of its view ([`Correspondence::view_held`]) is fitted again on the
+    /// joints turned back, and the fit that holds more is kept. A target that is not one view
+    /// (or another method) is matched by [`Pipeline::run`] alone.
+    ///
+    /// Errors: those of [`Pipeline::run`]; [`PipelineError::ViewNotHeld`] when the kept fit
+    /// holds less than [`MIN_VIEW_HELD`] (the joints belong to another frame, body or camera).
+    /// A turned target that cannot be prepared or matched leaves the fit on the given joints.
+    ///
+    /// ```no_run
+    /// # let (pipeline, template, scan): (symcorr::Pipeline, symcorr::PreparedMesh, symcorr::PreparedMesh) = unimplemented!();
+    /// let matched = pipeline.run_on_view(&template, &scan)?;
+    /// if matched.turned_target.is_some() {
+    ///     eprintln!("the scan's joints faced away from the camera and were turned back");
+    /// }
+    /// let target = matched.target(&scan); // the mesh the pairs' target ids refer to
+    /// println!("{} of {} template points matched", matched.correspondence.pairs.len(), template.num_vertices());
+    /// # let _ = target;
+    /// # Ok::<(), symcorr::PipelineError>(())
+    /// ```
+    pub fn run_on_view(
+        &self,
+        template: &PreparedMesh,
+        target: &PreparedMesh,
+    ) -> Result<ViewMatch, PipelineError> {
+        let mut kept = ViewMatch {
+            correspondence: self.run(template, target)?,
+            turned_target: None,
+        };
+        let held = kept.correspondence.view_held();
+        if held.is_some_and(|h| h < TURN_RETRY_BELOW) {
+            let turned = target
+                .attachment
+                .joints
+                .turned_about_spine(std::f64::consts::PI)
+                .and_then(|joints| self.prepare(target.input_mesh().clone(), &joints).ok())
+                .map(|t| match target.viewpoint {
+                    Some(eye) => t.seen_from(eye),
+                    None => t,
+                });
+            if let Some(turned) = turned {
+                if let Ok(corr) = self.run(template, &turned) {
+                    if corr.view_held() > held {
+                        kept = ViewMatch {
+                            correspondence: corr,
+                            turned_target: Some(turned),
+                        };
+                    }
+                }
+            }
+        }
+        match kept.correspondence.view_held() {
+            Some(held) if held < MIN_VIEW_HELD => Err(PipelineError::ViewNotHeld { held }),
+            _ => Ok(kept),
+        }
+    }
+}
+
 type MethodOutput = (Vec<Pair>, MethodReport, Timings);
 
 /// The dense per-vertex values `v` restricted to the sparse sample `points` (dense: all).

@@ -32,11 +32,11 @@
 //!    would take the near one), and a warm-started frame drops a match that moved more than
 //!    [`TrackOptions::max_match_shift_m`] against its posed vertex since the previous frame
 //!    (it slid to another part of the surface).
-//!    A fit that holds less than [`TURN_RETRY_BELOW`] of what it shows the camera
+//!    A fit that holds less than [`crate::TURN_RETRY_BELOW`] of what it shows the camera
 //!    ([`crate::Correspondence::view_held`]) may stand on a skeleton facing away from the
 //!    camera: the frame is prepared and fitted again with the joints turned half a turn about
 //!    their spine, and the fit that holds more is kept. A kept fit that holds less than
-//!    [`MIN_VIEW_HELD`] skips the frame — never matched to garbage.
+//!    [`crate::MIN_VIEW_HELD`] skips the frame — never matched to garbage.
 //!
 //! Steps 1–4 ([`Observer`]) follow the joint log and the depth frames only, never a match;
 //! step 5 ([`Fitter`]) follows the previous fit. The two can run on two threads, frame k + 1
@@ -51,7 +51,7 @@ pub mod animation;
 
 use crate::{
     ArticulatedStart, ArticulatedTables, BoneTransforms, Correspondence, Method, MethodReport,
-    Pipeline, PipelineError, PreparedMesh,
+    Pipeline, PipelineError, PreparedMesh, MIN_VIEW_HELD, TURN_RETRY_BELOW,
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
@@ -116,20 +116,6 @@ pub const RECIPROCAL_RADIUS: f64 = 0.03;
 /// Default [`TrackOptions::max_match_shift_m`], metres.
 /// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
 pub const MAX_MATCH_SHIFT_M: f64 = 0.03;
-
-/// A frame's fit that holds less than this fraction of its view
-/// ([`crate::Correspondence::view_held`]) is tried again with the joints turned half a turn
-/// about their spine, and the fit that holds more is kept. Measured 2026-12-03: good fits hold
-/// 0.66–0.99 (bodies20_kinect, its tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on
-/// two synthetic recordings), fits on a skeleton turned away from the camera 0.27–0.70
-/// (docs/decisions/2026-12-03-track-turned-skeletons.md). Below the threshold a good fit only
-/// costs the second fit, which holds less and is dropped.
-pub const TURN_RETRY_BELOW: f64 = 0.75;
-
-/// A frame whose kept fit holds less than this fraction of its view
-/// ([`crate::Correspondence::view_held`]) is skipped, never written as a match: the template
-/// does not lie on the scan (docs/decisions/2026-12-03-track-turned-skeletons.md).
-pub const MIN_VIEW_HELD: f64 = 0.5;
 
 /// Something the tracker corrected in a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -621,15 +607,8 @@ impl Fitter<'_> {
         if turned_back {
             corrections.push(Correction::SkeletonTurned);
         }
-        if let Some(h) = corr.view_held().filter(|&h| h < MIN_VIEW_HELD) {
-            return Err(format!(
-                "the template does not fit the frame: {:.0} % of the template points the fit \
-                 shows the camera lie on the scan (at least {:.0} % expected), with the joints \
-                 as logged and turned half a turn; the joints may belong to another frame, \
-                 another body or another camera",
-                100.0 * h,
-                100.0 * MIN_VIEW_HELD
-            ));
+        if let Some(held) = corr.view_held().filter(|&h| h < MIN_VIEW_HELD) {
+            return Err(PipelineError::ViewNotHeld { held }.to_string());
         }
         let t_match = t.elapsed().as_secs_f64();
         let posed = match &corr.report {

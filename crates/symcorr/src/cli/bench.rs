@@ -88,6 +88,7 @@ pub fn summary_json(report: &BenchReport, pipeline: &Pipeline, dataset: &Path) -
                 "skeleton_filter_fallbacks": p.correspondence.filter_stats().fallbacks,
                 "target_vertices_hit": p.correspondence.coverage(),
                 "view_held": p.correspondence.view_held(),
+                "turned_about_spine": p.turned_target.is_some(),
                 "scan": p.scan.map(scan_json),
             })
         })
@@ -228,8 +229,12 @@ pub fn stage_pair_files(
 ) -> Result<(), CliError> {
     std::fs::create_dir_all(dir).map_err(|e| CliError::with(dir.display(), e))?;
     for p in &report.pairs {
-        let (a, b) = (&report.prepared[&p.template], &report.prepared[&p.target]);
-        let doc = correspondence_json(
+        let a = &report.prepared[&p.template];
+        let b = p
+            .turned_target
+            .as_ref()
+            .unwrap_or(&report.prepared[&p.target]);
+        let mut doc = correspondence_json(
             &dataset.meshes[&p.template].display().to_string(),
             a,
             &dataset.meshes[&p.target].display().to_string(),
@@ -237,6 +242,9 @@ pub fn stage_pair_files(
             &p.correspondence,
             &symcorr::output::pair_timings(a, b, &p.correspondence),
         );
+        if let Some(fit) = doc.fit.as_mut() {
+            fit.target.turned_about_spine = p.turned_target.is_some();
+        }
         let path = dir.join(format!("{}__{}.json", p.template, p.target));
         batch
             .add(&path, doc.to_json().as_bytes())

@@ -137,6 +137,8 @@ pub fn run(args: DemoArgs, max_input_bytes: u64) -> Result<(), CliError> {
             target: format!("{b_name} ({tag})"),
             surface_errors: evaluate_surface_points(&a, &b, None, &graph, &corr),
             correspondence: corr,
+            // Two whole bodies: no view to turn a skeleton towards.
+            turned_target: None,
             evaluation,
             table1_row: row,
             scan: None,

@@ -304,7 +304,7 @@ pub fn load_prepared(
 /// skeleton that is unusable on its own, both for a skeleton that does not fit the mesh, the
 /// mesh otherwise.
 pub fn blame(mesh: &Path, joints: &Path, e: symcorr::PipelineError) -> CliError {
-    use symcorr::PipelineError::Attach;
+    use symcorr::PipelineError::{Attach, ViewNotHeld};
     use symcorr_attach::AttachError as A;
     match &e {
         Attach(A::EmptySkeleton { .. }) => CliError::with(joints.display(), e),
@@ -313,7 +313,10 @@ pub fn blame(mesh: &Path, joints: &Path, e: symcorr::PipelineError) -> CliError 
             | A::AlignmentFailed { .. }
             | A::ScaleMismatch { .. }
             | A::MirroredSkeleton { .. },
-        ) => CliError(format!("{} with {}: {e}", mesh.display(), joints.display())),
+        )
+        | ViewNotHeld { .. } => {
+            CliError(format!("{} with {}: {e}", mesh.display(), joints.display()))
+        }
         _ => CliError::with(mesh.display(), e),
     }
 }
@@ -425,11 +428,18 @@ pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
     );
     let (a, b) = (a?, b?);
     progress.set("matching");
-    let corr = pipeline.run(&a, &b).map_err(|e| CliError(e.to_string()))?;
+    // A scan's skeleton facing away from the camera is turned back (`run_on_view`): the
+    // outputs then describe the target prepared on the turned joints.
+    let matched = pipeline
+        .run_on_view(&a, &b)
+        .map_err(|e| blame(&args.target, &args.target_joints, e))?;
+    let turned = matched.turned_target.is_some();
+    let b = matched.turned_target.unwrap_or(b);
+    let corr = matched.correspondence;
     let mut timings = pair_timings(&a, &b, &corr);
     timings.push(("total".into(), start.elapsed().as_secs_f64()));
     progress.finish();
-    let doc = correspondence_json(
+    let mut doc = correspondence_json(
         &args.template.display().to_string(),
         &a,
         &args.target.display().to_string(),
@@ -437,6 +447,9 @@ pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
         &corr,
         &timings,
     );
+    if let Some(fit) = doc.fit.as_mut() {
+        fit.target.turned_about_spine = turned;
+    }
     let text = serde_json::to_string(&doc).map_err(|e| CliError(e.to_string()))?;
     // All outputs are staged, then committed together: an error leaves none of them.
     let mut batch = OutputBatch::new();
@@ -477,10 +490,7 @@ pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
             "no_counterpart": unseen,
             "template_points": points,
             "fallbacks": corr.filter_stats().fallbacks,
-            "fit": {
-                "template": symcorr::output::fit_entry(&a.attachment.diagnostics.fit, a.unreached),
-                "target": symcorr::output::fit_entry(&b.attachment.diagnostics.fit, b.unreached),
-            },
+            "fit": doc.fit,
             "seconds": seconds,
             "timings_s": timings.iter().map(|(n, s)| (n.clone(), serde_json::json!(s))).collect::<serde_json::Map<_, _>>(),
             "repair": {
@@ -511,6 +521,12 @@ pub fn run(args: MatchArgs, max_input_bytes: u64) -> Result<(), CliError> {
                 p.unreached
             );
         }
+    }
+    if turned {
+        println!(
+            "target: the joints faced away from the camera (the fit on them held too little of \
+             the scan): matched with them turned half a turn about their spine"
+        );
     }
     match unseen {
         Some(u) => println!(
