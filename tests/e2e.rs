@@ -549,6 +549,8 @@ fn scan_target_reports_template_points_without_counterpart() {
     let fit = turned.fit.as_ref().unwrap();
     assert!(fit.target.turned_about_spine);
     assert!(fit.target.view_held.unwrap() >= symcorr::TURN_RETRY_BELOW);
+    assert!(turned.timings_s["view_retry_dropped"] > 0.0);
+    assert!(!parsed.timings_s.contains_key("view_retry_dropped"));
     // Template points matched both ways land within 3 cm of each other (a template posed with
     // its back to the scan matches its left side onto the scan's right).
     let points = symcorr_mesh::io::read(&scan).unwrap().mesh.positions;

@@ -594,9 +594,11 @@ impl Pipeline {
 /// fit it again with the joints turned half a turn about their spine and keep the fit that
 /// holds more. Measured 2026-12-03: good fits hold 0.66–0.99 (bodies20_kinect, its
 /// tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on two synthetic recordings), fits on
-/// a skeleton turned away from the camera 0.27–0.70
-/// (docs/decisions/2026-12-03-track-turned-skeletons.md). Below the threshold a good fit only
-/// costs the second fit, which holds less and is dropped.
+/// a skeleton turned away from the camera 0.27–0.70 on recordings
+/// (docs/decisions/2026-12-03-track-turned-skeletons.md) and 0.23–0.80 on single scans, where
+/// a higher threshold also turned correct fits into flipped ones
+/// (docs/decisions/2026-12-04-turned-skeletons-in-match.md). Below the threshold a good fit
+/// only costs the second fit, which holds less and is dropped.
 pub const TURN_RETRY_BELOW: f64 = 0.75;
 
 /// A fit on one view whose kept fit holds less than this fraction of its view
@@ -636,6 +638,9 @@ impl Pipeline {
     /// joints turned back, and the fit that holds more is kept. A target that is not one view
     /// (or another method) is matched by [`Pipeline::run`] alone.
     ///
+    /// After a retry the correspondence's timings end with `view_retry_dropped`: the seconds of
+    /// the fit (or the turned preparation and fit) whose result was dropped.
+    ///
     /// Errors: those of [`Pipeline::run`]; [`PipelineError::ViewNotHeld`] when the kept fit
     /// holds less than [`MIN_VIEW_HELD`] (the joints belong to another frame, body or camera).
     /// A turned target that cannot be prepared or matched leaves the fit on the given joints.
@@ -656,12 +661,15 @@ impl Pipeline {
         template: &PreparedMesh,
         target: &PreparedMesh,
     ) -> Result<ViewMatch, PipelineError> {
+        let t = Instant::now();
         let mut kept = ViewMatch {
             correspondence: self.run(template, target)?,
             turned_target: None,
         };
         let held = kept.correspondence.view_held();
         if held.is_some_and(|h| h < TURN_RETRY_BELOW) {
+            let first_fit = t.elapsed().as_secs_f64();
+            let t = Instant::now();
             let turned = target
                 .attachment
                 .joints
@@ -681,6 +689,16 @@ impl Pipeline {
                     }
                 }
             }
+            // The work whose result was dropped: the first fit when the turned one is kept
+            // (whose preparation the turned target's own timings hold), else the turned
+            // preparation and fit.
+            let dropped = match kept.turned_target {
+                Some(_) => first_fit,
+                None => t.elapsed().as_secs_f64(),
+            };
+            kept.correspondence
+                .timings
+                .push(("view_retry_dropped".to_string(), dropped));
         }
         match kept.correspondence.view_held() {
             Some(held) if held < MIN_VIEW_HELD => Err(PipelineError::ViewNotHeld { held }),
