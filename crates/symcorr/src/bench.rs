@@ -338,7 +338,13 @@ pub fn run_bench(
         .map(|(a, b)| {
             let (ta, tb) = (&prepared[index[a.as_str()]], &prepared[index[b.as_str()]]);
             let t = Instant::now();
-            let matched = pipeline.run_on_view(&ta.1, &tb.1)?;
+            // A pair's error names the pair: the same meshes may be fine in other pairs.
+            let matched = pipeline
+                .run_on_view(&ta.1, &tb.1)
+                .map_err(|e| PipelineError::File {
+                    file: format!("pair {a} → {b}"),
+                    message: e.to_string(),
+                })?;
             let match_seconds = t.elapsed().as_secs_f64();
             let (corr, turned_target) = (matched.correspondence, matched.turned_target);
             let target = turned_target.as_ref().unwrap_or(&tb.1);
