@@ -628,6 +628,24 @@ impl ViewMatch {
 }
 
 impl Pipeline {
+    /// `target` prepared anew ([`Pipeline::prepare`], from its input mesh) on its joints turned
+    /// half a turn about their spine
+    /// ([`Skeleton::turned_about_spine`](symcorr_attach::Skeleton::turned_about_spine)), seen
+    /// from the same viewpoint: the other reading of a skeleton that may face away from the
+    /// camera ([`Pipeline::run_on_view`], `symcorr track`). `None` when the skeleton's hip and
+    /// shoulder centres coincide or the turned joints cannot be attached.
+    pub fn prepare_turned(&self, target: &PreparedMesh) -> Option<PreparedMesh> {
+        let joints = target
+            .attachment
+            .joints
+            .turned_about_spine(std::f64::consts::PI)?;
+        let turned = self.prepare(target.input_mesh().clone(), &joints).ok()?;
+        Some(match target.viewpoint {
+            Some(eye) => turned.seen_from(eye),
+            None => turned,
+        })
+    }
+
     /// [`Pipeline::run`], guarded against a target skeleton that faces away from the camera.
     /// On a target seen from one viewpoint (a depth scan, [`PreparedMesh::view_point`]) a
     /// skeleton turned half a turn about its spine — a log in a frame turned about the
@@ -670,16 +688,7 @@ impl Pipeline {
         if held.is_some_and(|h| h < TURN_RETRY_BELOW) {
             let first_fit = t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let turned = target
-                .attachment
-                .joints
-                .turned_about_spine(std::f64::consts::PI)
-                .and_then(|joints| self.prepare(target.input_mesh().clone(), &joints).ok())
-                .map(|t| match target.viewpoint {
-                    Some(eye) => t.seen_from(eye),
-                    None => t,
-                });
-            if let Some(turned) = turned {
+            if let Some(turned) = self.prepare_turned(target) {
                 if let Ok(corr) = self.run(template, &turned) {
                     if corr.view_held() > held {
                         kept = ViewMatch {

@@ -562,19 +562,17 @@ impl Fitter<'_> {
     }
 
     /// The frame's scan prepared anew with its joints turned half a turn about their spine
-    /// ([`Skeleton::turned_about_spine`]), and its match ([`Fitter::run_match`]): the
-    /// prepared scan, the match and whether it was warm.
+    /// ([`Pipeline::prepare_turned`]), and its match ([`Fitter::run_match`]): the prepared
+    /// scan, the match and whether it was warm.
     fn turned_match(
         &self,
-        scan: &ScanMesh,
         target: &PreparedMesh,
     ) -> Result<(PreparedMesh, Correspondence, bool), String> {
-        let joints = target
-            .attachment
-            .joints
-            .turned_about_spine(std::f64::consts::PI)
-            .ok_or("the skeleton's hip and shoulder centres coincide")?;
-        let (turned, tables) = prepare_scan(&self.pipeline, scan, &joints)?;
+        let turned = self
+            .pipeline
+            .prepare_turned(target)
+            .ok_or("the turned skeleton does not attach")?;
+        let tables = scan_tables(&self.pipeline, &turned);
         let (corr, warm) = self.run_match(&turned, tables.as_ref())?;
         Ok((turned, corr, warm))
     }
@@ -595,7 +593,7 @@ impl Fitter<'_> {
         // view is kept (a turned fit that cannot be made leaves the frame to the first).
         let mut turned_back = false;
         if corr.view_held().is_some_and(|h| h < TURN_RETRY_BELOW) {
-            if let Ok((turned, turned_corr, turned_warm)) = self.turned_match(&scan, &target) {
+            if let Ok((turned, turned_corr, turned_warm)) = self.turned_match(&target) {
                 if turned_corr.view_held() > corr.view_held() {
                     (target, corr, was_warm) = (turned, turned_corr, turned_warm);
                     turned_back = true;
@@ -694,9 +692,13 @@ fn prepare_scan(
         .prepare(scan.mesh.clone(), skeleton)
         .map_err(|e| e.to_string())?
         .seen_from(nalgebra::Point3::origin());
-    let tables = (pipeline.options.method == Method::Articulated)
-        .then(|| ArticulatedTables::target(&target));
+    let tables = scan_tables(pipeline, &target);
     Ok((target, tables))
+}
+
+/// A prepared scan's articulated tables (`None` for the other methods).
+fn scan_tables(pipeline: &Pipeline, target: &PreparedMesh) -> Option<ArticulatedTables> {
+    (pipeline.options.method == Method::Articulated).then(|| ArticulatedTables::target(target))
 }
 
 /// What the attachment of a frame's scan corrected: the skeleton's sides swapped to fit the

@@ -47,12 +47,10 @@ struct Fit {
 }
 
 fn fit(e: &Evaluation, view_held: Option<f64>) -> Fit {
-    let counted = e.flips.iter().filter(|f| f.is_some()).count();
-    let flips = e.flips.iter().filter(|f| **f == Some(true)).count();
-    let mean_error = e.errors.iter().sum::<f64>() / e.errors.len().max(1) as f64;
+    let (counted, flips) = e.flip_counts();
     Fit {
         view_held,
-        mean_error,
+        mean_error: e.mean_error(),
         flips,
         counted,
     }
@@ -128,15 +126,10 @@ fn main() -> Result<(), String> {
             };
             let corr = pipeline.run(template, &target).map_err(|e| e.to_string())?;
             let given = evaluate(&target, &corr);
-            let turned = target
-                .attachment
-                .joints
-                .turned_about_spine(std::f64::consts::PI)
-                .and_then(|j| pipeline.prepare(target.input_mesh().clone(), &j).ok())
-                .and_then(|t| {
-                    let corr = pipeline.run(template, &t).ok()?;
-                    Some(evaluate(&t, &corr))
-                });
+            let turned = pipeline.prepare_turned(&target).and_then(|t| {
+                let corr = pipeline.run(template, &t).ok()?;
+                Some(evaluate(&t, &corr))
+            });
             Ok((a.clone(), b.clone(), Outcome::Matched { given, turned }))
         })
         .collect::<Result<_, String>>()?;
