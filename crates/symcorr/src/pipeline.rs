@@ -591,8 +591,8 @@ impl Pipeline {
 /// A fit on one view ([`Correspondence::view_held`]) that holds less than this fraction of the
 /// template points it shows the camera may stand on a skeleton turned away from the camera
 /// (the template then shows the scan its back): [`Pipeline::run_on_view`] and `symcorr track`
-/// fit it again with the joints turned half a turn about their spine and keep the fit that
-/// holds more. Measured 2026-12-03: good fits hold 0.66–0.99 (bodies20_kinect, its
+/// fit it again with the joints turned half a turn about their spine and keep the turned fit
+/// when it holds [`TURN_KEEP_MARGIN`] more. Measured 2026-12-03: good fits hold 0.66–0.99 (bodies20_kinect, its
 /// tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on two synthetic recordings), fits on
 /// a skeleton turned away from the camera 0.27–0.70 on recordings
 /// (docs/decisions/2026-12-03-track-turned-skeletons.md) and 0.23–0.80 on single scans, where
@@ -600,6 +600,34 @@ impl Pipeline {
 /// (docs/decisions/2026-12-04-turned-skeletons-in-match.md). Below the threshold a good fit
 /// only costs the second fit, which holds less and is dropped.
 pub const TURN_RETRY_BELOW: f64 = 0.75;
+
+/// How much more of its view ([`Correspondence::view_held`]) the fit on the joints turned half a
+/// turn must hold than the fit on the joints as given for [`Pipeline::run_on_view`] and
+/// `symcorr track` to keep it ([`keeps_turned_fit`]). A turned fit that holds only a little
+/// more is no evidence that the given joints faced away: a nearly symmetric body (arms down)
+/// seen from behind lies on a scan almost as well as seen from the front. Measured 2026-12-04
+/// (`view_turn_eval`, the kinect scan sets with joints as given and turned 180°): every turned
+/// fit that mended a flipped one held 0.17–0.57 more (0.23 with tracker joints); a turned fit
+/// that was itself mirrored held less. (docs/decisions/2026-12-04-turned-fit-margin.md.)
+pub const TURN_KEEP_MARGIN: f64 = 0.1;
+
+/// Is the fit on the joints turned half a turn about their spine, holding `turned` of its
+/// view, kept over the fit on the joints as given, holding `given`? Only when it holds at
+/// least [`TURN_KEEP_MARGIN`] more; a fit whose view is unknown (`None`) keeps the given one.
+///
+/// ```
+/// use symcorr::keeps_turned_fit;
+/// assert!(keeps_turned_fit(Some(0.55), Some(0.9)));
+/// assert!(!keeps_turned_fit(Some(0.72), Some(0.78))); // no clearer than the given fit
+/// assert!(!keeps_turned_fit(Some(0.6), None));
+/// ```
+pub fn keeps_turned_fit(given: Option<f64>, turned: Option<f64>) -> bool {
+    match (given, turned) {
+        (Some(g), Some(t)) => t >= g + TURN_KEEP_MARGIN,
+        (None, Some(_)) => true,
+        _ => false,
+    }
+}
 
 /// A fit on one view whose kept fit holds less than this fraction of its view
 /// ([`Correspondence::view_held`]) is refused ([`PipelineError::ViewNotHeld`]), never returned
@@ -653,7 +681,7 @@ impl Pipeline {
     /// attachment's checks on about half of the frontal scans measured; the template posed on
     /// it shows the camera its back, which the scan does not hold. A fit that holds less than
     /// [`TURN_RETRY_BELOW`] of its view ([`Correspondence::view_held`]) is fitted again on the
-    /// joints turned back, and the fit that holds more is kept. A target that is not one view
+    /// joints turned back, and kept when it holds [`TURN_KEEP_MARGIN`] more. A target that is not one view
     /// (or another method) is matched by [`Pipeline::run`] alone.
     ///
     /// After a retry the correspondence's timings end with `view_retry_dropped`: the seconds of
@@ -690,7 +718,7 @@ impl Pipeline {
             let t = Instant::now();
             if let Some(turned) = self.prepare_turned(target) {
                 if let Ok(corr) = self.run(template, &turned) {
-                    if corr.view_held() > held {
+                    if keeps_turned_fit(held, corr.view_held()) {
                         kept = ViewMatch {
                             correspondence: corr,
                             turned_target: Some(turned),
