@@ -592,9 +592,9 @@ impl Pipeline {
 /// template points it shows the camera may stand on a skeleton turned away from the camera
 /// (the template then shows the scan its back): [`Pipeline::run_on_view`] and `symcorr track`
 /// fit it again with the joints turned half a turn about their spine and keep the turned fit
-/// when it holds [`TURN_KEEP_MARGIN`] more. Measured 2026-12-03: good fits hold 0.66–0.99 (bodies20_kinect, its
-/// tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on two synthetic recordings), fits on
-/// a skeleton turned away from the camera 0.27–0.70 on recordings
+/// when it holds [`TURN_KEEP_MARGIN`] more. Measured 2026-12-03: good fits hold 0.66–0.99
+/// (bodies20_kinect, its tracker-joint and profile sets; 0.70–0.92 and 0.83–0.99 on two
+/// synthetic recordings), fits on a skeleton turned away from the camera 0.27–0.70 on recordings
 /// (docs/decisions/2026-12-03-track-turned-skeletons.md) and 0.23–0.80 on single scans, where
 /// a higher threshold also turned correct fits into flipped ones
 /// (docs/decisions/2026-12-04-turned-skeletons-in-match.md). Below the threshold a good fit
@@ -681,8 +681,8 @@ impl Pipeline {
     /// attachment's checks on about half of the frontal scans measured; the template posed on
     /// it shows the camera its back, which the scan does not hold. A fit that holds less than
     /// [`TURN_RETRY_BELOW`] of its view ([`Correspondence::view_held`]) is fitted again on the
-    /// joints turned back, and kept when it holds [`TURN_KEEP_MARGIN`] more. A target that is not one view
-    /// (or another method) is matched by [`Pipeline::run`] alone.
+    /// joints turned back, and kept when it holds [`TURN_KEEP_MARGIN`] more. A target that is
+    /// not one view (or another method) is matched by [`Pipeline::run`] alone.
     ///
     /// After a retry the correspondence's timings end with `view_retry_dropped`: the seconds of
     /// the fit (or the turned preparation and fit) whose result was dropped.

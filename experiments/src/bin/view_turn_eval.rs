@@ -2,8 +2,8 @@
 //! target's joints as given (optionally turned about their spine first: a log in a frame turned
 //! about the vertical, a tracker that took a back for a front) and with those joints turned
 //! back half a turn, each by `Pipeline::run`; then `run_on_view`'s rule (below the retry
-//! threshold keep the turned fit when it holds `TURN_KEEP_MARGIN` more of its view, refuse a kept fit under
-//! `MIN_VIEW_HELD`) replayed at several thresholds.
+//! threshold keep the turned fit when it holds `TURN_KEEP_MARGIN` more of its view, refuse a
+//! kept fit under `MIN_VIEW_HELD`) replayed at several thresholds.
 //!
 //! ```text
 //! cargo run --release -p symcorr-experiments --bin view_turn_eval -- \
@@ -169,7 +169,8 @@ fn main() -> Result<(), String> {
         outcomes.len()
     );
     // `Pipeline::run_on_view`'s rule at each retry threshold: below it, the turned fit is kept
-    // when it holds `TURN_KEEP_MARGIN` more of its view (`keeps_turned_fit`); a kept fit below `MIN_VIEW_HELD` is refused.
+    // when it holds `TURN_KEEP_MARGIN` more of its view (`keeps_turned_fit`); a kept fit below
+    // `MIN_VIEW_HELD` is refused.
     for threshold in [0.0, 0.75, 0.8, 0.85, 0.9, 0.95] {
         let (mut n, mut err, mut flips, mut counted, mut mostly, mut turned_n, mut refused) =
             (0, 0.0, 0, 0, 0, 0, 0);
