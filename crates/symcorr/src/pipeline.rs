@@ -613,18 +613,19 @@ pub const TURN_KEEP_MARGIN: f64 = 0.1;
 
 /// Is the fit on the joints turned half a turn about their spine, holding `turned` of its
 /// view, kept over the fit on the joints as given, holding `given`? Only when it holds at
-/// least [`TURN_KEEP_MARGIN`] more; a fit whose view is unknown (`None`) keeps the given one.
+/// least [`TURN_KEEP_MARGIN`] more. Without both views (`None`: no viewpoint, nothing in view)
+/// there is nothing to compare, and the given fit stays.
 ///
 /// ```
 /// use symcorr::keeps_turned_fit;
 /// assert!(keeps_turned_fit(Some(0.55), Some(0.9)));
 /// assert!(!keeps_turned_fit(Some(0.72), Some(0.78))); // no clearer than the given fit
 /// assert!(!keeps_turned_fit(Some(0.6), None));
+/// assert!(!keeps_turned_fit(None, Some(0.9)));
 /// ```
 pub fn keeps_turned_fit(given: Option<f64>, turned: Option<f64>) -> bool {
     match (given, turned) {
         (Some(g), Some(t)) => t >= g + TURN_KEEP_MARGIN,
-        (None, Some(_)) => true,
         _ => false,
     }
 }
