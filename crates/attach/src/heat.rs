@@ -17,7 +17,7 @@
 
 use crate::bvh::TriangleBvh;
 use crate::geom::Joints;
-use crate::{AttachError, BoneWeights, ComponentReport, BONES};
+use crate::{AttachError, BoneWeights, ComponentReport, HeatMesh, BONES};
 use faer::Mat;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -131,17 +131,166 @@ fn facing(normal: &Vector3<f64>, x: &Point3<f64>, q: &Point3<f64>) -> bool {
 /// "in front of" the surface and no heat source for it (0: the tangent plane).
 const FRONT: f64 = 0.0;
 
-/// Computes bone-heat weights for `active` bones (indices into [`BONES`]) with joints `p`.
-/// `bvh` is `mesh`'s ([`TriangleBvh::new`]).
+/// The bone-heat problem of one mesh: joints `p`, the `active` bones (indices into [`BONES`])
+/// with their `reach`, the heat constant `c` and the smallest weight kept.
+pub(crate) struct HeatProblem<'a> {
+    pub p: &'a Joints,
+    pub active: &'a [usize],
+    pub reach: &'a [f64; 19],
+    pub c: f64,
+    pub min_weight: f64,
+}
+
+/// Computes bone-heat weights of every vertex of `mesh` on the heat mesh `heat_mesh` asks for
+/// (`height`: the skeleton's height, the unit of [`HeatMesh::Clustered`]'s radius). `bvh` is
+/// `mesh`'s ([`TriangleBvh::new`]).
 pub(crate) fn bone_heat(
     mesh: &TriMesh,
     bvh: &TriangleBvh,
-    p: &Joints,
-    active: &[usize],
-    reach: &[f64; 19],
-    c: f64,
-    min_weight: f64,
+    problem: &HeatProblem,
+    heat_mesh: HeatMesh,
+    height: f64,
 ) -> Result<Heat, AttachError> {
+    let clusters = match heat_mesh {
+        HeatMesh::Input => None,
+        HeatMesh::Clustered { radius } => {
+            Some(cluster(mesh, radius * height)).filter(|c| c.seed.len() < mesh.num_vertices())
+        }
+    };
+    let Some(cl) = clusters else {
+        let ids: Vec<u32> = (0..mesh.num_vertices() as u32).collect();
+        let solved = solve(mesh, &ids, bvh, problem)?;
+        return Ok(solved.report(mesh.num_vertices(), |v| v));
+    };
+    let solved = solve(&cl.coarse, &cl.seed, bvh, problem)?;
+    Ok(solved.report(mesh.num_vertices(), |v| cl.of[v] as usize))
+}
+
+/// Vertices gathered into clusters ([`cluster`]).
+struct Clusters {
+    /// The mesh of the clusters: one vertex per cluster (at its seed's position), the input's
+    /// triangles whose corners lie in three different clusters.
+    coarse: TriMesh,
+    /// Per input vertex, its cluster.
+    of: Vec<u32>,
+    /// Per cluster, its seed: the input vertex it grew from.
+    seed: Vec<u32>,
+}
+
+/// Gathers `mesh`'s vertices into clusters by greedy region growing over its edges: in vertex
+/// order, each vertex not yet taken seeds a cluster and takes every untaken vertex it reaches
+/// along edges without leaving the ball of `radius` around the seed. Clusters only follow
+/// edges, so two sheets that touch without sharing an edge (an arm against the torso) are
+/// never merged, and the coarse mesh has the input's connected components. A mesh whose edges
+/// are all longer than `radius` is its own clustering.
+fn cluster(mesh: &TriMesh, radius: f64) -> Clusters {
+    let n = mesh.num_vertices();
+    let neighbors = mesh.vertex_neighbors();
+    let r2 = radius * radius;
+    let mut of = vec![u32::MAX; n];
+    let mut seed = Vec::new();
+    let mut queue = Vec::new();
+    for s in 0..n {
+        if of[s] != u32::MAX {
+            continue;
+        }
+        let c = seed.len() as u32;
+        seed.push(s as u32);
+        of[s] = c;
+        let x = Point3::from(mesh.positions[s]);
+        queue.clear();
+        queue.push(s as u32);
+        while let Some(v) = queue.pop() {
+            for &u in &neighbors[v as usize] {
+                let u = u as usize;
+                if of[u] == u32::MAX && (Point3::from(mesh.positions[u]) - x).norm_squared() <= r2 {
+                    of[u] = c;
+                    queue.push(u as u32);
+                }
+            }
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    let triangles: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|v| of[v as usize]))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
+        .filter(|t| {
+            let mut key = *t;
+            key.sort_unstable();
+            seen.insert(key)
+        })
+        .collect();
+    let positions = seed.iter().map(|&v| mesh.positions[v as usize]).collect();
+    Clusters {
+        coarse: TriMesh {
+            positions,
+            triangles,
+        },
+        of,
+        seed,
+    }
+}
+
+/// What [`solve`] found per vertex of its mesh.
+struct Solved {
+    rows: Vec<Vec<(usize, f64)>>,
+    /// Per vertex: its component among the solved ones (`None`: in no non-degenerate
+    /// triangle), whether it saw a bone, whether it took its nearest bone's label.
+    vertex: Vec<(Option<u32>, bool, bool)>,
+    /// Per component: no vertex of it saw a bone.
+    fallback: Vec<bool>,
+}
+
+impl Solved {
+    /// The weights of every input vertex, `solved_of(v)` being the solved vertex it takes
+    /// them from; component counts are of input vertices.
+    fn report(self, n_input: usize, solved_of: impl Fn(usize) -> usize) -> Heat {
+        let mut components: Vec<ComponentReport> = self
+            .fallback
+            .iter()
+            .map(|&fallback| ComponentReport {
+                vertices: 0,
+                visible_vertices: 0,
+                fallback,
+            })
+            .collect();
+        let mut nearest_bone_vertices = 0;
+        let mut rows = Vec::with_capacity(n_input);
+        for v in 0..n_input {
+            let i = solved_of(v);
+            let (comp, visible, nearest) = self.vertex[i];
+            if let Some(k) = comp {
+                components[k as usize].vertices += 1;
+                components[k as usize].visible_vertices += usize::from(visible);
+            }
+            nearest_bone_vertices += usize::from(nearest);
+            rows.push(self.rows[i].clone());
+        }
+        Heat {
+            weights: BoneWeights::from_rows(rows),
+            components,
+            nearest_bone_vertices,
+        }
+    }
+}
+
+/// Bone heat on `mesh` itself; `bvh_id[v]` is vertex `v`'s id in the mesh `bvh` was built on
+/// (what its visibility rays skip).
+fn solve(
+    mesh: &TriMesh,
+    bvh_id: &[u32],
+    bvh: &TriangleBvh,
+    problem: &HeatProblem,
+) -> Result<Solved, AttachError> {
+    let HeatProblem {
+        p,
+        active,
+        reach,
+        c,
+        min_weight,
+    } = *problem;
     let n = mesh.num_vertices();
     // The Laplacian needs every vertex in a non-degenerate triangle (same test as
     // symcorr-spectral): solve on that sub-mesh, give the rest their nearest bone.
@@ -182,8 +331,8 @@ pub(crate) fn bone_heat(
             .unwrap_or(0)
     };
     let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
-    let mut nearest_bone_vertices = 0;
-    let mut components = Vec::new();
+    let mut vertex = vec![(None, false, false); n];
+    let mut fallback = Vec::new();
     if !old_id.is_empty() {
         let sub_tris: Vec<[u32; 3]> = keep_tri
             .iter()
@@ -219,27 +368,21 @@ pub(crate) fn bone_heat(
             .enumerate()
             .map(|(i, (d, _))| {
                 let x = Point3::from(sub_mesh.positions[i]);
-                sources(x, normals[i].into(), old_id[i], d, bvh)
+                sources(x, normals[i].into(), bvh_id[old_id[i] as usize], d, bvh)
             })
             .collect();
         let lap = Laplacian::new(&sub_mesh).map_err(|e| AttachError::Solver(e.to_string()))?;
         // Per component: at least one heat source, or every vertex uses its nearest bone.
         let (comp, ncomp) = sub_mesh.connected_components();
         let mut visible = vec![0usize; ncomp];
-        let mut size = vec![0usize; ncomp];
         for i in 0..m {
-            size[comp[i] as usize] += 1;
             if src[i].visible {
                 visible[comp[i] as usize] += 1;
             }
         }
-        let fallback: Vec<bool> = visible.iter().map(|&v| v == 0).collect();
-        for k in 0..ncomp {
-            components.push(ComponentReport {
-                vertices: size[k],
-                visible_vertices: visible[k],
-                fallback: fallback[k],
-            });
+        fallback = visible.iter().map(|&v| v == 0).collect();
+        for i in 0..m {
+            vertex[old_id[i] as usize] = (Some(comp[i]), src[i].visible, false);
         }
         let mut h = vec![0.0; m];
         let mut rhs = Mat::<f64>::zeros(m, active.len());
@@ -270,7 +413,7 @@ pub(crate) fn bone_heat(
             let s: f64 = row.iter().map(|r| r.1).sum();
             if !(s > 0.0) {
                 row = vec![(nearest_only(sub_mesh.positions[i].into()), 1.0)];
-                nearest_bone_vertices += 1;
+                vertex[old_id[i] as usize].2 = true;
             } else {
                 for r in &mut row {
                     r.1 /= s;
@@ -282,12 +425,12 @@ pub(crate) fn bone_heat(
     for v in 0..n {
         if new_id[v] == u32::MAX {
             rows[v] = vec![(nearest_only(mesh.positions[v].into()), 1.0)];
-            nearest_bone_vertices += 1;
+            vertex[v].2 = true;
         }
     }
-    Ok(Heat {
-        weights: BoneWeights::from_rows(rows),
-        components,
-        nearest_bone_vertices,
+    Ok(Solved {
+        rows,
+        vertex,
+        fallback,
     })
 }

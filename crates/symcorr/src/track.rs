@@ -57,7 +57,7 @@ use crate::{
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
 use std::time::Instant;
-use symcorr_attach::PoorFitPolicy;
+use symcorr_attach::{HeatMesh, PoorFitPolicy};
 use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
 use symcorr_kinect::{
     limb_swap_evidence, scan_mesh, DepthFrame, DepthSource, Intrinsics, JointTrack, LimbPair,
@@ -93,6 +93,8 @@ pub struct TrackOptions {
     /// counterpart in this frame. The posed template follows the body's motion, so a match
     /// that moved against it slid to another part of the surface.
     pub max_match_shift_m: Option<f64>,
+    /// The mesh each frame's bone heat is solved on ([`HeatMesh`]).
+    pub scan_heat_mesh: HeatMesh,
 }
 
 impl Default for TrackOptions {
@@ -106,6 +108,7 @@ impl Default for TrackOptions {
             max_warm_jump_m: 0.15,
             reciprocal_radius: Some(RECIPROCAL_RADIUS),
             max_match_shift_m: Some(MAX_MATCH_SHIFT_M),
+            scan_heat_mesh: SCAN_HEAT_MESH,
         }
     }
 }
@@ -113,6 +116,9 @@ impl Default for TrackOptions {
 /// Default [`TrackOptions::reciprocal_radius`] (√area of the template).
 /// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
 pub const RECIPROCAL_RADIUS: f64 = 0.03;
+
+/// Default [`TrackOptions::scan_heat_mesh`].
+pub const SCAN_HEAT_MESH: HeatMesh = HeatMesh::Clustered { radius: 0.006 };
 
 /// Default [`TrackOptions::max_match_shift_m`], metres.
 /// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
@@ -265,6 +271,7 @@ impl<'a> Tracker<'a> {
         pipeline.options.prepare.attach.align = false;
         pipeline.options.prepare.attach.poor_fit = PoorFitPolicy::Accept;
         pipeline.options.prepare.cache = None;
+        pipeline.options.prepare.attach.heat_mesh = options.scan_heat_mesh;
         // A frame keeps only the matches of the template vertices it shows (`target_of` −1
         // elsewhere): the final map need not guess the others'.
         pipeline.options.articulated.guess_hidden = false;

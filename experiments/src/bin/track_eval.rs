@@ -85,6 +85,10 @@ struct Args {
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
     breakdown: bool,
+    /// Solve each frame's bone heat on clusters of this radius (skeleton heights; 0: on the
+    /// scan itself). Default: the tracker's.
+    #[arg(long)]
+    heat_radius: Option<f64>,
 }
 
 /// A match that moves farther than this on the body between consecutive frames jumped (metres,
@@ -144,6 +148,13 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
             .map_or(Some(symcorr::track::MAX_MATCH_SHIFT_M), |d| {
                 (d > 0.0).then_some(d)
             }),
+        scan_heat_mesh: args.heat_radius.map_or(symcorr::track::SCAN_HEAT_MESH, |r| {
+            if r > 0.0 {
+                symcorr_attach::HeatMesh::Clustered { radius: r }
+            } else {
+                symcorr_attach::HeatMesh::Input
+            }
+        }),
         ..TrackOptions::default()
     };
     let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);
