@@ -40,13 +40,14 @@ impl<const K: usize> KdTree<K> {
     /// allowed but such points are never returned as nearest).
     pub(crate) fn new(points: Vec<[f64; K]>, ids: Vec<u32>) -> KdTree<K> {
         debug_assert_eq!(points.len(), ids.len());
-        let mut order: Vec<u32> = (0..points.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * points.len() / LEAF + 1);
-        if !points.is_empty() {
-            build(&points, &mut order, 0, &mut nodes);
+        // The points are reordered themselves, not through an index: the selections and
+        // partitions of the build then read memory in order.
+        let mut items: Vec<([f64; K], u32)> = points.into_iter().zip(ids).collect();
+        let mut nodes = Vec::with_capacity(2 * items.len() / LEAF + 1);
+        if !items.is_empty() {
+            build(&mut items, 0, &mut nodes);
         }
-        let ids = order.iter().map(|&i| ids[i as usize]).collect();
-        let points = order.iter().map(|&i| points[i as usize]).collect();
+        let (points, ids) = items.into_iter().unzip();
         KdTree { points, ids, nodes }
     }
 
@@ -132,11 +133,10 @@ impl<const K: usize> KdTree<K> {
     }
 }
 
-/// Builds the subtree of `order[..]` (indices into `points`, reordered in place) whose first
+/// Builds the subtree of `order[..]` (points with their ids, reordered in place) whose first
 /// point sits at `offset` of the final arrays; returns its node index.
 fn build<const K: usize>(
-    points: &[[f64; K]],
-    order: &mut [u32],
+    order: &mut [([f64; K], u32)],
     offset: usize,
     nodes: &mut Vec<Node>,
 ) -> u32 {
@@ -151,8 +151,8 @@ fn build<const K: usize>(
     // The widest axis over the finite coordinates.
     let mut lo = [f64::INFINITY; K];
     let mut hi = [f64::NEG_INFINITY; K];
-    for &i in order.iter() {
-        for ((l, h), &x) in lo.iter_mut().zip(hi.iter_mut()).zip(&points[i as usize]) {
+    for (p, _) in order.iter() {
+        for ((l, h), &x) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
             if x.is_finite() {
                 *l = l.min(x);
                 *h = h.max(x);
@@ -173,7 +173,7 @@ fn build<const K: usize>(
         return me as u32; // all equal (or non-finite) along every axis: one bucket
     }
     let mid = order.len() / 2;
-    let key = |i: &u32| points[*i as usize][axis];
+    let key = |i: &([f64; K], u32)| i.0[axis];
     order.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
     let value = key(&order[mid]);
     // Points equal to the split value may lie on both sides after selection; put every point
@@ -189,8 +189,8 @@ fn build<const K: usize>(
         return me as u32; // the median is the minimum: no useful split along the widest axis
     }
     let (lo, hi) = order.split_at_mut(split);
-    let left = build(points, lo, offset, nodes);
-    let right = build(points, hi, offset + split, nodes);
+    let left = build(lo, offset, nodes);
+    let right = build(hi, offset + split, nodes);
     nodes[me] = Node::Split {
         axis: axis as u8,
         value,

@@ -137,7 +137,7 @@ pub struct Correspondence {
     pub pairs: Vec<Pair>,
     /// Seconds per pair stage (`sampling`, then the method's own: `candidates`,
     /// `skeleton_filter`, `selection` for the paper's; `segment_pools`, `initial_map`, `zoomout`
-    /// for the refined one; `segment_pools`, `articulated_icp`, `nonrigid`, `map` for the
+    /// for the refined one; `segment_pools`, `pool_trees`, `articulated_icp`, `nonrigid`, `map` for the
     /// articulated one).
     pub timings: Vec<(String, f64)>,
     /// What the method reports beside the pairs.

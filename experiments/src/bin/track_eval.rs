@@ -67,6 +67,9 @@ struct Args {
     /// Rounds of the non-rigid step (default: the method's).
     #[arg(long)]
     nonrigid_rounds: Option<usize>,
+    /// Rounds of the non-rigid step from a warm start (default: the method's).
+    #[arg(long)]
+    warm_nonrigid_rounds: Option<usize>,
     /// Radius of the reciprocal check, in the template's √area (default: the tracker's; 0
     /// turns it off).
     #[arg(long)]
@@ -125,6 +128,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     a.icp_points = args.icp_points.unwrap_or(a.icp_points);
     a.warm_iterations = args.warm_iterations.unwrap_or(a.warm_iterations);
     a.nonrigid_rounds = args.nonrigid_rounds.unwrap_or(a.nonrigid_rounds);
+    a.warm_nonrigid_rounds = args.warm_nonrigid_rounds.unwrap_or(a.warm_nonrigid_rounds);
     a.joint_anchor = args.joint_anchor.unwrap_or(a.joint_anchor);
     if let Some(w) = args.head_twist_prior {
         a.head_twist_prior = (w > 0.0).then_some(w);
@@ -148,13 +152,15 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
             .map_or(Some(symcorr::track::MAX_MATCH_SHIFT_M), |d| {
                 (d > 0.0).then_some(d)
             }),
-        scan_heat_mesh: args.heat_radius.map_or(symcorr::track::SCAN_HEAT_MESH, |r| {
-            if r > 0.0 {
-                symcorr_attach::HeatMesh::Clustered { radius: r }
-            } else {
-                symcorr_attach::HeatMesh::Input
-            }
-        }),
+        scan_heat_mesh: args
+            .heat_radius
+            .map_or(symcorr::track::SCAN_HEAT_MESH, |r| {
+                if r > 0.0 {
+                    symcorr_attach::HeatMesh::Clustered { radius: r }
+                } else {
+                    symcorr_attach::HeatMesh::Input
+                }
+            }),
         ..TrackOptions::default()
     };
     let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);

@@ -162,6 +162,10 @@ pub struct ArticulatedOptions {
     pub warm_iterations: usize,
     /// Pair-rejection distance of the first iteration from a warm start.
     pub warm_gate_start: f64,
+    /// Rounds of the non-rigid step from a warm start (0: none); its gates run from
+    /// [`ArticulatedOptions::nonrigid_gate_start`] to [`ArticulatedOptions::gate_end`] as
+    /// [`ArticulatedOptions::nonrigid_rounds`]' do. `docs/decisions/2026-12-04-track-heat-clusters-and-warm-rounds.md`.
+    pub warm_nonrigid_rounds: usize,
     /// Reciprocal check (`None`: off): a pair (template vertex `v` → target vertex `q`) holds
     /// only when the posed template vertex nearest `q` (same features, among those the
     /// target's viewpoint shows) lies within this distance of `v` on the template at rest.
@@ -210,6 +214,7 @@ impl Default for ArticulatedOptions {
             min_facing_cosine: 0.0,
             warm_iterations: 4,
             warm_gate_start: 0.05,
+            warm_nonrigid_rounds: 2,
             reciprocal_radius: None,
             guess_hidden: true,
             head_twist_prior: Some(DEFAULT_HEAD_TWIST_PRIOR),
@@ -312,8 +317,14 @@ pub fn articulated_match(
 
     let t = Instant::now();
     let al = Alignment::new(template, weights, target, &pools, options)?;
+    timings.push(("pool_trees", t.elapsed().as_secs_f64()));
+    let t = Instant::now();
     let (mut transforms, head_limit, head_prior) = initial_transforms(&al, start)?;
     let sample = al.icp_sample();
+    let nonrigid_rounds = match start {
+        ArticulatedStart::Skeletons => options.nonrigid_rounds,
+        ArticulatedStart::Warm { .. } => options.warm_nonrigid_rounds,
+    };
     let rounds = match start {
         ArticulatedStart::Skeletons => icp::Rounds {
             iterations: options.iterations,
@@ -338,7 +349,7 @@ pub fn articulated_match(
 
     let t = Instant::now();
     let skinned = posed.clone();
-    let near = nonrigid::nonrigid_step(&al, &mut posed, &posed_normals, near)?;
+    let near = nonrigid::nonrigid_step(&al, &mut posed, &posed_normals, near, nonrigid_rounds)?;
     timings.push(("nonrigid", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();

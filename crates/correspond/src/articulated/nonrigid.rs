@@ -21,8 +21,8 @@ const ROBUST_SCALE: f64 = 0.5;
 /// the sampling fell (and a depth sensor's noise is along the line of sight).
 const TANGENTIAL_SHARE: f64 = 0.3;
 
-/// Moves `posed` by [`ArticulatedOptions::nonrigid_rounds`](crate::ArticulatedOptions)
-/// rounds of a smooth displacement field; nothing without the template's edge graph
+/// Moves `posed` by `rounds` rounds ([`ArticulatedOptions::nonrigid_rounds`](crate::ArticulatedOptions)
+/// or, from a warm start, `warm_nonrigid_rounds`) of a smooth displacement field; nothing without the template's edge graph
 /// (`neighbors`, one list per vertex). Each round pairs every posed vertex with its nearest
 /// pool vertex, keeps the pairs that hold at the round's gate (coarse to fine, from
 /// `nonrigid_gate_start` to `gate_end`, so a body part further off than the final gate — a
@@ -43,6 +43,7 @@ pub(super) fn nonrigid_step(
     posed: &mut [Point3<f64>],
     posed_normals: &[Vector3<f64>],
     hints: Vec<(u32, f64)>,
+    rounds: usize,
 ) -> Result<Vec<(u32, f64)>, CorrespondError> {
     let options = al.options;
     let n = posed.len();
@@ -51,7 +52,6 @@ pub(super) fn nonrigid_step(
     };
     let mut hints = hints;
     let scan = al.is_scan();
-    let rounds = options.nonrigid_rounds;
     let g0 = options.nonrigid_gate_start.max(options.gate_end);
     for round in 0..rounds {
         let frac = if rounds > 1 {
