@@ -434,3 +434,80 @@ fn solve(
         fallback,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w × h` grid of unit-square cells (two triangles each) with spacing `step`, at height
+    /// `z`, its vertex ids starting at `first`.
+    fn sheet(w: usize, h: usize, step: f64, z: f64, first: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let id = |i: usize, j: usize| first + (j * (w + 1) + i) as u32;
+        let positions = (0..=h)
+            .flat_map(|j| (0..=w).map(move |i| [i as f64 * step, j as f64 * step, z]))
+            .collect();
+        let triangles = (0..h)
+            .flat_map(|j| {
+                (0..w).flat_map(move |i| {
+                    [
+                        [id(i, j), id(i + 1, j), id(i + 1, j + 1)],
+                        [id(i, j), id(i + 1, j + 1), id(i, j + 1)],
+                    ]
+                })
+            })
+            .collect();
+        (positions, triangles)
+    }
+
+    /// Two parallel sheets 5 mm apart that share no edge (an arm resting on the torso).
+    fn two_sheets() -> (TriMesh, usize) {
+        let (mut positions, mut triangles) = sheet(20, 20, 0.01, 0.0, 0);
+        let first = positions.len();
+        let (p, t) = sheet(20, 20, 0.01, 0.005, first as u32);
+        positions.extend(p);
+        triangles.extend(t);
+        (
+            TriMesh {
+                positions,
+                triangles,
+            },
+            first,
+        )
+    }
+
+    #[test]
+    fn clusters_stay_within_their_radius_and_never_join_sheets_without_an_edge() {
+        let (mesh, first) = two_sheets();
+        let radius = 0.025;
+        let c = cluster(&mesh, radius);
+        assert!(
+            c.seed.len() * 4 < mesh.num_vertices(),
+            "{} clusters of {} vertices",
+            c.seed.len(),
+            mesh.num_vertices()
+        );
+        for (v, &k) in c.of.iter().enumerate() {
+            let s = c.seed[k as usize] as usize;
+            let d = (Point3::from(mesh.positions[v]) - Point3::from(mesh.positions[s])).norm();
+            assert!(d <= radius + 1e-12, "vertex {v} lies {d} from its seed");
+            assert_eq!(
+                v < first,
+                s < first,
+                "vertex {v} joined the other sheet's cluster"
+            );
+            assert_eq!(c.of[s], k, "a seed belongs to its own cluster");
+        }
+        // The coarse mesh keeps the two sheets apart and each in one piece.
+        assert_eq!(c.coarse.connected_components().1, 2);
+        assert_eq!(c.coarse.num_vertices(), c.seed.len());
+    }
+
+    #[test]
+    fn a_radius_below_every_edge_leaves_the_mesh_as_it_is() {
+        let (mesh, _) = two_sheets();
+        let c = cluster(&mesh, 0.004);
+        assert_eq!(c.seed.len(), mesh.num_vertices());
+        assert!(c.of.iter().enumerate().all(|(v, &k)| k as usize == v));
+        assert_eq!(c.coarse.triangles, mesh.triangles);
+    }
+}

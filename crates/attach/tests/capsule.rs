@@ -5,7 +5,7 @@ mod common;
 
 use common::{agreement, noisy, unambiguous, Rng};
 use symcorr_attach::testbody::{capsule_body, t_pose};
-use symcorr_attach::{attach, AttachOptions, Segment, Skeleton};
+use symcorr_attach::{attach, AttachOptions, HeatMesh, Segment, Skeleton};
 use symcorr_mesh::TriMesh;
 
 fn body() -> (Skeleton, TriMesh, Vec<Segment>, Vec<bool>) {
@@ -209,5 +209,43 @@ fn inward_winding_gives_the_same_labels() {
         for s in 0..17 {
             assert!((wa[s] - wb[s]).abs() < 1e-9, "vertex {v}: {wa:?} vs {wb:?}");
         }
+    }
+}
+
+#[test]
+fn bone_heat_on_clusters_labels_a_dense_body_as_on_the_body_itself() {
+    // A body sampled every 1 cm (about 0.6 % of its height), clustered to 1.2 % of its height:
+    // a few vertices per cluster, the boundaries known to a cluster's width.
+    let sk = t_pose(1.0);
+    let (mesh, reference) = capsule_body(&sk, 0.01);
+    let core = unambiguous(&mesh, &sk, 0.03);
+    let input = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    let options = AttachOptions {
+        heat_mesh: HeatMesh::Clustered { radius: 0.012 },
+        ..AttachOptions::default()
+    };
+    let clustered = attach(&mesh, &sk, &options).unwrap();
+    let (agree, mirror) = agreement(&mesh, &clustered.labels, &reference, &core);
+    let same = (0..mesh.num_vertices())
+        .filter(|&v| clustered.labels[v] == input.labels[v])
+        .count() as f64
+        / mesh.num_vertices() as f64;
+    eprintln!(
+        "capsule clustered heat: core agreement {agree:.4}, same label as unclustered {same:.4}"
+    );
+    assert!(agree >= 0.95, "core agreement {agree}");
+    assert_eq!(mirror, 0.0);
+    assert!(same >= 0.97, "{same}");
+    // Every input vertex is counted in its component, and each row still sums to one.
+    let counted: usize = clustered
+        .diagnostics
+        .components
+        .iter()
+        .map(|c| c.vertices)
+        .sum();
+    assert_eq!(counted, mesh.num_vertices());
+    for v in 0..mesh.num_vertices() {
+        let s: f64 = clustered.weights.row(v).iter().map(|&(_, w)| w).sum();
+        assert!((s - 1.0).abs() < 1e-9, "row {v} sums to {s}");
     }
 }

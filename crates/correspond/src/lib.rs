@@ -63,9 +63,9 @@ mod pools;
 mod refined;
 
 pub use articulated::{
-    articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
-    ArticulatedMatches, ArticulatedOptions, ArticulatedStart, BoneTransforms,
-    DEFAULT_HEAD_TWIST_PRIOR, DEFAULT_ICP_POINTS, MAX_HEAD_TWIST_DEG, TWISTS,
+    articulated_match, articulated_match_indexed, bone_transforms, outward_normals, skin,
+    ArticulatedIndex, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, ArticulatedStart,
+    BoneTransforms, DEFAULT_HEAD_TWIST_PRIOR, DEFAULT_ICP_POINTS, MAX_HEAD_TWIST_DEG, TWISTS,
 };
 pub use paper::{
     assign_confidence, base_profile, candidates, explain_point, farthest_point_sample,
@@ -126,6 +126,9 @@ pub enum CorrespondError {
     /// A surface area that is not positive and finite.
     #[error("area {0} is not positive and finite")]
     InvalidArea(f64),
+    /// An [`ArticulatedIndex`] used with inputs or options other than those it was built for.
+    #[error("the articulated index was built for another template, target or options")]
+    IndexMismatch,
     /// A landmark source set without vertices.
     #[error("landmark {0} has no source vertex")]
     EmptyLandmark(usize),

@@ -6,8 +6,9 @@ use nalgebra::Point3;
 use symcorr_attach::testbody::{capsule_body, t_pose};
 use symcorr_attach::{attach, AttachOptions};
 use symcorr_correspond::{
-    articulated_match, bone_transforms, outward_normals, skin, ArticulatedInputs,
-    ArticulatedMatches, ArticulatedOptions, ArticulatedStart,
+    articulated_match, articulated_match_indexed, bone_transforms, outward_normals, skin,
+    ArticulatedIndex, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, ArticulatedStart,
+    CorrespondError,
 };
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Segment, Skeleton};
@@ -478,5 +479,76 @@ fn the_map_without_guesses_keeps_every_counterpart_and_its_pair() {
         } else {
             assert_eq!(shown.pairs[v].confidence, 0.0);
         }
+    }
+}
+
+#[test]
+fn an_index_built_beforehand_gives_the_same_matches_and_only_for_its_inputs() {
+    let FrontScan {
+        a,
+        att_a,
+        scan,
+        att_s,
+        na,
+        ns,
+        ..
+    } = FrontScan::new();
+    let neighbors = a.mesh.vertex_neighbors();
+    let boundary = scan.boundary_vertices();
+    let graph = EdgeGraph::new(&scan);
+    let options = ArticulatedOptions::default();
+    let mut template = side(&a.mesh, &att_a, &na, None);
+    template.neighbors = Some(&neighbors);
+    let target = side(&scan, &att_s, &ns, Some(&boundary));
+    let index = ArticulatedIndex::new(&template, &target, &graph, &options).unwrap();
+    let start = || ArticulatedStart::Skeletons;
+    let built_here = articulated_match(
+        &template,
+        &att_a.weights,
+        &target,
+        &graph,
+        &options,
+        start(),
+    )
+    .unwrap();
+    let indexed = articulated_match_indexed(
+        &template,
+        &att_a.weights,
+        &target,
+        &index,
+        &options,
+        start(),
+    )
+    .unwrap();
+    assert_eq!(built_here.pairs, indexed.pairs);
+    assert_eq!(built_here.posed, indexed.posed);
+    assert_eq!(built_here.has_counterpart, indexed.has_counterpart);
+    let stages = |m: &ArticulatedMatches| m.timings.iter().map(|t| t.0).collect::<Vec<_>>();
+    assert_eq!(
+        stages(&built_here)[..2],
+        ["segment_pools", "pool_trees"],
+        "the index's stages lead the timings when it is built here"
+    );
+    assert!(!stages(&indexed).contains(&"pool_trees"));
+    // Another target (the scan moved by 1 cm), other options: the index is refused.
+    let moved: Vec<[f64; 3]> = scan
+        .positions
+        .iter()
+        .map(|p| [p[0] + 0.01, p[1], p[2]])
+        .collect();
+    let mut other = target;
+    other.positions = &moved;
+    let wider = ArticulatedOptions {
+        band: options.band * 2.0,
+        ..options.clone()
+    };
+    for (target, options) in [(&other, &options), (&target, &wider)] {
+        let refused =
+            articulated_match_indexed(&template, &att_a.weights, target, &index, options, start());
+        assert!(
+            matches!(refused, Err(CorrespondError::IndexMismatch)),
+            "{:?}",
+            refused.map(|m| m.pairs.len())
+        );
     }
 }

@@ -7,10 +7,10 @@ use crate::{OptionError, PipelineError};
 use nalgebra::Point3;
 use std::time::Instant;
 use symcorr_correspond::{
-    articulated_match, coverage, explain_point, farthest_point_sample, match_points,
-    outward_normals, refine_dense, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions,
-    ArticulatedStart, BoneTransforms, FilterStats, Match, MatchOptions, Pair, PaperFilter,
-    PointExplanation, RefineOptions, RefinedInputs, SpectralBasis,
+    articulated_match, articulated_match_indexed, coverage, explain_point, farthest_point_sample,
+    match_points, outward_normals, refine_dense, ArticulatedIndex, ArticulatedInputs,
+    ArticulatedMatches, ArticulatedOptions, ArticulatedStart, BoneTransforms, FilterStats, Match,
+    MatchOptions, Pair, PaperFilter, PointExplanation, RefineOptions, RefinedInputs, SpectralBasis,
 };
 use symcorr_mesh::geometry::closest_on_triangle;
 use symcorr_mesh::TriMesh;
@@ -320,6 +320,8 @@ pub struct ArticulatedTables {
     /// the refined method (which holds one).
     boundary: Option<Vec<bool>>,
     graph: Option<EdgeGraph>,
+    /// As a target: its search index against one template ([`ArticulatedTables::target_against`]).
+    index: Option<ArticulatedIndex>,
 }
 
 impl ArticulatedTables {
@@ -330,6 +332,7 @@ impl ArticulatedTables {
             neighbors: Some(m.mesh.vertex_neighbors()),
             boundary: None,
             graph: None,
+            index: None,
         }
     }
 
@@ -340,7 +343,35 @@ impl ArticulatedTables {
             neighbors: None,
             boundary: Some(m.mesh.boundary_vertices()),
             graph: m.refine.is_none().then(|| EdgeGraph::new(&m.mesh)),
+            index: None,
         }
+    }
+
+    /// [`ArticulatedTables::target`] with the target's search index against `template` (its
+    /// tables from [`ArticulatedTables::template`]) for `options` built as well
+    /// ([`ArticulatedIndex`]: the segment pools and their k-d trees) — a recording's frame's on
+    /// the thread that observed it, so that the thread that matches need not. Matching these
+    /// tables against another template or with other options is refused
+    /// ([`PipelineError::Correspond`] with [`symcorr_correspond::CorrespondError::IndexMismatch`]).
+    ///
+    /// Errors: those of [`ArticulatedIndex::new`].
+    pub fn target_against(
+        template: (&PreparedMesh, &ArticulatedTables),
+        target: &PreparedMesh,
+        options: &ArticulatedOptions,
+    ) -> Result<ArticulatedTables, PipelineError> {
+        let mut tables = ArticulatedTables::target(target);
+        let index = with_sides(template, (target, &tables), |t, _, q, graph| {
+            ArticulatedIndex::new(t, q, graph, options)
+        })?;
+        tables.index = Some(index);
+        Ok(tables)
+    }
+
+    /// Seconds per stage of building [`ArticulatedTables::target_against`]'s index (empty
+    /// without one).
+    pub fn index_timings(&self) -> &[(&'static str, f64)] {
+        self.index.as_ref().map_or(&[], |i| i.timings())
     }
 }
 
@@ -358,11 +389,36 @@ fn articulated_normals(m: &PreparedMesh) -> Vec<[f64; 3]> {
 /// template onto the target (symcorr-correspond's `articulated_match`), with the tables of
 /// both ([`ArticulatedTables::template`], [`ArticulatedTables::target`]).
 fn articulated(
-    (template, tt): (&PreparedMesh, &ArticulatedTables),
-    (target, qt): (&PreparedMesh, &ArticulatedTables),
+    template: (&PreparedMesh, &ArticulatedTables),
+    target: (&PreparedMesh, &ArticulatedTables),
     options: &ArticulatedOptions,
     start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, PipelineError> {
+    let index = target.1.index.as_ref();
+    let weights = &template.0.attachment.weights;
+    Ok(with_sides(
+        template,
+        target,
+        |t, _, q, graph| match index {
+            Some(index) => articulated_match_indexed(t, weights, q, index, options, start),
+            None => articulated_match(t, weights, q, graph, options, start),
+        },
+    )?)
+}
+
+/// Calls `f` with the articulated method's view of both meshes (the template in the target's
+/// unit), the template's bone weights and the target's edge graph, each table taken from the
+/// meshes' [`ArticulatedTables`] or built here when they lack it.
+fn with_sides<R>(
+    (template, tt): (&PreparedMesh, &ArticulatedTables),
+    (target, qt): (&PreparedMesh, &ArticulatedTables),
+    f: impl FnOnce(
+        &ArticulatedInputs<'_>,
+        &symcorr_attach::BoneWeights,
+        &ArticulatedInputs<'_>,
+        &EdgeGraph,
+    ) -> R,
+) -> R {
     let built;
     let graph = match (&target.refine, &qt.graph) {
         (Some(r), _) => &r.graph,
@@ -429,14 +485,12 @@ fn articulated(
         template_side.joints = joints;
         template_side.area = template.area * ratio * ratio;
     }
-    Ok(articulated_match(
+    f(
         &template_side,
         &template.attachment.weights,
         &side(target, qn, Some(boundary), None),
         graph,
-        options,
-        start,
-    )?)
+    )
 }
 
 /// The paper's pipeline, configured once and run on many pairs.

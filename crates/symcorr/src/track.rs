@@ -56,6 +56,7 @@ use crate::{
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
+use std::sync::Arc;
 use std::time::Instant;
 use symcorr_attach::{HeatMesh, PoorFitPolicy};
 use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
@@ -222,8 +223,11 @@ pub struct Observation {
 /// Steps 1–4 of a frame (module docs): the joints at its time, corrected and smoothed, and its
 /// scan, prepared. It follows the joint log and the depth frames only — never a match — so it
 /// can run one frame ahead of the [`Fitter`], on another thread.
-pub struct Observer {
+pub struct Observer<'a> {
     pipeline: Pipeline,
+    /// The template and its articulated tables: each frame's search index is built against
+    /// them here ([`ArticulatedTables::target_against`]), not on the fitter's thread.
+    template: (&'a PreparedMesh, Arc<ArticulatedTables>),
     intrinsics: Intrinsics,
     joints: JointTrack,
     options: TrackOptions,
@@ -238,7 +242,7 @@ pub struct Fitter<'a> {
     pipeline: Pipeline,
     template: &'a PreparedMesh,
     /// The articulated method's tables of the template, built once.
-    template_tables: ArticulatedTables,
+    template_tables: Arc<ArticulatedTables>,
     options: TrackOptions,
     /// The previous frame's fit: its bone transforms and the refined joints they pose onto.
     previous_fit: Option<(BoneTransforms, Skeleton)>,
@@ -251,7 +255,7 @@ pub struct Fitter<'a> {
 /// [`Observer`] and a [`Fitter`], one after the other ([`Tracker::frame`]), or apart
 /// ([`Tracker::parts`]) so that the next frame is observed while this one is matched.
 pub struct Tracker<'a> {
-    observer: Observer,
+    observer: Observer<'a>,
     fitter: Fitter<'a>,
 }
 
@@ -278,9 +282,11 @@ impl<'a> Tracker<'a> {
         if options.reciprocal_radius.is_some() {
             pipeline.options.articulated.reciprocal_radius = options.reciprocal_radius;
         }
+        let template_tables = Arc::new(ArticulatedTables::template(template));
         Tracker {
             observer: Observer {
                 pipeline: pipeline.clone(),
+                template: (template, Arc::clone(&template_tables)),
                 intrinsics,
                 joints,
                 filter: options.smoothing.map(SkeletonFilter::new),
@@ -288,7 +294,7 @@ impl<'a> Tracker<'a> {
                 previous: None,
             },
             fitter: Fitter {
-                template_tables: ArticulatedTables::template(template),
+                template_tables,
                 pipeline,
                 template,
                 options,
@@ -318,7 +324,7 @@ impl<'a> Tracker<'a> {
     /// The observer and the fitter, to run apart: observe frame k + 1 while frame k is
     /// matched; give the fitter every observation in order and [`Fitter::reset`] it for every
     /// frame the observer refused. The outcomes are those of [`Tracker::frame`].
-    pub fn parts(&mut self) -> (&mut Observer, &mut Fitter<'a>) {
+    pub fn parts(&mut self) -> (&mut Observer<'a>, &mut Fitter<'a>) {
         (&mut self.observer, &mut self.fitter)
     }
 
@@ -442,7 +448,7 @@ pub struct TrackedFrame {
     pub outcome: FrameOutcome,
 }
 
-impl Observer {
+impl Observer<'_> {
     /// Forgets the previous frame: no continuity check, no smoothing history.
     pub fn reset(&mut self) {
         self.previous = None;
@@ -496,7 +502,8 @@ impl Observer {
             .map_err(|e| e.to_string())?;
         let t_scan = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let (target, tables) = prepare_scan(&self.pipeline, &scan, &skeleton)?;
+        let template = (self.template.0, &*self.template.1);
+        let (target, tables) = prepare_scan(&self.pipeline, template, &scan, &skeleton)?;
         let t_prepare = t.elapsed().as_secs_f64();
         let d = &target.attachment.diagnostics;
         let mut timings = vec![
@@ -508,6 +515,11 @@ impl Observer {
                 .iter()
                 .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
         );
+        timings.extend(tables.iter().flat_map(|t| {
+            t.index_timings()
+                .iter()
+                .map(|(stage, t)| (format!("prepare.{stage}"), *t))
+        }));
         // Continuity is judged against what was used, the corrected and smoothed joints.
         self.previous = Some(skeleton);
         Ok(Observation {
@@ -563,7 +575,7 @@ impl Fitter<'_> {
                 self.template,
                 target,
                 start,
-                tables.map(|t| (&self.template_tables, t)),
+                tables.map(|t| (&*self.template_tables, t)),
             )
             .map_err(|e: PipelineError| e.to_string())?;
         Ok((corr, warm.is_some()))
@@ -580,7 +592,11 @@ impl Fitter<'_> {
             .pipeline
             .prepare_turned(target)
             .ok_or("the turned skeleton does not attach")?;
-        let tables = scan_tables(&self.pipeline, &turned);
+        let tables = scan_tables(
+            &self.pipeline,
+            (self.template, &self.template_tables),
+            &turned,
+        )?;
         let (corr, warm) = self.run_match(&turned, tables.as_ref())?;
         Ok((turned, corr, warm))
     }
@@ -694,6 +710,7 @@ impl Fitter<'_> {
 /// methods).
 fn prepare_scan(
     pipeline: &Pipeline,
+    template: (&PreparedMesh, &ArticulatedTables),
     scan: &ScanMesh,
     skeleton: &Skeleton,
 ) -> Result<(PreparedMesh, Option<ArticulatedTables>), String> {
@@ -701,13 +718,23 @@ fn prepare_scan(
         .prepare(scan.mesh.clone(), skeleton)
         .map_err(|e| e.to_string())?
         .seen_from(nalgebra::Point3::origin());
-    let tables = scan_tables(pipeline, &target);
+    let tables = scan_tables(pipeline, template, &target)?;
     Ok((target, tables))
 }
 
-/// A prepared scan's articulated tables (`None` for the other methods).
-fn scan_tables(pipeline: &Pipeline, target: &PreparedMesh) -> Option<ArticulatedTables> {
-    (pipeline.options.method == Method::Articulated).then(|| ArticulatedTables::target(target))
+/// A prepared scan's articulated tables against `template`, with its search index (`None`
+/// for the other methods).
+fn scan_tables(
+    pipeline: &Pipeline,
+    template: (&PreparedMesh, &ArticulatedTables),
+    target: &PreparedMesh,
+) -> Result<Option<ArticulatedTables>, String> {
+    if pipeline.options.method != Method::Articulated {
+        return Ok(None);
+    }
+    ArticulatedTables::target_against(template, target, &pipeline.options.articulated)
+        .map(Some)
+        .map_err(|e| e.to_string())
 }
 
 /// What the attachment of a frame's scan corrected: the skeleton's sides swapped to fit the

@@ -269,8 +269,9 @@ pub struct ArticulatedMatches {
     /// The final bone transforms (template frame → target frame), one per bone of
     /// [`BONES`](symcorr_skeleton::BONES).
     pub transforms: BoneTransforms,
-    /// Seconds per stage: `segment_pools`, `articulated_icp` (with the k-d trees and the head's
-    /// twist search), `nonrigid`, `map`.
+    /// Seconds per stage: `segment_pools`, `pool_trees` (both only when the index was built
+    /// here, [`articulated_match`]), `articulated_icp` (with the head's twist search),
+    /// `nonrigid`, `map`.
     pub timings: Vec<(&'static str, f64)>,
 }
 
@@ -310,14 +311,45 @@ pub fn articulated_match(
     start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, CorrespondError> {
     validate(template, weights, target)?;
-    let mut timings = Vec::new();
-    let t = Instant::now();
-    let pools = segment_pools(template, target, graph, options)?;
-    timings.push(("segment_pools", t.elapsed().as_secs_f64()));
+    let index = ArticulatedIndex::new(template, target, graph, options)?;
+    let mut out = match_indexed(template, weights, target, &index, options, start)?;
+    out.timings.splice(0..0, index.timings.iter().copied());
+    Ok(out)
+}
 
-    let t = Instant::now();
-    let al = Alignment::new(template, weights, target, &pools, options)?;
-    timings.push(("pool_trees", t.elapsed().as_secs_f64()));
+/// [`articulated_match`] with the target's search index built beforehand
+/// ([`ArticulatedIndex::new`] with the same template, target and options) — a recording's
+/// frame has it built on the thread that observed the frame. The result is the same;
+/// `timings` lack the index's stages (they are in [`ArticulatedIndex::timings`]).
+///
+/// Errors: those of [`articulated_match`], and [`CorrespondError::IndexMismatch`] for an
+/// index built for another template, target or options.
+pub fn articulated_match_indexed(
+    template: &ArticulatedInputs<'_>,
+    weights: &BoneWeights,
+    target: &ArticulatedInputs<'_>,
+    index: &ArticulatedIndex,
+    options: &ArticulatedOptions,
+    start: ArticulatedStart<'_>,
+) -> Result<ArticulatedMatches, CorrespondError> {
+    validate(template, weights, target)?;
+    match_indexed(template, weights, target, index, options, start)
+}
+
+/// [`articulated_match_indexed`] after the inputs were validated.
+fn match_indexed(
+    template: &ArticulatedInputs<'_>,
+    weights: &BoneWeights,
+    target: &ArticulatedInputs<'_>,
+    index: &ArticulatedIndex,
+    options: &ArticulatedOptions,
+    start: ArticulatedStart<'_>,
+) -> Result<ArticulatedMatches, CorrespondError> {
+    if index.built_for != IndexKey::of(template, target, options) {
+        return Err(CorrespondError::IndexMismatch);
+    }
+    let mut timings = Vec::new();
+    let al = Alignment::new(template, weights, target, index, options);
     let t = Instant::now();
     let (mut transforms, head_limit, head_prior) = initial_transforms(&al, start)?;
     let sample = al.icp_sample();
@@ -373,32 +405,141 @@ fn validate(
     weights: &BoneWeights,
     target: &ArticulatedInputs<'_>,
 ) -> Result<(), CorrespondError> {
-    for (side, s) in [("template", template), ("target", target)] {
-        let n = s.positions.len();
-        if n == 0 {
-            return Err(CorrespondError::EmptyMesh { side });
-        }
-        let tables = [
-            ("normals", Some(s.normals.len())),
-            ("labels", Some(s.labels.len())),
-            ("boundary flags", s.boundary.map(<[bool]>::len)),
-        ];
-        for (table, len) in tables {
-            if let Some(found) = len.filter(|&l| l != n) {
-                return Err(CorrespondError::LengthMismatch {
-                    what: format!("{side} {table} (one per position)"),
-                    expected: n,
-                    found,
-                });
-            }
-        }
-    }
+    validate_side("template", template)?;
+    validate_side("target", target)?;
     if weights.len() != template.positions.len() {
         return Err(CorrespondError::LengthMismatch {
             what: "template bone weight rows (one per vertex)".into(),
             expected: template.positions.len(),
             found: weights.len(),
         });
+    }
+    Ok(())
+}
+
+/// The target's search index for one template: the segment pools
+/// ([`SegmentPools::with_adjacent`]) and one k-d tree per pool over the target's features
+/// (position ⊕ β·normal) — what [`articulated_match`] builds before its ICP. Built apart
+/// ([`ArticulatedIndex::new`]), it moves that work to another thread: a recording's tracker
+/// builds each frame's while the previous frame is matched ([`articulated_match_indexed`]).
+///
+/// ```no_run
+/// use symcorr_correspond::{articulated_match_indexed, ArticulatedIndex, ArticulatedInputs, ArticulatedOptions, ArticulatedStart};
+/// # let (template, weights, target, graph): (ArticulatedInputs, symcorr_attach::BoneWeights, ArticulatedInputs, symcorr_spectral::EdgeGraph) = unimplemented!();
+/// let options = ArticulatedOptions::default();
+/// // On the thread that observed the target:
+/// let index = ArticulatedIndex::new(&template, &target, &graph, &options)?;
+/// // Later, on the thread that matches (the same as `articulated_match` with the graph):
+/// let matches = articulated_match_indexed(&template, &weights, &target, &index, &options, ArticulatedStart::Skeletons)?;
+/// # Ok::<(), symcorr_correspond::CorrespondError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct ArticulatedIndex {
+    pools: SegmentPools,
+    trees: PoolTrees,
+    built_for: IndexKey,
+    timings: Vec<(&'static str, f64)>,
+}
+
+impl ArticulatedIndex {
+    /// The pools of `template`'s segments on `target` (`graph`: the target's edge graph, for
+    /// the pools' bands) and their trees, for `options`.
+    ///
+    /// Errors: [`CorrespondError::EmptyMesh`], [`CorrespondError::LengthMismatch`] (a side's
+    /// tables disagree in length), and those of [`SegmentPools::with_adjacent`].
+    pub fn new(
+        template: &ArticulatedInputs<'_>,
+        target: &ArticulatedInputs<'_>,
+        graph: &EdgeGraph,
+        options: &ArticulatedOptions,
+    ) -> Result<ArticulatedIndex, CorrespondError> {
+        validate_side("template", template)?;
+        validate_side("target", target)?;
+        let t = Instant::now();
+        let pools = segment_pools(template, target, graph, options)?;
+        let t_pools = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let beta = options.normal_weight * template.area.sqrt();
+        let features: Vec<[f64; 6]> = target
+            .positions
+            .iter()
+            .zip(target.normals)
+            .map(|(x, n)| feature(&Point3::from(*x), &Vector3::from(*n), beta))
+            .collect();
+        let trees = PoolTrees::new(&pools, &features)?;
+        Ok(ArticulatedIndex {
+            pools,
+            trees,
+            built_for: IndexKey::of(template, target, options),
+            timings: vec![
+                ("segment_pools", t_pools),
+                ("pool_trees", t.elapsed().as_secs_f64()),
+            ],
+        })
+    }
+
+    /// Seconds per stage of the build: `segment_pools`, `pool_trees`.
+    pub fn timings(&self) -> &[(&'static str, f64)] {
+        &self.timings
+    }
+}
+
+/// What an [`ArticulatedIndex`] was built from, as a fingerprint (FNV-1a over the bits of
+/// everything the pools and trees read): an index is used only with the inputs it was built
+/// for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct IndexKey(u64);
+
+impl IndexKey {
+    fn of(
+        template: &ArticulatedInputs<'_>,
+        target: &ArticulatedInputs<'_>,
+        options: &ArticulatedOptions,
+    ) -> IndexKey {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: u64| {
+            for b in x.to_le_bytes() {
+                h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        eat(template.area.to_bits());
+        eat(target.area.to_bits());
+        eat(options.normal_weight.to_bits());
+        eat(options.band.to_bits());
+        for side in [template, target] {
+            eat(side.positions.len() as u64);
+            for l in side.labels {
+                eat(l.index() as u64);
+            }
+        }
+        for (x, n) in target.positions.iter().zip(target.normals) {
+            for c in x.iter().chain(n) {
+                eat(c.to_bits());
+            }
+        }
+        IndexKey(h)
+    }
+}
+
+/// Checks that a side has vertices and one entry per vertex in each of its tables.
+fn validate_side(side: &'static str, s: &ArticulatedInputs<'_>) -> Result<(), CorrespondError> {
+    let n = s.positions.len();
+    if n == 0 {
+        return Err(CorrespondError::EmptyMesh { side });
+    }
+    let tables = [
+        ("normals", Some(s.normals.len())),
+        ("labels", Some(s.labels.len())),
+        ("boundary flags", s.boundary.map(<[bool]>::len)),
+    ];
+    for (table, len) in tables {
+        if let Some(found) = len.filter(|&l| l != n) {
+            return Err(CorrespondError::LengthMismatch {
+                what: format!("{side} {table} (one per position)"),
+                expected: n,
+                found,
+            });
+        }
     }
     Ok(())
 }
@@ -435,7 +576,7 @@ pub(super) struct Alignment<'a> {
     target: ArticulatedInputs<'a>,
     pools: &'a SegmentPools,
     options: &'a ArticulatedOptions,
-    trees: PoolTrees,
+    trees: &'a PoolTrees,
     template_positions: Vec<Point3<f64>>,
     template_normals: Vec<Vector3<f64>>,
     target_positions: Vec<Point3<f64>>,
@@ -452,32 +593,27 @@ pub(super) struct Alignment<'a> {
 }
 
 impl<'a> Alignment<'a> {
-    /// Converts the meshes and builds one k-d tree per pool over the target's features.
+    /// Converts the meshes; the pools and their trees are `index`'s.
     fn new(
         template: &ArticulatedInputs<'a>,
         weights: &'a BoneWeights,
         target: &ArticulatedInputs<'a>,
-        pools: &'a SegmentPools,
+        index: &'a ArticulatedIndex,
         options: &'a ArticulatedOptions,
-    ) -> Result<Alignment<'a>, CorrespondError> {
+    ) -> Alignment<'a> {
         let points = |p: &[[f64; 3]]| p.iter().copied().map(Point3::from).collect::<Vec<_>>();
         let vectors = |p: &[[f64; 3]]| p.iter().copied().map(Vector3::from).collect::<Vec<_>>();
         let unit_len = template.area.sqrt();
         let beta = options.normal_weight * unit_len;
         let target_positions = points(target.positions);
         let target_normals = vectors(target.normals);
-        let target_features: Vec<[f64; 6]> = target_positions
-            .iter()
-            .zip(&target_normals)
-            .map(|(x, n)| feature(x, n, beta))
-            .collect();
-        Ok(Alignment {
+        Alignment {
             template: *template,
             weights,
             target: *target,
-            pools,
+            pools: &index.pools,
             options,
-            trees: PoolTrees::new(pools, &target_features)?,
+            trees: &index.trees,
             longest_target_normal2: target_normals
                 .iter()
                 .map(|n| n.norm_squared())
@@ -497,7 +633,7 @@ impl<'a> Alignment<'a> {
                 } else {
                     options.boundary_gate
                 },
-        })
+        }
     }
 
     /// The nearest-neighbour feature of a posed point and its normal.
