@@ -271,7 +271,7 @@ impl FitMesh {
 /// A depth scan faces its camera all one way, from a distance
 /// ([`TriMesh::origin_facing_side`]), and shows the body's near side: the torso's joints, inside
 /// the body, lie beyond the surface along their lines of sight. The origin is refused as the
-/// camera when more of them lie clearly in front of the surface ([`BEHIND_MARGIN`]) than beyond
+/// camera when more of them lie clearly in front of the surface (`BEHIND_MARGIN`) than beyond
 /// it: this tells a scan from a partial mesh whose origin lies *behind* it (the front half of a
 /// body in a frame whose origin is 2 m behind the body faces the origin all one way as well).
 ///

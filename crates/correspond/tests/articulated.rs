@@ -540,7 +540,7 @@ fn an_index_built_beforehand_gives_the_same_matches_and_only_for_its_inputs() {
     other.positions = &moved;
     let wider = ArticulatedOptions {
         band: options.band * 2.0,
-        ..options.clone()
+        ..options
     };
     for (target, options) in [(&other, &options), (&target, &wider)] {
         let refused =

@@ -21,7 +21,9 @@
 //!    **prepare** it (skeleton attachment; joints and depth share the camera frame, so no
 //!    alignment, and a poor fit is recorded, not refused: a profile view's far-side joints lie
 //!    behind the only surface the camera sees; the camera at the origin is its viewpoint, for
-//!    the occlusion test).
+//!    the occlusion test; bone heat on 1 cm clusters of the scan,
+//!    [`TrackOptions::scan_heat_mesh`]), with its search index against the template
+//!    ([`ArticulatedTables::target_against`]).
 //! 5. **Match** the template onto it with the pipeline's method — **warm-started** from the
 //!    previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by the
 //!    joints' motion, what the joints cannot say, a bone's roll and the head's twist, carried
