@@ -50,6 +50,14 @@ pub(super) fn nonrigid_step(
     let Some(nb) = al.template.neighbors.filter(|nb| nb.len() == n) else {
         return Ok(hints);
     };
+    // The edge graph as compressed rows (offsets, then neighbours in the lists' order): the
+    // Jacobi sweeps read it thirty times per round.
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0usize);
+    for list in nb {
+        offsets.push(offsets[offsets.len() - 1] + list.len());
+    }
+    let adjacent: Vec<u32> = nb.iter().flatten().copied().collect();
     let mut hints = hints;
     let scan = al.is_scan();
     let g0 = options.nonrigid_gate_start.max(options.gate_end);
@@ -117,7 +125,7 @@ pub(super) fn nonrigid_step(
                 .enumerate()
                 .for_each(|(v, out)| {
                     let mut acc = data[v];
-                    for &u in &nb[v] {
+                    for &u in &adjacent[offsets[v]..offsets[v + 1]] {
                         acc += field[u as usize] * lambda;
                     }
                     *out = if scale[v] > 0.0 {

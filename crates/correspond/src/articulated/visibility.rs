@@ -48,7 +48,7 @@ pub(super) fn visible_from(
     let up = right.cross(&forward);
     // Per vertex: image coordinates (tangent plane at unit distance) and depth along forward.
     let projected: Vec<Option<(f64, f64, f64)>> = positions
-        .iter()
+        .par_iter()
         .map(|p| {
             let d = p - eye;
             let z = d.dot(&forward);
@@ -63,7 +63,7 @@ pub(super) fn visible_from(
         ])
     };
     let mut edges: Vec<f64> = triangles
-        .iter()
+        .par_iter()
         .filter_map(|t| {
             let [a, b, _] = corners(t)?;
             Some(((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt())
@@ -112,7 +112,7 @@ pub(super) fn visible_from(
     // triangle with a corner behind the eye or a zero image area hides nothing and is left
     // out.
     let image: Vec<ImageTriangle> = triangles
-        .iter()
+        .par_iter()
         .filter_map(|tri| {
             let [a, b, c] = corners(tri)?;
             let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
