@@ -484,8 +484,8 @@ impl ArticulatedIndex {
     }
 }
 
-/// What an [`ArticulatedIndex`] was built from, as a fingerprint (FNV-1a over the bits of
-/// everything the pools and trees read): an index is used only with the inputs it was built
+/// What an [`ArticulatedIndex`] was built from, as a fingerprint (a word-wise FNV-1a over the
+/// bits of everything the pools and trees read): an index is used only with the inputs it was built
 /// for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct IndexKey(u64);
@@ -496,11 +496,12 @@ impl IndexKey {
         target: &ArticulatedInputs<'_>,
         options: &ArticulatedOptions,
     ) -> IndexKey {
+        // FNV-1a over 64-bit words, each word's high bits folded down after the multiply (a
+        // byte-wise FNV cost 1 % of a recording's CPU).
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |x: u64| {
-            for b in x.to_le_bytes() {
-                h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-            }
+            h = (h ^ x).wrapping_mul(0x0000_0100_0000_01b3);
+            h ^= h >> 29;
         };
         eat(template.area.to_bits());
         eat(target.area.to_bits());
