@@ -14,6 +14,10 @@
 //! (ignoring visibility) as its heat source instead of an empty row, and is reported
 //! ([`ComponentReport::fallback`]); vertices in no non-degenerate triangle get the nearest
 //! bone's label.
+//!
+//! With [`HeatMesh::Clustered`] all of this runs on the mesh of clusters of the input's
+//! vertices (`cluster`), each cluster at its seed vertex (whose triangles the visibility rays
+//! skip), and every vertex takes its cluster's row.
 
 use crate::bvh::TriangleBvh;
 use crate::geom::Joints;

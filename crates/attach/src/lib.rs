@@ -342,7 +342,8 @@ impl JointMove {
 pub struct ComponentReport {
     /// Vertices in the component.
     pub vertices: usize,
-    /// Vertices that saw a bone (heat sources).
+    /// Vertices that saw a bone (heat sources; with [`HeatMesh::Clustered`], the vertices of
+    /// the clusters whose seed saw one).
     pub visible_vertices: usize,
     /// True if no vertex saw a bone and the nearest bones were used instead.
     pub fallback: bool,
