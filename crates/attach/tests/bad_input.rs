@@ -183,6 +183,22 @@ fn an_empty_mesh_and_bad_options_are_errors() {
             ..
         })
     ));
+    for radius in [f64::NAN, 0.0, -0.01, 0.5, f64::INFINITY] {
+        let o = AttachOptions {
+            heat_mesh: symcorr_attach::HeatMesh::Clustered { radius },
+            ..AttachOptions::default()
+        };
+        assert!(
+            matches!(
+                attach(&mesh, &sk, &o),
+                Err(AttachError::OptionOutOfRange {
+                    name: "heat_mesh.radius",
+                    ..
+                })
+            ),
+            "radius {radius}"
+        );
+    }
 }
 
 #[test]

@@ -137,8 +137,9 @@ pub struct Correspondence {
     pub pairs: Vec<Pair>,
     /// Seconds per pair stage (`sampling`, then the method's own: `candidates`,
     /// `skeleton_filter`, `selection` for the paper's; `segment_pools`, `initial_map`, `zoomout`
-    /// for the refined one; `segment_pools`, `pool_trees`, `articulated_icp`, `nonrigid`, `map` for the
-    /// articulated one).
+    /// for the refined one; `segment_pools`, `pool_trees` (unless the target's tables brought
+    /// its index, [`ArticulatedTables::target_against`]), `articulated_icp`, `nonrigid`, `map`
+    /// for the articulated one).
     pub timings: Vec<(String, f64)>,
     /// What the method reports beside the pairs.
     pub report: MethodReport,
@@ -386,8 +387,10 @@ fn articulated_normals(m: &PreparedMesh) -> Vec<[f64; 3]> {
 }
 
 /// The articulated method: skeleton-driven articulated alignment of the
-/// template onto the target (symcorr-correspond's `articulated_match`), with the tables of
-/// both ([`ArticulatedTables::template`], [`ArticulatedTables::target`]).
+/// template onto the target (symcorr-correspond's `articulated_match`, or
+/// `articulated_match_indexed` when the target's tables hold its index), with the tables of
+/// both ([`ArticulatedTables::template`], [`ArticulatedTables::target`] or
+/// [`ArticulatedTables::target_against`]).
 fn articulated(
     template: (&PreparedMesh, &ArticulatedTables),
     target: (&PreparedMesh, &ArticulatedTables),

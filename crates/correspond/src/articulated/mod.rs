@@ -162,9 +162,10 @@ pub struct ArticulatedOptions {
     pub warm_iterations: usize,
     /// Pair-rejection distance of the first iteration from a warm start.
     pub warm_gate_start: f64,
-    /// Rounds of the non-rigid step from a warm start (0: none); its gates run from
+    /// Rounds of the non-rigid step from a warm start (0: none); their gates run from
     /// [`ArticulatedOptions::nonrigid_gate_start`] to [`ArticulatedOptions::gate_end`] as
-    /// [`ArticulatedOptions::nonrigid_rounds`]' do. `docs/decisions/2026-12-04-track-heat-clusters-and-warm-rounds.md`.
+    /// those of [`ArticulatedOptions::nonrigid_rounds`] do. Measured:
+    /// `docs/decisions/2026-12-04-track-heat-clusters-and-warm-rounds.md`.
     pub warm_nonrigid_rounds: usize,
     /// Reciprocal check (`None`: off): a pair (template vertex `v` → target vertex `q`) holds
     /// only when the posed template vertex nearest `q` (same features, among those the
@@ -485,8 +486,9 @@ impl ArticulatedIndex {
 }
 
 /// What an [`ArticulatedIndex`] was built from, as a fingerprint (a word-wise FNV-1a over the
-/// bits of everything the pools and trees read): an index is used only with the inputs it was built
-/// for.
+/// bits of both sides' labels and areas, the target's positions and normals, and the options
+/// that shape the pools and trees): an index is used only with the inputs it was built for.
+/// The edge graph is not in it; it is taken to be the target's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct IndexKey(u64);
 
