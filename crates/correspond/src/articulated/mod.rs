@@ -313,7 +313,7 @@ pub fn articulated_match(
 ) -> Result<ArticulatedMatches, CorrespondError> {
     validate(template, weights, target)?;
     let index = ArticulatedIndex::new(template, target, graph, options)?;
-    let mut out = match_indexed(template, weights, target, &index, options, start)?;
+    let mut out = articulated_match_indexed(template, weights, target, &index, options, start)?;
     out.timings.splice(0..0, index.timings.iter().copied());
     Ok(out)
 }
@@ -334,18 +334,6 @@ pub fn articulated_match_indexed(
     start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, CorrespondError> {
     validate(template, weights, target)?;
-    match_indexed(template, weights, target, index, options, start)
-}
-
-/// [`articulated_match_indexed`] after the inputs were validated.
-fn match_indexed(
-    template: &ArticulatedInputs<'_>,
-    weights: &BoneWeights,
-    target: &ArticulatedInputs<'_>,
-    index: &ArticulatedIndex,
-    options: &ArticulatedOptions,
-    start: ArticulatedStart<'_>,
-) -> Result<ArticulatedMatches, CorrespondError> {
     if index.built_for != IndexKey::of(template, target, options) {
         return Err(CorrespondError::IndexMismatch);
     }
