@@ -1,5 +1,6 @@
 //! Exact nearest neighbours in a few dimensions: a static k-d tree (Bentley 1975; median
-//! splits on the widest axis, buckets of [`LEAF`] points) and one tree per segment pool.
+//! splits on the widest axis of a sample of each node's points, buckets of [`LEAF`] points)
+//! and one tree per segment pool.
 //!
 //! The articulated alignment asks, a dozen times per pair, for every template vertex's nearest
 //! target vertex of its pool in position + normal space (6 dimensions). Brute force costs

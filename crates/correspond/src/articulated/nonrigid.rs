@@ -21,9 +21,10 @@ const ROBUST_SCALE: f64 = 0.5;
 /// the sampling fell (and a depth sensor's noise is along the line of sight).
 const TANGENTIAL_SHARE: f64 = 0.3;
 
-/// Moves `posed` by `rounds` rounds ([`ArticulatedOptions::nonrigid_rounds`](crate::ArticulatedOptions)
-/// or, from a warm start, `warm_nonrigid_rounds`) of a smooth displacement field; nothing without the template's edge graph
-/// (`neighbors`, one list per vertex). Each round pairs every posed vertex with its nearest
+/// Moves `posed` by `rounds` rounds
+/// ([`ArticulatedOptions::nonrigid_rounds`](crate::ArticulatedOptions) or, from a warm start,
+/// `warm_nonrigid_rounds`) of a smooth displacement field; nothing without the template's edge
+/// graph (`neighbors`, one list per vertex). Each round pairs every posed vertex with its nearest
 /// pool vertex, keeps the pairs that hold at the round's gate (coarse to fine, from
 /// `nonrigid_gate_start` to `gate_end`, so a body part further off than the final gate — a
 /// heavier shape's belly — is pulled in by the early rounds), and spreads their offsets `d_v`
