@@ -11,9 +11,10 @@
 //! → handedness check ([`MirrorCheck`], [`MirrorPolicy`]; on its own: [`check_handedness`],
 //! and as a verdict for a scan: [`handedness_verdict`]) → joint refinement (limb joints to
 //! their cross-section's centre) → bone heat (`(L + M·H) W = M·H·P`, one sparse Cholesky for
-//! all 19 bones, on the mesh or on clusters of a dense one: [`HeatMesh`]; [`BoneWeights`]) → labels: the segment with the largest weight, side first;
-//! joint planes between neighbouring segments ([`AttachOptions::joint_planes`]); the midline
-//! guard ([`AttachOptions::midline_band`]); optionally a learned [`BoundaryConvention`] →
+//! all 19 bones, on the mesh or on clusters of a dense one: [`HeatMesh`]; [`BoneWeights`]) →
+//! labels: the segment with the largest weight, side first; joint planes between neighbouring
+//! segments ([`AttachOptions::joint_planes`]); the midline guard
+//! ([`AttachOptions::midline_band`]); optionally a learned [`BoundaryConvention`] →
 //! [`Attachment`] with its [`Diagnostics`]. The module sources explain each step.
 //!
 //! ```
