@@ -362,7 +362,7 @@ impl ArticulatedTables {
         options: &ArticulatedOptions,
     ) -> Result<ArticulatedTables, PipelineError> {
         let mut tables = ArticulatedTables::target(target);
-        let index = with_sides(template, (target, &tables), |t, _, q, graph| {
+        let index = with_sides(template, (target, &tables), |t, q, graph| {
             ArticulatedIndex::new(t, q, graph, options)
         })?;
         tables.index = Some(index);
@@ -399,28 +399,19 @@ fn articulated(
 ) -> Result<ArticulatedMatches, PipelineError> {
     let index = target.1.index.as_ref();
     let weights = &template.0.attachment.weights;
-    Ok(with_sides(
-        template,
-        target,
-        |t, _, q, graph| match index {
-            Some(index) => articulated_match_indexed(t, weights, q, index, options, start),
-            None => articulated_match(t, weights, q, graph, options, start),
-        },
-    )?)
+    Ok(with_sides(template, target, |t, q, graph| match index {
+        Some(index) => articulated_match_indexed(t, weights, q, index, options, start),
+        None => articulated_match(t, weights, q, graph, options, start),
+    })?)
 }
 
 /// Calls `f` with the articulated method's view of both meshes (the template in the target's
-/// unit), the template's bone weights and the target's edge graph, each table taken from the
-/// meshes' [`ArticulatedTables`] or built here when they lack it.
+/// unit) and the target's edge graph, each table taken from the meshes' [`ArticulatedTables`]
+/// or built here when they lack it.
 fn with_sides<R>(
     (template, tt): (&PreparedMesh, &ArticulatedTables),
     (target, qt): (&PreparedMesh, &ArticulatedTables),
-    f: impl FnOnce(
-        &ArticulatedInputs<'_>,
-        &symcorr_attach::BoneWeights,
-        &ArticulatedInputs<'_>,
-        &EdgeGraph,
-    ) -> R,
+    f: impl FnOnce(&ArticulatedInputs<'_>, &ArticulatedInputs<'_>, &EdgeGraph) -> R,
 ) -> R {
     let built;
     let graph = match (&target.refine, &qt.graph) {
@@ -490,7 +481,6 @@ fn with_sides<R>(
     }
     f(
         &template_side,
-        &template.attachment.weights,
         &side(target, qn, Some(boundary), None),
         graph,
     )
