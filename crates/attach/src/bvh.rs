@@ -57,9 +57,6 @@ impl TriangleBvh {
         });
         let mut stack = vec![(0usize, 0usize, order.len())];
         while let Some((ni, s, e)) = stack.pop() {
-            let (lo, hi) = bounds(order[s..e].iter().flat_map(|&t| &tris[t as usize]));
-            nodes[ni].lo = lo;
-            nodes[ni].hi = hi;
             if e - s <= LEAF {
                 nodes[ni].start = s;
                 nodes[ni].count = e - s;
@@ -87,6 +84,25 @@ impl TriangleBvh {
             nodes[ni].count = 0;
             stack.push((left, s, mid));
             stack.push((left + 1, mid, e));
+        }
+        // Boxes bottom-up (children come after their parent): a leaf's from its triangles,
+        // an inner node's from its children's — each triangle read once, not once per level.
+        for ni in (0..nodes.len()).rev() {
+            let n = &nodes[ni];
+            // An inner node's children follow the root (`start > 0`); only an empty mesh's
+            // root is a leaf without triangles.
+            let (lo, hi) = if n.count > 0 || n.start == 0 {
+                bounds(
+                    order[n.start..n.start + n.count]
+                        .iter()
+                        .flat_map(|&t| &tris[t as usize]),
+                )
+            } else {
+                let (a, b) = (&nodes[n.start], &nodes[n.start + 1]);
+                (a.lo.inf(&b.lo), a.hi.sup(&b.hi))
+            };
+            nodes[ni].lo = lo;
+            nodes[ni].hi = hi;
         }
         TriangleBvh {
             nodes,

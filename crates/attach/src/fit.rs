@@ -32,6 +32,7 @@
 use crate::bvh::TriangleBvh;
 use crate::geom::{bone_segments, distance_to_bones, Joints};
 use crate::refine::torso_frame;
+use crate::tables::MeshTables;
 use crate::{Joint, MirrorCheck, Skeleton};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use symcorr_mesh::TriMesh;
@@ -201,11 +202,12 @@ impl FitMesh {
     /// The mesh as the checks see it; `p` (the given placement's joints, `usable` ones) decides
     /// whether a depth scan is seen from the origin ([`camera_side`]); `bvh` is the mesh's.
     pub(crate) fn new(
-        mesh: &TriMesh,
+        tables: &MeshTables<'_>,
         bvh: &TriangleBvh,
         p: &Joints,
         usable: &[bool; 20],
     ) -> FitMesh {
+        let mesh = tables.mesh;
         let positions: Vec<Point3<f64>> = mesh.positions.iter().map(|&p| Point3::from(p)).collect();
         let normals = mesh
             .vertex_normals()
@@ -219,7 +221,7 @@ impl FitMesh {
         // the surface, and beside the silhouette, is seen empty — a body's bones cannot lie
         // there (the visual hull); its "outward" normals face the camera.
         let area = mesh.total_area();
-        let closed = mesh.boundary_length() < 0.5 * area.sqrt();
+        let closed = tables.boundary().length < 0.5 * area.sqrt();
         let outward = if closed {
             Some(if signed_volume(mesh) >= 0.0 {
                 1.0

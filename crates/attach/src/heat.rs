@@ -21,6 +21,7 @@
 
 use crate::bvh::TriangleBvh;
 use crate::geom::Joints;
+use crate::tables::MeshTables;
 use crate::{AttachError, BoneWeights, ComponentReport, HeatMesh, BONES};
 use faer::Mat;
 use nalgebra::{Point3, Vector3};
@@ -145,21 +146,21 @@ pub(crate) struct HeatProblem<'a> {
     pub min_weight: f64,
 }
 
-/// Computes bone-heat weights of every vertex of `mesh` on the heat mesh `heat_mesh` asks for
-/// (`height`: the skeleton's height, the unit of [`HeatMesh::Clustered`]'s radius). `bvh` is
-/// `mesh`'s ([`TriangleBvh::new`]).
+/// Computes bone-heat weights of every vertex of `tables`' mesh on the heat mesh `heat_mesh`
+/// asks for (`height`: the skeleton's height, the unit of [`HeatMesh::Clustered`]'s radius).
+/// `bvh` is the mesh's ([`TriangleBvh::new`]).
 pub(crate) fn bone_heat(
-    mesh: &TriMesh,
+    tables: &MeshTables<'_>,
     bvh: &TriangleBvh,
     problem: &HeatProblem,
     heat_mesh: HeatMesh,
     height: f64,
 ) -> Result<Heat, AttachError> {
+    let mesh = tables.mesh;
     let clusters = match heat_mesh {
         HeatMesh::Input => None,
-        HeatMesh::Clustered { radius } => {
-            Some(cluster(mesh, radius * height)).filter(|c| c.seed.len() < mesh.num_vertices())
-        }
+        HeatMesh::Clustered { radius } => Some(cluster(mesh, tables.neighbors(), radius * height))
+            .filter(|c| c.seed.len() < mesh.num_vertices()),
     };
     let Some(cl) = clusters else {
         let ids: Vec<u32> = (0..mesh.num_vertices() as u32).collect();
@@ -187,9 +188,8 @@ struct Clusters {
 /// edges, so two sheets that touch without sharing an edge (an arm against the torso) are
 /// never merged, and the coarse mesh has the input's connected components. A mesh whose edges
 /// are all longer than `radius` is its own clustering.
-fn cluster(mesh: &TriMesh, radius: f64) -> Clusters {
+fn cluster(mesh: &TriMesh, neighbors: &[Vec<u32>], radius: f64) -> Clusters {
     let n = mesh.num_vertices();
-    let neighbors = mesh.vertex_neighbors();
     let r2 = radius * radius;
     let mut of = vec![u32::MAX; n];
     let mut seed = Vec::new();
@@ -483,7 +483,7 @@ mod tests {
     fn clusters_stay_within_their_radius_and_never_join_sheets_without_an_edge() {
         let (mesh, first) = two_sheets();
         let radius = 0.025;
-        let c = cluster(&mesh, radius);
+        let c = cluster(&mesh, &mesh.vertex_neighbors(), radius);
         assert!(
             c.seed.len() * 4 < mesh.num_vertices(),
             "{} clusters of {} vertices",
@@ -509,7 +509,7 @@ mod tests {
     #[test]
     fn a_radius_below_every_edge_leaves_the_mesh_as_it_is() {
         let (mesh, _) = two_sheets();
-        let c = cluster(&mesh, 0.004);
+        let c = cluster(&mesh, &mesh.vertex_neighbors(), 0.004);
         assert_eq!(c.seed.len(), mesh.num_vertices());
         assert!(c.of.iter().enumerate().all(|(v, &k)| k as usize == v));
         assert_eq!(c.coarse.triangles, mesh.triangles);

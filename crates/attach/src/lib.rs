@@ -64,6 +64,7 @@ pub mod palette;
 mod planes;
 mod refine;
 mod repair;
+mod tables;
 
 pub use convention::{
     boundaries, BoundaryConvention, BoundaryRule, LabelledBody, ASYMMETRY_FACTOR, MIN_SIDE_BAND,
@@ -520,7 +521,8 @@ pub(crate) fn attach_with_usable(
     lap("mirror", &mut clock);
     // One BVH of the mesh serves the fit checks and the bone heat's visibility rays.
     let bvh = bvh::TriangleBvh::new(mesh);
-    let fit_mesh = fit::FitMesh::new(mesh, &bvh, &positions, &usable);
+    let tables = tables::MeshTables::new(mesh);
+    let fit_mesh = fit::FitMesh::new(&tables, &bvh, &positions, &usable);
     let mut fit = fit::measure(&fit_mesh, &positions, &usable, height, &mirror);
     if !fit.passed() && options.align {
         let unmirrored = if mirror.swapped {
@@ -574,7 +576,7 @@ pub(crate) fn attach_with_usable(
     let mut joint_moves = Vec::new();
     let mut refinement_skipped = Vec::new();
     if options.refine_joints {
-        let r = refine::refine(mesh, &mut positions, &usable, height, options);
+        let r = refine::refine(&tables, &mut positions, &usable, height, options);
         joint_moves = r.moves;
         refinement_skipped = r.skipped;
     }
@@ -589,7 +591,7 @@ pub(crate) fn attach_with_usable(
         *r = options.segment_reach[bone_segment(b).index()];
     }
     let heat = heat::bone_heat(
-        mesh,
+        &tables,
         &bvh,
         &heat::HeatProblem {
             p: &positions,

@@ -26,6 +26,7 @@
 //! `docs/decisions/2026-12-02-attach-noisy-joint-limit.md`.
 
 use crate::geom::{unit, Joints};
+use crate::tables::MeshTables;
 use crate::{AttachOptions, Joint, JointMove, MirrorCheck, BONES};
 use nalgebra::{distance, Matrix3, Point3, Vector3};
 use symcorr_mesh::geometry::closest_on_segment;
@@ -294,7 +295,7 @@ fn plane_basis(n: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 
 /// Refines the joint positions in place.
 pub(crate) fn refine(
-    mesh: &TriMesh,
+    tables: &MeshTables<'_>,
     p: &mut Joints,
     usable: &[bool; 20],
     height: f64,
@@ -302,7 +303,8 @@ pub(crate) fn refine(
 ) -> Refined {
     let mut moves = Vec::new();
     let mut skipped = Vec::new();
-    let adj = mesh.vertex_neighbors();
+    let mesh = tables.mesh;
+    let adj = tables.neighbors();
     let mean_edge = {
         let e = mesh.edges();
         e.iter()
@@ -319,7 +321,7 @@ pub(crate) fn refine(
     // Boundary vertices (edges with one triangle): a cross-section containing one is open (a
     // single-view scan), where only limbs can be centred (circle fit on the visible arc); the
     // torso's and the shoulders'/hips' depth centres are unknowable there.
-    let on_boundary = mesh.boundary_vertices();
+    let on_boundary = &tables.boundary().vertices;
     let max_move = options.max_joint_move * height;
     let mut mark = vec![0u32; mesh.num_vertices()];
     let orig = *p;
@@ -369,7 +371,7 @@ pub(crate) fn refine(
         let (e1, e2) = plane_basis(axis);
         let mut best: Option<(Point3<f64>, f64)> = None;
         let mut open = false;
-        for piece in pieces(&set, &adj, &mut mark, stamp as u32 + 1) {
+        for piece in pieces(&set, adj, &mut mark, stamp as u32 + 1) {
             if k != Kind::Limb && piece.iter().any(|&v| on_boundary[v as usize]) {
                 open = true;
                 continue;
@@ -558,7 +560,13 @@ mod tests {
         for (offset, radius, moved) in [(0.10, 0.005, false), (0.02, 0.03, true)] {
             let mesh = tube(w + e1 * offset, axis, radius);
             let mut q = p;
-            let r = refine(&mesh, &mut q, &usable, 1.7, &options);
+            let r = refine(
+                &crate::tables::MeshTables::new(&mesh),
+                &mut q,
+                &usable,
+                1.7,
+                &options,
+            );
             let d = distance(&q[Joint::WristLeft.index()], &w);
             if moved {
                 assert!((d - offset).abs() < 1e-3, "moved {d}");

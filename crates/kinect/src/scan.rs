@@ -199,12 +199,19 @@ pub struct ScanReport {
     pub component_vertices_removed: usize,
 }
 
-/// Distinct vertices of `tris`.
-fn count_vertices(tris: &[[usize; 3]]) -> usize {
-    let mut v: Vec<usize> = tris.iter().flatten().copied().collect();
-    v.sort_unstable();
-    v.dedup();
-    v.len()
+/// Per pixel of an image of `pixels`: is it a corner of one of `tris`? (A flag per pixel,
+/// not a sort of every corner: this runs on every recorded frame.)
+fn used_pixels(tris: &[[usize; 3]], pixels: usize) -> Vec<bool> {
+    let mut used = vec![false; pixels];
+    for &v in tris.iter().flatten() {
+        used[v] = true;
+    }
+    used
+}
+
+/// Distinct vertices of `tris` (pixels of an image of `pixels`).
+fn count_vertices(tris: &[[usize; 3]], pixels: usize) -> usize {
+    used_pixels(tris, pixels).iter().filter(|&&u| u).count()
 }
 
 /// Keeps the triangles of the components `filter` selects (not [`ComponentFilter::All`]).
@@ -231,13 +238,18 @@ fn keep_components(
         }
     }
     let root: Vec<usize> = tris.iter().map(|t| find(&mut parent, t[0])).collect();
-    let mut size = std::collections::BTreeMap::new();
+    // Triangles per component, indexed by its root pixel.
+    let mut size = vec![0usize; points.len()];
     for &r in &root {
-        *size.entry(r).or_insert(0usize) += 1;
+        size[r] += 1;
     }
     // Deterministic choice among equal sizes: the smallest root id.
-    let Some((&largest, &largest_size)) =
-        size.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+    let Some((largest, largest_size)) = size
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|&(_, c)| c > 0)
+        .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
     else {
         return;
     };
@@ -252,7 +264,7 @@ fn keep_components(
                 .collect()
         })
         .unwrap_or_default();
-    let kept: std::collections::BTreeSet<usize> = match filter {
+    let kept: Vec<usize> = match filter {
         ComponentFilter::NearBones {
             max_median_m,
             min_share,
@@ -261,7 +273,7 @@ fn keep_components(
             let mut distances: std::collections::BTreeMap<usize, Vec<f64>> = Default::default();
             let mut seen = vec![false; points.len()];
             for (t, &r) in tris.iter().zip(&root) {
-                if (size[&r] as f64) < min_share * largest_size as f64 {
+                if (size[r] as f64) < min_share * largest_size as f64 {
                     continue;
                 }
                 for &v in t {
@@ -288,10 +300,14 @@ fn keep_components(
         }
         _ => std::iter::once(largest).collect(),
     };
+    let mut keep = vec![false; points.len()];
+    for r in kept {
+        keep[r] = true;
+    }
     let mut k = 0;
     tris.retain(|_| {
         k += 1;
-        kept.contains(&root[k - 1])
+        keep[root[k - 1]]
     });
 }
 
@@ -563,9 +579,9 @@ pub fn scan_mesh(
 
     // Connected components (union-find over pixels through triangles).
     if opts.components != ComponentFilter::All && !tris.is_empty() {
-        let before = count_vertices(&tris);
+        let before = count_vertices(&tris, points.len());
         keep_components(&mut tris, &points, skeleton, opts.components);
-        report.component_vertices_removed = before - count_vertices(&tris);
+        report.component_vertices_removed = before - count_vertices(&tris, points.len());
     }
     if tris.is_empty() {
         return Err(KinectError::Scan(format!(
@@ -579,9 +595,11 @@ pub fn scan_mesh(
 
     // Compact: vertices in pixel order.
     let mut index = vec![u32::MAX; points.len()];
-    let mut used: Vec<usize> = tris.iter().flatten().copied().collect();
-    used.sort_unstable();
-    used.dedup();
+    let used: Vec<usize> = used_pixels(&tris, points.len())
+        .iter()
+        .enumerate()
+        .filter_map(|(px, &u)| u.then_some(px))
+        .collect();
     let mut positions = Vec::with_capacity(used.len());
     let mut pixel_ids = Vec::with_capacity(used.len());
     for (n, &px) in used.iter().enumerate() {

@@ -274,7 +274,31 @@ fn classify_triangles(
         k.sort_unstable();
         keys.push((k, t));
     }
-    keys.sort_unstable();
+    // The order of one sort of every key, in linear time: bucketed by the smallest vertex (a
+    // counting sort), each short bucket sorted (a recorded frame's scan is validated on
+    // every frame).
+    let n = keys
+        .iter()
+        .map(|(k, _)| k[0] as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut start = vec![0usize; n + 1];
+    for (k, _) in &keys {
+        start[k[0] as usize + 1] += 1;
+    }
+    for a in 0..n {
+        start[a + 1] += start[a];
+    }
+    let mut fill = start.clone();
+    let mut sorted = vec![([0u32; 3], 0u32); keys.len()];
+    for &(k, t) in &keys {
+        sorted[fill[k[0] as usize]] = (k, t);
+        fill[k[0] as usize] += 1;
+    }
+    for a in 0..n {
+        sorted[start[a]..start[a + 1]].sort_unstable();
+    }
+    let keys = sorted;
     for w in keys.windows(2) {
         if w[0].0 == w[1].0 {
             dup.push(w[1].1);
@@ -711,11 +735,18 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
         report.removed_zero_area_triangles = before.zero_area_triangles.len();
     }
     if options.remove_duplicates {
-        // Recompute among kept triangles (a duplicate of a removed triangle is not a duplicate).
-        let kept: Vec<u32> = (0..mesh.num_triangles() as u32)
-            .filter(|&t| keep[t as usize])
-            .collect();
-        let (_, _, dups) = classify_triangles(mesh, &kept, f64::NEG_INFINITY);
+        // Among kept triangles (a duplicate of a removed triangle is not a duplicate). With the
+        // degenerate and zero-area ones removed, the kept triangles are exactly those the
+        // validation compared, so its list is the answer (sorting them all again cost a
+        // recorded frame's scan as much as the validation's own sort).
+        let dups = if options.remove_degenerate {
+            before.duplicate_triangles.clone()
+        } else {
+            let kept: Vec<u32> = (0..mesh.num_triangles() as u32)
+                .filter(|&t| keep[t as usize])
+                .collect();
+            classify_triangles(mesh, &kept, f64::NEG_INFINITY).2
+        };
         for &t in &dups {
             keep[t as usize] = false;
         }

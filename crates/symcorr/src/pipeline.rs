@@ -309,7 +309,8 @@ impl SurfacePoint {
 
 /// The tables of one mesh that the articulated method derives from it alone, per frame of a
 /// recording no matter how many frames: its outward normals, and as a template its edge graph
-/// (the non-rigid step), as a target its boundary flags and its edge graph for the pools' band.
+/// (the non-rigid step), as a target its edge graph for the pools' band (its boundary flags are
+/// the prepared mesh's, [`PreparedMesh::boundary_vertices`]).
 /// Built once for a template and, for a recording's frame, on the thread that observes it
 /// ([`Pipeline::run_with`]); [`Pipeline::run_from`] builds both for each call.
 #[derive(Debug, Clone)]
@@ -317,9 +318,8 @@ pub struct ArticulatedTables {
     normals: Vec<[f64; 3]>,
     /// As a template: the vertex neighbours.
     neighbors: Option<Vec<Vec<u32>>>,
-    /// As a target: the boundary flags, and the edge graph unless the mesh was prepared for
-    /// the refined method (which holds one).
-    boundary: Option<Vec<bool>>,
+    /// As a target: the edge graph unless the mesh was prepared for the refined method (which
+    /// holds one).
     graph: Option<EdgeGraph>,
     /// As a target: its search index against one template ([`ArticulatedTables::target_against`]).
     index: Option<ArticulatedIndex>,
@@ -331,7 +331,6 @@ impl ArticulatedTables {
         ArticulatedTables {
             normals: articulated_normals(m),
             neighbors: Some(m.mesh.vertex_neighbors()),
-            boundary: None,
             graph: None,
             index: None,
         }
@@ -342,7 +341,6 @@ impl ArticulatedTables {
         ArticulatedTables {
             normals: articulated_normals(m),
             neighbors: None,
-            boundary: Some(m.mesh.boundary_vertices()),
             graph: m.refine.is_none().then(|| EdgeGraph::new(&m.mesh)),
             index: None,
         }
@@ -422,14 +420,6 @@ fn with_sides<R>(
             &built
         }
     };
-    let built_boundary;
-    let boundary = match &qt.boundary {
-        Some(b) => b,
-        None => {
-            built_boundary = target.mesh.boundary_vertices();
-            &built_boundary
-        }
-    };
     let built_neighbors;
     let neighbors = match &tt.neighbors {
         Some(nb) => nb,
@@ -481,7 +471,7 @@ fn with_sides<R>(
     }
     f(
         &template_side,
-        &side(target, qn, Some(boundary), None),
+        &side(target, qn, Some(&target.boundary_vertices), None),
         graph,
     )
 }

@@ -114,6 +114,10 @@ pub struct PreparedMesh {
     /// Total length of the mesh's boundary edges (0 for a closed surface): a single-view scan
     /// has a long one ([`PreparedMesh::is_partial`]).
     pub boundary_length: f64,
+    /// Per vertex of [`PreparedMesh::mesh`]: does it lie on the boundary (an edge of one
+    /// triangle)? The vertices of the repair's boundary loops, which hold every boundary
+    /// edge; the articulated method reads it on every target.
+    pub boundary_vertices: Vec<bool>,
     /// Where the mesh was seen from, when it is one view of a body (a depth scan's camera
     /// centre, in the mesh's frame: the origin for `symcorr scan`'s camera-space scans). As a
     /// target of the articulated method it turns on the occlusion test: template vertices
@@ -160,6 +164,10 @@ impl PreparedMesh {
             .iter()
             .map(|l| mesh.loop_length(l))
             .sum();
+        let mut boundary_vertices = vec![false; mesh.num_vertices()];
+        for &v in report.after.boundary_loops.iter().flatten() {
+            boundary_vertices[v as usize] = true;
+        }
         let input = if report.unchanged() {
             None
         } else {
@@ -221,6 +229,7 @@ impl PreparedMesh {
             unreached: 0,
             viewpoint: None,
             boundary_length,
+            boundary_vertices,
             paper,
             refine,
             area,
