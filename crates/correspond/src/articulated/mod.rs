@@ -758,14 +758,56 @@ impl<'a> Alignment<'a> {
         reverse: Option<&Reverse>,
         found_only: bool,
     ) -> Vec<bool> {
-        near.par_iter()
+        let holds: Vec<bool> = near
+            .par_iter()
             .with_min_len(HELD_CHUNK)
             .enumerate()
             .map(|(v, &(q, d2))| {
                 (d2.is_finite() || !found_only)
                     && visible.is_none_or(|s| s.get(v) == Some(&true))
                     && self.holds(&posed[v], &normals[v], q, gate)
-                    && self.reciprocal(reverse, posed, normals, v, q)
+            })
+            .collect();
+        let Some(r) = reverse else {
+            return holds;
+        };
+        // The reciprocal check's search answers a question about the target vertex alone
+        // (which shown template vertex is nearest it), so each target vertex is searched once,
+        // however many template vertices pair with it (a template finer than the scan pairs
+        // several with one), starting from the first of them.
+        let mut first = vec![u32::MAX; self.target_positions.len()];
+        for (v, (&(q, _), &h)) in near.iter().zip(&holds).enumerate() {
+            if h && first[q as usize] == u32::MAX {
+                first[q as usize] = v as u32;
+            }
+        }
+        let searched: Vec<(u32, u32)> = first
+            .iter()
+            .enumerate()
+            .filter(|(_, &v)| v != u32::MAX)
+            .map(|(q, &v)| (q as u32, v))
+            .collect();
+        let mut nearest = vec![u32::MAX; self.target_positions.len()];
+        let answers: Vec<u32> = searched
+            .par_iter()
+            .with_min_len(HELD_CHUNK)
+            .map(|&(q, v)| self.reverse_nearest(r, posed, normals, v as usize, q))
+            .collect();
+        for (&(q, _), u) in searched.iter().zip(answers) {
+            nearest[q as usize] = u;
+        }
+        holds
+            .par_iter()
+            .with_min_len(HELD_CHUNK)
+            .enumerate()
+            .map(|(v, &h)| {
+                h && {
+                    let u = nearest[near[v].0 as usize];
+                    u == u32::MAX
+                        || (self.template_positions[u as usize] - self.template_positions[v])
+                            .norm_squared()
+                            <= r.radius2
+                }
             })
             .collect()
     }
@@ -811,20 +853,19 @@ impl<'a> Alignment<'a> {
         })
     }
 
-    /// Does the pair `v → q` pass the reciprocal check of `reverse` (always, without one)?
-    /// `posed` and `normals` are those `reverse` was built from, and `v` must be one of the
-    /// vertices it holds (a shown vertex).
-    fn reciprocal(
+    /// The reverse search of the reciprocal check ([`ArticulatedOptions::reciprocal_radius`]):
+    /// the shown posed template vertex nearest the target vertex `q` in feature space (ties to
+    /// the smaller id). `posed` and `normals` are those `r` was built from, and `v` one of the
+    /// vertices it holds (a shown vertex), where the search starts. `u32::MAX` for none (a
+    /// tree without finite points), which the check lets pass.
+    fn reverse_nearest(
         &self,
-        reverse: Option<&Reverse>,
+        r: &Reverse,
         posed: &[Point3<f64>],
         normals: &[Vector3<f64>],
         v: usize,
         q: u32,
-    ) -> bool {
-        let Some(r) = reverse else {
-            return true;
-        };
+    ) -> u32 {
         let q = q as usize;
         let f = self.feature(&self.target_positions[q], &self.target_normals[q]);
         // The search starts from `v` itself, one of the tree's points, at its distance summed
@@ -841,10 +882,9 @@ impl<'a> Alignment<'a> {
         } else {
             (u32::MAX, f64::INFINITY)
         };
-        r.tree.nearest_within(&f, start).is_none_or(|(u, _)| {
-            (self.template_positions[u as usize] - self.template_positions[v]).norm_squared()
-                <= r.radius2
-        })
+        r.tree
+            .nearest_within(&f, start)
+            .map_or(u32::MAX, |(u, _)| u)
     }
 
     /// The template vertices that drive the ICP fits, per pool group: an even stride sample
