@@ -186,8 +186,9 @@ fn build<const K: usize>(
     let value = key(&order[mid]);
     // Points equal to the split value may lie on both sides after selection; put every point
     // below `value` left, the rest right, so that the search's rule (`< value` is left) holds.
+    // Those after `mid` are at least `value` already: only the first half is moved through.
     let mut split = 0;
-    for i in 0..order.len() {
+    for i in 0..mid {
         if key(&order[i]) < value {
             order.swap(i, split);
             split += 1;
