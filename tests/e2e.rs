@@ -975,6 +975,39 @@ fn track_streams_a_recording_and_resumes_after_an_interruption() {
 }
 
 #[test]
+fn track_outputs_do_not_depend_on_the_thread_count() {
+    // The observer and the fitter each run their parallel work on a pool of `--threads`
+    // workers; how the work is split must not change a single byte of what is written.
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sequence_recording(dir.path());
+    let log = fixtures().join("../sequence/joints.json");
+    let outputs: Vec<Vec<Vec<u8>>> = ["1", "3"]
+        .iter()
+        .map(|threads| {
+            let out = dir.path().join(format!("track-{threads}"));
+            let o = run(bin()
+                .args([
+                    "track",
+                    rec.to_str().unwrap(),
+                    "--threads",
+                    threads,
+                    "--joints",
+                ])
+                .arg(&log)
+                .arg("--out")
+                .arg(&out));
+            assert!(o.status.success());
+            ["correspondence.npy", "confidence.npy", "posed.npy"]
+                .iter()
+                .map(|name| std::fs::read(out.join(name)).unwrap())
+                .collect()
+        })
+        .collect();
+    assert!(outputs[0][0].len() > 4 * 13380, "four frames written");
+    assert_eq!(outputs[0], outputs[1]);
+}
+
+#[test]
 fn track_skips_frames_the_joint_log_does_not_cover() {
     let dir = tempfile::tempdir().unwrap();
     let rec = sequence_recording(dir.path());

@@ -336,7 +336,9 @@ impl<'a> Tracker<'a> {
     /// reads and observes frame k + 1 while another matches frame k ([`Tracker::parts`]) — and
     /// hands every finished frame to `sink`, on this thread, in the order of `frames`. The
     /// outcomes are those of [`Tracker::frame`] one after the other; a frame the source cannot
-    /// read is skipped with the reason and resets the tracker.
+    /// read is skipped with the reason and resets the tracker. The observer's parallel work
+    /// runs on a rayon pool of its own, as many threads as the pool `run` is called from; the
+    /// fitter's on that pool.
     ///
     /// `stop` is checked before each frame is read: once it is set no further frame is
     /// read, and the frames in flight (at most two) are finished and handed to `sink`. An error
@@ -380,6 +382,16 @@ impl<'a> Tracker<'a> {
                 }
             }
         };
+        // The observer's parallel work runs on a pool of its own, as large as the caller's: in
+        // one shared pool the fitter's parallel sections queued behind the observer's (bone
+        // heat, fit checks), and the fitter sets the rate (7.7 → 8.4–8.9 frames/s measured:
+        // docs/decisions/2026-12-04-track-throughput-5.md). Without one (the system refuses
+        // a thread), the observer shares the caller's pool as before.
+        let observer_pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(rayon::current_num_threads())
+            .thread_name(|i| format!("symcorr-observer-{i}"))
+            .build()
+            .ok();
         std::thread::scope(|scope| {
             // A frame read and observed (or refused by the observer), on its way to the fitter.
             type Observed = (usize, f64, Instant, Result<Observation, String>);
@@ -412,7 +424,10 @@ impl<'a> Tracker<'a> {
                 let time_s = source.time(i).unwrap_or(f64::NAN);
                 let started = Instant::now();
                 let observation = match source.frame(i) {
-                    Ok(depth) => observer.observe(time_s, &depth),
+                    Ok(depth) => match &observer_pool {
+                        Some(pool) => pool.install(|| observer.observe(time_s, &depth)),
+                        None => observer.observe(time_s, &depth),
+                    },
                     Err(e) => {
                         observer.reset();
                         Err(e.to_string())

@@ -85,7 +85,8 @@ pub struct TrackArgs {
         allow_hyphen_values = true
     )]
     pub head_twist_prior: f64,
-    /// Worker threads (default: every core).
+    /// Worker threads of each half, the observer and the matcher (default: every core;
+    /// they share the cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
     /// Continue an interrupted run in DIR after its last complete frame.
