@@ -578,10 +578,10 @@ pub fn scan_mesh(
     }
 
     // Connected components (union-find over pixels through triangles).
+    let mut before_components = None;
     if opts.components != ComponentFilter::All && !tris.is_empty() {
-        let before = count_vertices(&tris, points.len());
+        before_components = Some(count_vertices(&tris, points.len()));
         keep_components(&mut tris, &points, skeleton, opts.components);
-        report.component_vertices_removed = before - count_vertices(&tris, points.len());
     }
     if tris.is_empty() {
         return Err(KinectError::Scan(format!(
@@ -600,6 +600,9 @@ pub fn scan_mesh(
         .enumerate()
         .filter_map(|(px, &u)| u.then_some(px))
         .collect();
+    if let Some(before) = before_components {
+        report.component_vertices_removed = before - used.len();
+    }
     let mut positions = Vec::with_capacity(used.len());
     let mut pixel_ids = Vec::with_capacity(used.len());
     for (n, &px) in used.iter().enumerate() {

@@ -274,31 +274,12 @@ fn classify_triangles(
         k.sort_unstable();
         keys.push((k, t));
     }
-    // The order of one sort of every key, in linear time: bucketed by the smallest vertex (a
-    // counting sort), each short bucket sorted (a recorded frame's scan is validated on
-    // every frame).
     let n = keys
         .iter()
         .map(|(k, _)| k[0] as usize + 1)
         .max()
         .unwrap_or(0);
-    let mut start = vec![0usize; n + 1];
-    for (k, _) in &keys {
-        start[k[0] as usize + 1] += 1;
-    }
-    for a in 0..n {
-        start[a + 1] += start[a];
-    }
-    let mut fill = start.clone();
-    let mut sorted = vec![([0u32; 3], 0u32); keys.len()];
-    for &(k, t) in &keys {
-        sorted[fill[k[0] as usize]] = (k, t);
-        fill[k[0] as usize] += 1;
-    }
-    for a in 0..n {
-        sorted[start[a]..start[a + 1]].sort_unstable();
-    }
-    let keys = sorted;
+    let (keys, _) = bucket_sort(&keys, n, |(k, _)| k[0] as usize);
     for w in keys.windows(2) {
         if w[0].0 == w[1].0 {
             dup.push(w[1].1);
@@ -306,6 +287,36 @@ fn classify_triangles(
     }
     dup.sort_unstable();
     (degenerate, zero, dup)
+}
+
+/// `items` ordered by `key` (below `keys`), then by their own order, with the offsets of each
+/// key's run (`keys + 1` of them: key `k` holds `start[k]..start[k + 1]`): a counting sort by
+/// the key, then each short run sorted. Where the key is the items' leading field — an edge's
+/// or a triangle's smallest vertex — that is the order of one sort of them all, found in
+/// linear time (a recorded frame's scan is validated and repaired on every frame).
+fn bucket_sort<T: Ord + Copy>(
+    items: &[T],
+    keys: usize,
+    key: impl Fn(&T) -> usize,
+) -> (Vec<T>, Vec<usize>) {
+    let mut start = vec![0usize; keys + 1];
+    for item in items {
+        start[key(item) + 1] += 1;
+    }
+    for k in 0..keys {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut sorted = items.to_vec();
+    for item in items {
+        let k = key(item);
+        sorted[fill[k]] = *item;
+        fill[k] += 1;
+    }
+    for k in 0..keys {
+        sorted[start[k]..start[k + 1]].sort_unstable();
+    }
+    (sorted, start)
 }
 
 /// Undirected edges with the triangles using them, for triangles with distinct vertices.
@@ -316,42 +327,18 @@ struct Topology {
 
 impl Topology {
     fn new(mesh: &TriMesh, tris: &[u32]) -> Self {
-        // Bucketed by the smaller end (a counting sort), each short bucket sorted: the order of
-        // one sort of every half-edge in linear time (a recorded frame's scan is validated and
-        // its boundary traced on every frame).
-        let halves = |t: u32| {
-            let tri = mesh.triangles[t as usize];
-            [0, 1, 2].map(|k| {
-                let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                (a.min(b), a.max(b), t, a < b)
-            })
-        };
-        let n = tris
+        let halves: Vec<(u32, u32, u32, bool)> = tris
             .iter()
-            .flat_map(|&t| mesh.triangles[t as usize])
-            .map(|v| v as usize + 1)
-            .max()
-            .unwrap_or(0);
-        let mut start = vec![0usize; n + 1];
-        for &t in tris {
-            for h in halves(t) {
-                start[h.0 as usize + 1] += 1;
-            }
-        }
-        for a in 0..n {
-            start[a + 1] += start[a];
-        }
-        let mut fill = start.clone();
-        let mut half = vec![(0, 0, 0, false); start[n]];
-        for &t in tris {
-            for h in halves(t) {
-                half[fill[h.0 as usize]] = h;
-                fill[h.0 as usize] += 1;
-            }
-        }
-        for a in 0..n {
-            half[start[a]..start[a + 1]].sort_unstable();
-        }
+            .flat_map(|&t| {
+                let tri = mesh.triangles[t as usize];
+                [0, 1, 2].map(|k| {
+                    let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                    (a.min(b), a.max(b), t, a < b)
+                })
+            })
+            .collect();
+        let n = halves.iter().map(|h| h.1 as usize + 1).max().unwrap_or(0);
+        let (half, _) = bucket_sort(&halves, n, |h| h.0 as usize);
         Topology { half }
     }
 
@@ -895,9 +882,9 @@ pub fn repair(mesh: &TriMesh, options: &RepairOptions) -> Result<Repaired, MeshE
 fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> usize {
     let proper = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
     // Undirected edge → the triangles using it (ascending), with the direction each runs it
-    // in: the half-edges bucketed by their smaller end (a counting sort), each bucket sorted by
-    // the larger end, and every triangle side pointing at its edge's run. A hash map of lists
-    // cost an allocation per edge on every recorded frame's scan.
+    // in: the half-edges (smaller end, larger end, triangle, forward, side) in sorted order
+    // ([`bucket_sort`] by the smaller end), and every triangle side pointing at its edge's run.
+    // A hash map of lists cost an allocation per edge on every recorded frame's scan.
     let ends = |tri: &[u32; 3], k: usize| {
         let (a, b) = (tri[k], tri[(k + 1) % 3]);
         (a.min(b), a.max(b), a < b)
@@ -908,40 +895,30 @@ fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> us
         .map(|&v| v as usize + 1)
         .max()
         .unwrap_or(0);
-    let mut bucket = vec![0usize; vertices + 1];
-    for tri in triangles.iter().filter(|t| proper(t)) {
-        for k in 0..3 {
-            bucket[ends(tri, k).0 as usize + 1] += 1;
-        }
-    }
-    for v in 0..vertices {
-        bucket[v + 1] += bucket[v];
-    }
-    let mut bucket_fill = bucket.clone();
-    // (larger end, triangle, forward, side), bucketed by the smaller end.
-    let mut half = vec![(0u32, 0u32, false, 0u8); bucket[vertices]];
-    for (t, tri) in triangles.iter().enumerate() {
-        if proper(tri) {
-            for k in 0..3 {
+    let halves: Vec<(u32, u32, u32, bool, u8)> = triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, tri)| proper(tri))
+        .flat_map(|(t, tri)| {
+            (0..3).map(move |k| {
                 let (lo, hi, forward) = ends(tri, k);
-                half[bucket_fill[lo as usize]] = (hi, t as u32, forward, k as u8);
-                bucket_fill[lo as usize] += 1;
-            }
-        }
-    }
+                (lo, hi, t as u32, forward, k as u8)
+            })
+        })
+        .collect();
+    let (half, bucket) = bucket_sort(&halves, vertices, |h| h.0 as usize);
     let n = triangles.len();
     // The run of `half` holding the edge of each triangle side (`3·t + k`).
     let mut side = vec![(0usize, 0usize); 3 * n];
     for v in 0..vertices {
         let end = bucket[v + 1];
-        half[bucket[v]..end].sort_unstable();
         let mut i = bucket[v];
         while i < end {
             let mut j = i + 1;
-            while j < end && half[j].0 == half[i].0 {
+            while j < end && half[j].1 == half[i].1 {
                 j += 1;
             }
-            for &(_, t, _, k) in &half[i..j] {
+            for &(_, _, t, _, k) in &half[i..j] {
                 side[3 * t as usize + k as usize] = (i, j);
             }
             i = j;
@@ -972,7 +949,7 @@ fn orient_consistently(positions: &[[f64; 3]], triangles: &mut [[u32; 3]]) -> us
                     continue; // a boundary or non-manifold edge carries no orientation
                 }
                 let forward = (a < b) != ft; // t's direction along the edge after its flip
-                for &(_, u, dir, _) in users {
+                for &(_, _, u, dir, _) in users {
                     let u = u as usize;
                     if u == t || flip[u].is_some() {
                         continue;
