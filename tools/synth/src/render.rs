@@ -16,8 +16,9 @@
 //!   with the square of the distance); c = 1.5·10⁻³ m⁻¹ in [`Realism::kinect`], their fitted
 //!   1.425·10⁻³ m⁻¹ in [`Realism::kinect_v1`];
 //! * quantisation: the Kinect measures disparity d = f·b/z in steps of 1/8 pixel (b = 7.5 cm
-//!   baseline, f = fx), so depth is quantised in steps of z²/(8·f·b) (~2.9 mm at 1 m, ~2.2 cm at
-//!   2.8 m — Khoshelham & Elberink's 2.85·10⁻³·z²);
+//!   baseline, f the focal length at its native 640 pixels across, whatever size the image is
+//!   delivered at: [`KINECT_NATIVE_WIDTH`]), so depth is quantised in steps of z²/(8·f·b)
+//!   (~2.9 mm at 1 m, ~2.2 cm at 2.8 m — Khoshelham & Elberink's 2.85·10⁻³·z²);
 //! * missing pixels at grazing angles (angle between the viewing ray and the surface normal
 //!   above `grazing_deg`) and at depth edges (a pixel whose 4-neighbour differs by more than
 //!   4 cm is dropped with probability ½);
@@ -51,6 +52,10 @@ pub const NO_VERTEX: u32 = u32::MAX;
 
 /// Kinect v1 stereo baseline (projector–camera), metres.
 pub const KINECT_BASELINE_M: f64 = 0.075;
+
+/// Width, pixels, of the image a Kinect v1 computes its disparity on (its depth stream's
+/// VGA mode; QVGA and smaller streams are that image scaled down).
+pub const KINECT_NATIVE_WIDTH: f64 = 640.0;
 
 /// A depth camera placed in the world (body) frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -516,7 +521,10 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
         }
     }
     let axial_coeff = realism.axial_coeff.unwrap_or(KINECT_AXIAL_COEFF);
-    let fb = k.fx * KINECT_BASELINE_M;
+    // The sensor matches its speckle pattern at its native resolution, whatever size the
+    // depth image is delivered at (a downscaled or cropped stream keeps the native steps):
+    // the disparity's focal length is that of the same field of view at 640 pixels across.
+    let fb = k.fx * (KINECT_NATIVE_WIDTH / k.width as f64) * KINECT_BASELINE_M;
     let mut depth = vec![0u16; w * h];
     for i in 0..w * h {
         let mut z = zmeas[i];

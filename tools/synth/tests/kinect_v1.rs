@@ -10,7 +10,10 @@ use symcorr_synth::dataset::{write_dataset, DatasetSpec, MeshFormat, ScanSpec};
 use symcorr_synth::kinect::{skeleton_to_camera, CameraSampling};
 use symcorr_synth::mapping::{kinect_joints, reference_labels};
 use symcorr_synth::poses::named_pose;
-use symcorr_synth::render::{render, Camera, Realism, Rendering, KINECT_BASELINE_M};
+use symcorr_synth::recording::kinect_v1_intrinsics;
+use symcorr_synth::render::{
+    render, Camera, Realism, Rendering, KINECT_BASELINE_M, KINECT_NATIVE_WIDTH,
+};
 use symcorr_synth::tracker::{tracker_joints, TrackerNoise, INFERRED_CONFIDENCE};
 use symcorr_synth::{Assets, Model, Shape};
 
@@ -145,6 +148,43 @@ fn quantised_depths_lie_on_the_disparity_grid() {
         n += 1;
     }
     assert!(n > 100_000);
+}
+
+/// A depth image delivered at a quarter of the native width keeps the native disparity steps
+/// (≈ 2.85·10⁻³·z², Khoshelham & Elberink 2012), not steps four times as deep.
+#[test]
+fn a_smaller_image_keeps_the_native_depth_steps() {
+    let mut small = camera();
+    small.intrinsics = kinect_v1_intrinsics(160, 120).unwrap();
+    let r = render(&scene(Some(Z_NEAR)), &small, &Realism::kinect_v1(3), 0);
+    let native_fb = small.intrinsics.fx * (KINECT_NATIVE_WIDTH / 160.0) * KINECT_BASELINE_M;
+    let mut depths: Vec<u16> = r.depth_mm.iter().copied().filter(|&d| d > 0).collect();
+    assert!(depths.len() > 5_000);
+    for &mm in &depths {
+        let eighths = 8.0 * native_fb / (f64::from(mm) / 1000.0);
+        assert!(
+            (eighths - eighths.round()).abs() < 0.05,
+            "{mm} mm is {eighths:.3} eighths of a native pixel"
+        );
+    }
+    // The levels the noise spreads the preset's wall (2 m away, in front of the squares) over
+    // are one native step apart (1.2 cm; the delivered image's focal length would give 4.7 cm).
+    depths.sort_unstable();
+    let wall = f64::from(depths[depths.len() / 2]) / 1000.0;
+    depths.dedup();
+    let near_wall: Vec<u16> = depths
+        .into_iter()
+        .filter(|&d| (f64::from(d) / 1000.0 - wall).abs() < 0.05)
+        .collect();
+    assert!(near_wall.len() >= 3, "{near_wall:?}");
+    let expected_mm = 1000.0 * wall * wall / (8.0 * native_fb);
+    for w in near_wall.windows(2) {
+        let step = f64::from(w[1] - w[0]);
+        assert!(
+            (step - expected_mm).abs() < 2.0,
+            "levels {w:?} at {wall} m, expected {expected_mm:.1} mm apart"
+        );
+    }
 }
 
 #[test]
