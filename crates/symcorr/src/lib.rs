@@ -84,13 +84,13 @@ pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
     keeps_turned_fit, ArticulatedTables, Correspondence, Method, MethodReport, Mode, Pipeline,
     PipelineOptions, SurfacePoint, ViewMatch, DEFAULT_SAMPLES, MIN_VIEW_HELD, TURN_KEEP_MARGIN,
-    TURN_RETRY_BELOW,
+    TURN_KEEP_POINTS_RATIO, TURN_RETRY_BELOW,
 };
 pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
     DEFAULT_EIGENPAIRS, DEFAULT_MIDLINE_MARGIN, ORIGIN_FACING_FRACTION, PARTIAL_BOUNDARY_RATIO,
 };
-pub use symcorr_correspond::{ArticulatedStart, BoneTransforms};
+pub use symcorr_correspond::{ArticulatedStart, BoneTransforms, ViewHold};
 
 /// An option [`PipelineOptions::check`] or [`PreparedMesh::new`] refuses, before any work.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]

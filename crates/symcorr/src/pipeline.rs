@@ -11,6 +11,7 @@ use symcorr_correspond::{
     match_points, outward_normals, refine_dense, ArticulatedIndex, ArticulatedInputs,
     ArticulatedMatches, ArticulatedOptions, ArticulatedStart, BoneTransforms, FilterStats, Match,
     MatchOptions, Pair, PaperFilter, PointExplanation, RefineOptions, RefinedInputs, SpectralBasis,
+    ViewHold,
 };
 use symcorr_mesh::geometry::closest_on_triangle;
 use symcorr_mesh::TriMesh;
@@ -170,9 +171,9 @@ pub enum MethodReport {
         /// template point at all (`false`: no counterpart; the pair is then only the nearest
         /// guess). `None` for a whole surface, where every point has one.
         has_counterpart: Option<Vec<bool>>,
-        /// A target seen from a viewpoint: the fraction of the template points the final pose
-        /// shows to it that found a counterpart ([`ArticulatedMatches::view_held`]).
-        view_held: Option<f64>,
+        /// A target seen from a viewpoint: how many template points the final pose shows to
+        /// it, and how many of them found a counterpart ([`ArticulatedMatches::view_hold`]).
+        view_hold: Option<ViewHold>,
         /// The template posed onto the target (final skinning plus the non-rigid step), per
         /// template vertex of its prepared mesh, in the target's frame and unit.
         posed: Vec<[f64; 3]>,
@@ -268,8 +269,14 @@ impl Correspondence {
     /// points its fit shows to the viewpoint that found a counterpart
     /// ([`ArticulatedMatches::view_held`]); `None` otherwise.
     pub fn view_held(&self) -> Option<f64> {
+        self.view_hold().map(|h| h.fraction())
+    }
+
+    /// [`Correspondence::view_held`] as counts: the template points the fit shows the
+    /// viewpoint and those of them with a counterpart ([`ArticulatedMatches::view_hold`]).
+    pub fn view_hold(&self) -> Option<ViewHold> {
         match self.report {
-            MethodReport::Articulated { view_held, .. } => view_held,
+            MethodReport::Articulated { view_hold, .. } => view_hold,
             _ => None,
         }
     }
@@ -648,21 +655,40 @@ pub const TURN_RETRY_BELOW: f64 = 0.75;
 /// that was itself mirrored held less. (docs/decisions/2026-12-04-turned-fit-margin.md.)
 pub const TURN_KEEP_MARGIN: f64 = 0.1;
 
+/// How many times as many template points ([`ViewHold::held`]) the fit on the joints turned
+/// half a turn must lay on the scan as the fit on the joints as given for [`keeps_turned_fit`]
+/// to keep it, whatever share of its view each holds. On a coarse or noisy scan every fit holds
+/// a small share of its view, the right one as well, and the shares of the two fits differ by
+/// less than [`TURN_KEEP_MARGIN`] or even the wrong way; the right fit still lays two to four
+/// times as many points on the scan as the one with its back to it. Measured 2026-12-04
+/// (`view_turn_eval` on the kinect scan sets, joints as given and turned 180°; `track_eval` on
+/// four recordings, 160 × 120 to 640 × 480, logs as recorded and turned about the vertical): a
+/// turned fit with its back to the scan laid 0.18–0.64 times as many points as the right given
+/// fit; a right turned fit 1.37–4.44 times as many as a given fit with its back to the scan
+/// (docs/decisions/2026-12-04-turned-fit-points.md).
+pub const TURN_KEEP_POINTS_RATIO: f64 = 1.5;
+
 /// Is the fit on the joints turned half a turn about their spine, holding `turned` of its
-/// view, kept over the fit on the joints as given, holding `given`? Only when it holds at
-/// least [`TURN_KEEP_MARGIN`] more. Without both views (`None`: no viewpoint, nothing in view)
+/// view, kept over the fit on the joints as given, holding `given`? When it holds at least
+/// [`TURN_KEEP_MARGIN`] more of its view, or lays [`TURN_KEEP_POINTS_RATIO`] times as many
+/// template points on the scan. Without both views (`None`: no viewpoint, nothing in view)
 /// there is nothing to compare, and the given fit stays.
 ///
 /// ```
-/// use symcorr::keeps_turned_fit;
-/// assert!(keeps_turned_fit(Some(0.55), Some(0.9)));
-/// assert!(!keeps_turned_fit(Some(0.72), Some(0.78))); // no clearer than the given fit
-/// assert!(!keeps_turned_fit(Some(0.6), None));
-/// assert!(!keeps_turned_fit(None, Some(0.9)));
+/// use symcorr::{keeps_turned_fit, ViewHold};
+/// let hold = |held, shown| Some(ViewHold { held, shown });
+/// assert!(keeps_turned_fit(hold(2200, 4000), hold(3600, 4000))); // 0.55 → 0.90 of its view
+/// assert!(!keeps_turned_fit(hold(2880, 4000), hold(3120, 4000))); // 0.72 → 0.78: no clearer
+/// assert!(keeps_turned_fit(hold(2030, 3560), hold(3600, 6900))); // 0.57 → 0.52, 1.8× the points
+/// assert!(!keeps_turned_fit(hold(2400, 4000), None));
+/// assert!(!keeps_turned_fit(None, hold(3600, 4000)));
 /// ```
-pub fn keeps_turned_fit(given: Option<f64>, turned: Option<f64>) -> bool {
+pub fn keeps_turned_fit(given: Option<ViewHold>, turned: Option<ViewHold>) -> bool {
     match (given, turned) {
-        (Some(g), Some(t)) => t >= g + TURN_KEEP_MARGIN,
+        (Some(g), Some(t)) => {
+            t.fraction() >= g.fraction() + TURN_KEEP_MARGIN
+                || t.held as f64 >= TURN_KEEP_POINTS_RATIO * g.held as f64
+        }
         _ => false,
     }
 }
@@ -750,13 +776,13 @@ impl Pipeline {
             correspondence: self.run(template, target)?,
             turned_target: None,
         };
-        let held = kept.correspondence.view_held();
-        if held.is_some_and(|h| h < TURN_RETRY_BELOW) {
+        let hold = kept.correspondence.view_hold();
+        if hold.is_some_and(|h| h.fraction() < TURN_RETRY_BELOW) {
             let first_fit = t.elapsed().as_secs_f64();
             let t = Instant::now();
             if let Some(turned) = self.prepare_turned(target) {
                 if let Ok(corr) = self.run(template, &turned) {
-                    if keeps_turned_fit(held, corr.view_held()) {
+                    if keeps_turned_fit(hold, corr.view_hold()) {
                         kept = ViewMatch {
                             correspondence: corr,
                             turned_target: Some(turned),
@@ -818,7 +844,7 @@ fn run_articulated(
         .collect();
     let report = MethodReport::Articulated {
         coverage: coverage(&shown, target.num_vertices()),
-        view_held: out.view_held(),
+        view_hold: out.view_hold(),
         has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
         posed: out.posed.iter().map(|p| p.coords.into()).collect(),
         transforms: Box::new(out.transforms),

@@ -38,6 +38,7 @@
 //!    ([`crate::Correspondence::view_held`]) may stand on a skeleton facing away from the
 //!    camera: the frame is prepared and fitted again with the joints turned half a turn about
 //!    their spine, and the turned fit is kept when it holds [`crate::TURN_KEEP_MARGIN`] more
+//!    or lays [`crate::TURN_KEEP_POINTS_RATIO`] times as many template points on the scan
 //!    ([`crate::keeps_turned_fit`]). A kept fit that holds less than
 //!    [`crate::MIN_VIEW_HELD`] skips the frame — never matched to garbage.
 //!
@@ -632,13 +633,13 @@ impl Fitter<'_> {
         let (mut corr, mut was_warm) = self.run_match(&target, tables.as_ref())?;
         // A fit that leaves most of what it shows the camera without a counterpart may stand on
         // a skeleton turned away from the camera: the template then shows the scan its back.
-        // The joints turned half a turn get their own fit, kept when it holds clearly more of
-        // its view (`keeps_turned_fit`; a turned fit that cannot be made leaves the frame to the
-        // first).
+        // The joints turned half a turn get their own fit, kept when it clearly holds more of
+        // its view or lays clearly more points on the scan (`keeps_turned_fit`; a turned fit
+        // that cannot be made leaves the frame to the first).
         let mut turned_back = false;
         if corr.view_held().is_some_and(|h| h < TURN_RETRY_BELOW) {
             if let Ok((turned, turned_corr, turned_warm)) = self.turned_match(&target) {
-                if keeps_turned_fit(corr.view_held(), turned_corr.view_held()) {
+                if keeps_turned_fit(corr.view_hold(), turned_corr.view_hold()) {
                     (target, corr, was_warm) = (turned, turned_corr, turned_warm);
                     turned_back = true;
                 }

@@ -12,7 +12,7 @@
 //!
 //! One line per pair: `refused` when the attachment's fit checks refuse the (turned) joints,
 //! else for the fit on the joints as given and on them turned back the fraction of its view the
-//! fit holds (`view_held`), the mean error and the flips of the listed matches (`bench`'s
+//! fit holds (`view_held`) and the template points it lays on the scan, the mean error and the flips of the listed matches (`bench`'s
 //! evaluation). Then per retry threshold: fits turned, refused, the mean of the pairs' mean
 //! errors, the pooled flips and the pairs with more than a fifth of their matches flipped.
 
@@ -40,16 +40,16 @@ struct Args {
 
 /// A fit's figures: view held, mean error, (flips, counted matches).
 struct Fit {
-    view_held: Option<f64>,
+    view_hold: Option<symcorr::ViewHold>,
     mean_error: f64,
     flips: usize,
     counted: usize,
 }
 
-fn fit(e: &Evaluation, view_held: Option<f64>) -> Fit {
+fn fit(e: &Evaluation, corr: &symcorr::Correspondence) -> Fit {
     let (counted, flips) = e.flip_counts();
     Fit {
-        view_held,
+        view_hold: corr.view_hold(),
         mean_error: e.mean_error(),
         flips,
         counted,
@@ -122,7 +122,7 @@ fn main() -> Result<(), String> {
                     corr,
                     mirror,
                 );
-                fit(&e, corr.view_held())
+                fit(&e, corr)
             };
             let corr = pipeline.run(template, &target).map_err(|e| e.to_string())?;
             let given = evaluate(&target, &corr);
@@ -134,8 +134,12 @@ fn main() -> Result<(), String> {
         })
         .collect::<Result<_, String>>()?;
 
-    println!("template target | given: view_held error flips | turned back: view_held error flips");
-    let vh = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+    println!("template target | given: view_held held_points error flips | turned back: the same");
+    let vh = |v: Option<symcorr::ViewHold>| {
+        v.map_or("- 0".to_string(), |v| {
+            format!("{:.3} {}", v.fraction(), v.held)
+        })
+    };
     let mut refused_attach = 0;
     for (a, b, o) in &outcomes {
         match o {
@@ -148,7 +152,7 @@ fn main() -> Result<(), String> {
                 let t = turned.as_ref().map_or("refused".to_string(), |f| {
                     format!(
                         "{} {:.4} {}/{}",
-                        vh(f.view_held),
+                        vh(f.view_hold),
                         f.mean_error,
                         f.flips,
                         f.counted
@@ -156,7 +160,7 @@ fn main() -> Result<(), String> {
                 });
                 println!(
                     "{a} {b} | {} {:.4} {}/{} | {t}",
-                    vh(given.view_held),
+                    vh(given.view_hold),
                     given.mean_error,
                     given.flips,
                     given.counted
@@ -179,16 +183,19 @@ fn main() -> Result<(), String> {
                 continue;
             };
             let mut kept = given;
-            if given.view_held.is_some_and(|h| h < threshold) {
+            if given.view_hold.is_some_and(|h| h.fraction() < threshold) {
                 if let Some(t) = turned
                     .as_ref()
-                    .filter(|t| symcorr::keeps_turned_fit(given.view_held, t.view_held))
+                    .filter(|t| symcorr::keeps_turned_fit(given.view_hold, t.view_hold))
                 {
                     kept = t;
                     turned_n += 1;
                 }
             }
-            if kept.view_held.is_some_and(|h| h < symcorr::MIN_VIEW_HELD) {
+            if kept
+                .view_hold
+                .is_some_and(|h| h.fraction() < symcorr::MIN_VIEW_HELD)
+            {
                 refused += 1;
                 continue;
             }

@@ -285,6 +285,13 @@ impl ArticulatedMatches {
     /// does not hold (0.27–0.70). `None` without a viewpoint or with nothing in view.
     /// (`docs/decisions/2026-12-03-track-turned-skeletons.md`.)
     pub fn view_held(&self) -> Option<f64> {
+        self.view_hold().map(|h| h.fraction())
+    }
+
+    /// [`ArticulatedMatches::view_held`] as counts: how many template points the final pose
+    /// shows the viewpoint, and how many of them found a counterpart. `None` without a
+    /// viewpoint or with nothing in view.
+    pub fn view_hold(&self) -> Option<ViewHold> {
         let in_view = self.in_view.as_ref()?;
         let shown = in_view.iter().filter(|&&s| s).count();
         let held = in_view
@@ -292,7 +299,30 @@ impl ArticulatedMatches {
             .zip(&self.has_counterpart)
             .filter(|&(&s, &h)| s && h)
             .count();
-        (shown > 0).then(|| held as f64 / shown as f64)
+        (shown > 0).then_some(ViewHold { shown, held })
+    }
+}
+
+/// Of the template points a fit shows a target's viewpoint, how many found a counterpart
+/// ([`ArticulatedMatches::view_hold`]). `held ≤ shown`, and `shown > 0`.
+///
+/// ```
+/// use symcorr_correspond::ViewHold;
+/// let h = ViewHold { shown: 4000, held: 3000 };
+/// assert_eq!(h.fraction(), 0.75);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ViewHold {
+    /// Template points the fit shows the viewpoint (occlusion and facing tests).
+    pub shown: usize,
+    /// Of those, the points with a counterpart on the target: what the fit lays on the scan.
+    pub held: usize,
+}
+
+impl ViewHold {
+    /// `held / shown`: the fraction of its view the fit holds.
+    pub fn fraction(&self) -> f64 {
+        self.held as f64 / self.shown.max(1) as f64
     }
 }
 
