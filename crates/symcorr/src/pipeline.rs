@@ -663,8 +663,8 @@ pub const TURN_KEEP_MARGIN: f64 = 0.1;
 /// times as many points on the scan as the one with its back to it. Measured 2026-12-04
 /// (`view_turn_eval` on the kinect scan sets, joints as given and turned 180°; `track_eval` on
 /// four recordings, 160 × 120 to 640 × 480, logs as recorded and turned about the vertical): a
-/// turned fit with its back to the scan laid 0.18–0.64 times as many points as the right given
-/// fit; a right turned fit 1.37–4.44 times as many as a given fit with its back to the scan
+/// fit with its back to the scan laid 0.14–0.70 times as many points as the right fit of the
+/// same view, a right fit 1.37–4.89 times as many as one with its back to the scan
 /// (docs/decisions/2026-12-04-turned-fit-points.md).
 pub const TURN_KEEP_POINTS_RATIO: f64 = 1.5;
 
