@@ -2,8 +2,8 @@
 //! target's joints as given (optionally turned about their spine first: a log in a frame turned
 //! about the vertical, a tracker that took a back for a front) and with those joints turned
 //! back half a turn, each by `Pipeline::run`; then `run_on_view`'s rule (below the retry
-//! threshold keep the turned fit when it holds `TURN_KEEP_MARGIN` more of its view, refuse a
-//! kept fit under `MIN_VIEW_HELD`) replayed at several thresholds.
+//! threshold keep the turned fit when `keeps_turned_fit` says so, refuse a kept fit under
+//! `MIN_VIEW_HELD`) replayed at several thresholds.
 //!
 //! ```text
 //! cargo run --release -p symcorr-experiments --bin view_turn_eval -- \
@@ -12,9 +12,10 @@
 //!
 //! One line per pair: `refused` when the attachment's fit checks refuse the (turned) joints,
 //! else for the fit on the joints as given and on them turned back the fraction of its view the
-//! fit holds (`view_held`) and the template points it lays on the scan, the mean error and the flips of the listed matches (`bench`'s
-//! evaluation). Then per retry threshold: fits turned, refused, the mean of the pairs' mean
-//! errors, the pooled flips and the pairs with more than a fifth of their matches flipped.
+//! fit holds (`view_held`), the template points it lays on the scan (`ViewHold::held`), the
+//! mean error and the flips of the listed matches (`bench`'s evaluation). Then per retry
+//! threshold: fits turned, refused, the mean of the pairs' mean errors, the pooled flips and
+//! the pairs with more than a fifth of their matches flipped.
 
 use clap::Parser;
 use rayon::prelude::*;
@@ -38,7 +39,7 @@ struct Args {
     turn_deg: f64,
 }
 
-/// A fit's figures: view held, mean error, (flips, counted matches).
+/// A fit's figures: view held (share and points), mean error, (flips, counted matches).
 struct Fit {
     view_hold: Option<symcorr::ViewHold>,
     mean_error: f64,
@@ -173,8 +174,7 @@ fn main() -> Result<(), String> {
         outcomes.len()
     );
     // `Pipeline::run_on_view`'s rule at each retry threshold: below it, the turned fit is kept
-    // when it holds `TURN_KEEP_MARGIN` more of its view (`keeps_turned_fit`); a kept fit below
-    // `MIN_VIEW_HELD` is refused.
+    // when `keeps_turned_fit` says so; a kept fit below `MIN_VIEW_HELD` is refused.
     for threshold in [0.0, 0.75, 0.8, 0.85, 0.9, 0.95] {
         let (mut n, mut err, mut flips, mut counted, mut mostly, mut turned_n, mut refused) =
             (0, 0.0, 0, 0, 0, 0, 0);

@@ -304,7 +304,7 @@ impl ArticulatedMatches {
 }
 
 /// Of the template points a fit shows a target's viewpoint, how many found a counterpart
-/// ([`ArticulatedMatches::view_hold`]). `held ≤ shown`, and `shown > 0`.
+/// ([`ArticulatedMatches::view_hold`], which gives `0 < shown` and `held ≤ shown`).
 ///
 /// ```
 /// use symcorr_correspond::ViewHold;
