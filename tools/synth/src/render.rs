@@ -416,10 +416,66 @@ fn flying_pixels(
     }
 }
 
-/// Renders `mesh` (world frame) with `camera`. `stream` separates the noise of different frames
-/// that share a seed.
+/// The camera `camera` is a scaled-down stream of: the same pose and field of view at
+/// [`KINECT_NATIVE_WIDTH`] pixels across, its pixel (s·u + s/2, s·v + s/2) on the ray of the
+/// small image's pixel (u, v) (s = 640 / width). `None` when the image is native or its width
+/// does not divide 640.
+fn native_camera(camera: &Camera) -> Option<Camera> {
+    let k = &camera.intrinsics;
+    let native = KINECT_NATIVE_WIDTH as u32;
+    let s = native / k.width.max(1);
+    if s < 2 || s * k.width != native {
+        return None;
+    }
+    let (scale, offset) = (f64::from(s), f64::from(s / 2));
+    Some(Camera {
+        intrinsics: Intrinsics {
+            width: k.width * s,
+            height: k.height * s,
+            fx: k.fx * scale,
+            fy: k.fy * scale,
+            cx: k.cx * scale + offset,
+            cy: k.cy * scale + offset,
+        },
+        ..*camera
+    })
+}
+
+/// The native rendering `r` delivered at the size of `k`: one native pixel per small pixel,
+/// the one on its ray ([`native_camera`]), as a sensor's scaled-down stream skips pixels.
+fn decimate(r: &Rendering, k: &Intrinsics) -> Rendering {
+    let (w, h) = (k.width as usize, k.height as usize);
+    let (nw, s) = (r.width as usize, r.width as usize / w.max(1));
+    let mut depth_mm = Vec::with_capacity(w * h);
+    let mut vertex_id = Vec::with_capacity(w * h);
+    for v in 0..h {
+        for u in 0..w {
+            let i = (v * s + s / 2) * nw + u * s + s / 2;
+            depth_mm.push(r.depth_mm[i]);
+            vertex_id.push(r.vertex_id[i]);
+        }
+    }
+    Rendering {
+        width: k.width,
+        height: k.height,
+        depth_mm,
+        vertex_id,
+    }
+}
+
+/// Renders `mesh` (world frame) with `camera`. An image whose width divides 640 (320, 160) is
+/// rendered at the native 640 pixels across and delivered one pixel in every s × s block
+/// ([`native_camera`]): a Kinect's artefacts — silhouette dropout, flying pixels, the
+/// projector's shadow, speckle dropout — are one or two *native* pixels wide, and its smaller
+/// streams are the native image scaled down, so they lose a thinner band along a silhouette
+/// than the same terms drawn at the small image's pixel size would
+/// (docs/decisions/2026-12-04-native-depth-steps.md). `stream` separates the noise of
+/// different frames that share a seed.
 pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -> Rendering {
     let k = &camera.intrinsics;
+    if let Some(native) = native_camera(camera) {
+        return decimate(&render(mesh, &native, realism, stream), k);
+    }
     let (w, h) = (k.width as usize, k.height as usize);
     let to_cam = camera.world_to_camera();
     let cam: Vec<V3> = mesh.positions.iter().map(|&p| to_cam.apply(p)).collect();

@@ -187,6 +187,61 @@ fn a_smaller_image_keeps_the_native_depth_steps() {
     }
 }
 
+/// A 160 × 120 image is the native 640 × 480 one, noise and artefacts included, delivered one
+/// pixel in every 4 × 4 block (the pixel on the small pixel's ray): the occluder's silhouette
+/// loses bands one or two native pixels wide, not small pixels wide.
+#[test]
+fn a_smaller_image_is_the_native_one_scaled_down() {
+    let mut small = camera();
+    small.intrinsics = kinect_v1_intrinsics(160, 120).unwrap();
+    let k = small.intrinsics;
+    // The native camera: the same field of view at 640 pixels, its pixel (4u + 2, 4v + 2) on
+    // the ray of the small pixel (u, v).
+    let mut native = camera();
+    native.intrinsics = symcorr_kinect::Intrinsics {
+        width: 640,
+        height: 480,
+        fx: 4.0 * k.fx,
+        fy: 4.0 * k.fy,
+        cx: 4.0 * k.cx + 2.0,
+        cy: 4.0 * k.cy + 2.0,
+    };
+    let (a, b) = (
+        k.unproject(37.0, 81.0, 1.0),
+        native.intrinsics.unproject(150.0, 326.0, 1.0),
+    );
+    assert!((a - b).norm() < 1e-12, "{a} vs {b}");
+    // No wall: the occluder's edges against the background make shadows and flying pixels.
+    let realism = Realism {
+        wall: false,
+        floor: false,
+        ..Realism::kinect_v1(3)
+    };
+    let mesh = scene(Some(Z_NEAR));
+    let r = render(&mesh, &small, &realism, 7);
+    let full = render(&mesh, &native, &realism, 7);
+    assert_eq!((r.width, r.height), (160, 120));
+    let mut seen = std::collections::BTreeSet::new();
+    for v in 0..120 {
+        for u in 0..160 {
+            let i = (4 * v + 2) * 640 + 4 * u + 2;
+            assert_eq!(
+                r.depth_mm[v * 160 + u],
+                full.depth_mm[i],
+                "pixel ({u}, {v})"
+            );
+            assert_eq!(
+                r.vertex_id[v * 160 + u],
+                full.vertex_id[i],
+                "pixel ({u}, {v})"
+            );
+            seen.insert(r.depth_mm[v * 160 + u]);
+        }
+    }
+    // Both surfaces, lost pixels and mixed depths between them: not a uniform image.
+    assert!(seen.contains(&0) && seen.len() > 10, "{seen:?}");
+}
+
 #[test]
 fn axial_noise_has_the_fitted_sigma() {
     let mesh = scene(None);
