@@ -416,10 +416,10 @@ fn flying_pixels(
     }
 }
 
-/// The camera `camera` is a scaled-down stream of: the same pose and field of view at
-/// [`KINECT_NATIVE_WIDTH`] pixels across, its pixel (s·u + s/2, s·v + s/2) on the ray of the
-/// small image's pixel (u, v) (s = 640 / width). `None` when the image is native or its width
-/// does not divide 640.
+/// The native camera whose image `camera`'s is a scaled-down stream of: the same pose and
+/// field of view at [`KINECT_NATIVE_WIDTH`] pixels across, its pixel (s·u + s/2, s·v + s/2) on
+/// the ray of the small image's pixel (u, v) (s = 640 / width). `None` when the image is
+/// native or its width does not divide 640.
 fn native_camera(camera: &Camera) -> Option<Camera> {
     let k = &camera.intrinsics;
     let native = KINECT_NATIVE_WIDTH as u32;
@@ -578,8 +578,8 @@ pub fn render(mesh: &TriMesh, camera: &Camera, realism: &Realism, stream: u64) -
     }
     let axial_coeff = realism.axial_coeff.unwrap_or(KINECT_AXIAL_COEFF);
     // The sensor matches its speckle pattern at its native resolution, whatever size the
-    // depth image is delivered at (a downscaled or cropped stream keeps the native steps):
-    // the disparity's focal length is that of the same field of view at 640 pixels across.
+    // depth image is delivered at: the disparity's focal length is that of the same field of
+    // view at 640 pixels across (this image's own when it is native or rendered natively).
     let fb = k.fx * (KINECT_NATIVE_WIDTH / k.width as f64) * KINECT_BASELINE_M;
     let mut depth = vec![0u16; w * h];
     for i in 0..w * h {
