@@ -1105,15 +1105,7 @@ fn track_turns_back_a_skeleton_logged_facing_away() {
     std::fs::write(&turned_path, log.to_string()).unwrap();
     let mut posed = Vec::new();
     for (name, joints) in [("as_logged", &log_path), ("turned", &turned_path)] {
-        let out = dir.path().join(name);
-        let o = run(bin()
-            .args(["track", rec.to_str().unwrap(), "--joints"])
-            .arg(joints)
-            .arg("--out")
-            .arg(&out));
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let doc = read_json(&out.join("track.json"));
-        let frames = doc["frames"].as_array().unwrap().clone();
+        let (frames, poses) = track_frames_and_poses(&rec, &[], joints, &dir.path().join(name));
         assert_eq!(frames.len(), 4);
         for f in &frames {
             assert_eq!(f["status"], "ok", "{name}: {f}");
@@ -1125,24 +1117,50 @@ fn track_turns_back_a_skeleton_logged_facing_away() {
             assert_eq!(turned_back, name == "turned", "{name}: {f}");
             assert!(f["view_held"].as_f64().unwrap() >= 0.5, "{name}: {f}");
         }
-        let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
-        posed.push(f32_rows(&out.join("posed.npy"), 3 * n));
+        posed.push(poses);
     }
     // The template stands where it stands with the log as recorded: on average within 4 cm
     // (measured 1.4–2.2 cm; posed with its back to the scan it stood 38 cm away).
     for (a, b) in posed[0].iter().zip(&posed[1]) {
-        let n = a.len() / 3;
-        let mean = a
-            .chunks(3)
-            .zip(b.chunks(3))
-            .map(|(p, q)| {
-                let d: f32 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
-                f64::from(d.sqrt())
-            })
-            .sum::<f64>()
-            / n as f64;
+        let mean = mean_point_distance(a, b);
         assert!(mean < 0.04, "mean distance between the poses {mean}");
     }
+}
+
+/// `symcorr track REC [extra] --joints JOINTS --out OUT`, which must succeed: the frames of
+/// its `track.json` and the rows of its `posed.npy` (one per frame, x y z per template vertex).
+fn track_frames_and_poses(
+    rec: &Path,
+    extra: &[&str],
+    joints: &Path,
+    out: &Path,
+) -> (Vec<Value>, Vec<Vec<f32>>) {
+    let o = run(bin()
+        .arg("track")
+        .arg(rec)
+        .args(extra)
+        .arg("--joints")
+        .arg(joints)
+        .arg("--out")
+        .arg(out));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc = read_json(&out.join("track.json"));
+    let frames = doc["frames"].as_array().unwrap().clone();
+    let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
+    (frames, f32_rows(&out.join("posed.npy"), 3 * n))
+}
+
+/// The mean distance between two poses of the same points (rows of x y z, metres).
+fn mean_point_distance(a: &[f32], b: &[f32]) -> f64 {
+    let n = a.len() / 3;
+    a.chunks(3)
+        .zip(b.chunks(3))
+        .map(|(p, q)| {
+            let d: f32 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
+            f64::from(d.sqrt())
+        })
+        .sum::<f64>()
+        / n as f64
 }
 
 /// Each frame's joints turned half a turn about the vertical through its hip centre
@@ -1179,19 +1197,10 @@ fn track_turns_back_a_log_turned_about_the_vertical() {
     std::fs::write(&turned_path, log.to_string()).unwrap();
     let mut runs = Vec::new();
     for (name, joints) in [("as_logged", &log_path), ("turned", &turned_path)] {
-        let out = dir.path().join(name);
-        let o = run(bin()
-            .args(["track", rec.to_str().unwrap(), "--frames", "44..50"])
-            .args(["--joint-offset", "0.04", "--joints"])
-            .arg(joints)
-            .arg("--out")
-            .arg(&out));
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let doc = read_json(&out.join("track.json"));
-        let frames = doc["frames"].as_array().unwrap().clone();
-        assert_eq!(frames.len(), 6);
-        let n = doc["run"]["template_vertices"].as_u64().unwrap() as usize;
-        runs.push((frames, f32_rows(&out.join("posed.npy"), 3 * n)));
+        let extra = ["--frames", "44..50", "--joint-offset", "0.04"];
+        let run = track_frames_and_poses(&rec, &extra, joints, &dir.path().join(name));
+        assert_eq!(run.0.len(), 6);
+        runs.push(run);
     }
     let (logged, turned) = (&runs[0], &runs[1]);
     let mut written = 0;
@@ -1201,17 +1210,7 @@ fn track_turns_back_a_log_turned_about_the_vertical() {
             continue;
         }
         written += 1;
-        let (a, b) = (&logged.1[k], &turned.1[k]);
-        let n = a.len() / 3;
-        let mean = a
-            .chunks(3)
-            .zip(b.chunks(3))
-            .map(|(p, q)| {
-                let d: f32 = (0..3).map(|i| (p[i] - q[i]).powi(2)).sum();
-                f64::from(d.sqrt())
-            })
-            .sum::<f64>()
-            / n as f64;
+        let mean = mean_point_distance(&logged.1[k], &turned.1[k]);
         assert!(
             mean < 0.1,
             "frame {f}: {mean} m from the pose on the log as recorded"
