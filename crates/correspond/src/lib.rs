@@ -65,8 +65,8 @@ mod refined;
 pub use articulated::{
     articulated_match, articulated_match_indexed, bone_transforms, outward_normals, skin,
     ArticulatedIndex, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, ArticulatedStart,
-    BoneTransforms, ViewHold, DEFAULT_HEAD_TWIST_PRIOR, DEFAULT_ICP_POINTS, MAX_HEAD_TWIST_DEG,
-    TWISTS,
+    BoneTransforms, ViewHold, DEFAULT_HEAD_NECK_ANCHOR, DEFAULT_HEAD_TWIST_PRIOR,
+    DEFAULT_ICP_POINTS, MAX_HEAD_TWIST_DEG, TWISTS,
 };
 pub use paper::{
     assign_confidence, base_profile, candidates, explain_point, farthest_point_sample,

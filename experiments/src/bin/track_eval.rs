@@ -81,6 +81,10 @@ struct Args {
     /// Weight of the joint anchors in a bone's fit (default: the method's).
     #[arg(long)]
     joint_anchor: Option<f64>,
+    /// Weight of the head bone's anchor at the neck's base, relative to the other joint
+    /// anchors (default: the method's).
+    #[arg(long)]
+    head_neck_anchor: Option<f64>,
     /// Weight of the head twist prior (default: the method's; 0 turns it off).
     #[arg(long)]
     head_twist_prior: Option<f64>,
@@ -130,6 +134,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     a.nonrigid_rounds = args.nonrigid_rounds.unwrap_or(a.nonrigid_rounds);
     a.warm_nonrigid_rounds = args.warm_nonrigid_rounds.unwrap_or(a.warm_nonrigid_rounds);
     a.joint_anchor = args.joint_anchor.unwrap_or(a.joint_anchor);
+    a.head_neck_anchor = args.head_neck_anchor.unwrap_or(a.head_neck_anchor);
     if let Some(w) = args.head_twist_prior {
         a.head_twist_prior = (w > 0.0).then_some(w);
     }

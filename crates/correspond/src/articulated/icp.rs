@@ -121,12 +121,11 @@ pub(super) fn articulated_icp(
                 let wsum: f64 = pairs.iter().map(|p| p.2).sum();
                 // The skeleton anchors the fit: both joints of the bone pulled to the
                 // target's joints.
-                let anchor = options.joint_anchor * wsum;
                 for j in [BONES[b].parent, BONES[b].child] {
                     pairs.push((
                         template.joints.position(j),
                         target.joints.position(j),
-                        anchor,
+                        options.anchor(b, j) * wsum,
                     ));
                 }
                 if let Some((pb, extra)) = &prior_pairs {

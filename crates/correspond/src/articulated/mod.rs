@@ -32,7 +32,9 @@
 //!    behind the posed template (module `visibility`) or facing away from the viewpoint
 //!    ([`ArticulatedOptions::min_facing_cosine`]) takes no pair. Each bone with at least 20 pairs of weight > 0.1 is
 //!    re-fitted by weighted Kabsch (Arun et al. 1987) to them plus its two joints as anchors
-//!    ([`ArticulatedOptions::joint_anchor`]); with a target viewpoint the head's fit also pulls
+//!    ([`ArticulatedOptions::joint_anchor`]; the head's anchor at the neck's base is weaker,
+//!    [`ArticulatedOptions::head_neck_anchor`]: the neck bends below the skull, so the two
+//!    joints do not give the skull's pitch); with a target viewpoint the head's fit also pulls
 //!    its twist towards the chest's ([`ArticulatedOptions::head_twist_prior`]: one view of a
 //!    round head barely pins it). Then the template is re-skinned (module `icp`).
 //! 5. **Non-rigid step** (needs the template's edge graph, [`ArticulatedInputs::neighbors`]):
@@ -121,6 +123,15 @@ pub struct ArticulatedOptions {
     pub min_normal_cosine: f64,
     /// Weight of each joint anchor in a bone's fit, relative to the bone's total vertex weight.
     pub joint_anchor: f64,
+    /// The head bone's anchor at its parent joint (`ShoulderCenter`, the base of the neck),
+    /// relative to [`ArticulatedOptions::joint_anchor`]. The neck bends between that joint and
+    /// the `Head` joint (the skull's centre, carried by the skull), so the line through the two
+    /// does not give the skull's pitch: a nodding head anchored at both ends was held 27° off
+    /// its truth. A weaker anchor at the neck's base lets the head's pairs decide its swing
+    /// about the skull's centre, and still conditions a fit with few pairs.
+    /// (0.3, [`DEFAULT_HEAD_NECK_ANCHOR`]:
+    /// `docs/decisions/2026-12-04-head-neck-anchor.md`.)
+    pub head_neck_anchor: f64,
     /// Geodesic band of the target pools (see [`SegmentPools::new`]), in the target's √area.
     pub band: f64,
     /// At most this many template vertices (an even stride sample) drive the ICP fits.
@@ -204,6 +215,7 @@ impl Default for ArticulatedOptions {
             normal_weight: 0.03,
             min_normal_cosine: 0.3,
             joint_anchor: 0.1,
+            head_neck_anchor: DEFAULT_HEAD_NECK_ANCHOR,
             band: 0.02,
             icp_points: DEFAULT_ICP_POINTS,
             boundary_gate: 0.015,
@@ -245,6 +257,23 @@ pub enum ArticulatedStart<'a> {
 
 /// Default [`ArticulatedOptions::head_twist_prior`].
 pub const DEFAULT_HEAD_TWIST_PRIOR: f64 = 0.1;
+
+/// Default [`ArticulatedOptions::head_neck_anchor`].
+pub const DEFAULT_HEAD_NECK_ANCHOR: f64 = 0.3;
+
+impl ArticulatedOptions {
+    /// The weight of bone `b`'s anchor at `joint` (one of its two joints) per unit of the
+    /// bone's pair weight: [`ArticulatedOptions::joint_anchor`], times
+    /// [`ArticulatedOptions::head_neck_anchor`] for the head bone's parent joint.
+    pub(crate) fn anchor(&self, b: usize, joint: Joint) -> f64 {
+        let bone = BONES[b];
+        if bone == Bone::new(Joint::ShoulderCenter, Joint::Head) && joint == bone.parent {
+            self.joint_anchor * self.head_neck_anchor
+        } else {
+            self.joint_anchor
+        }
+    }
+}
 
 /// Default [`ArticulatedOptions::icp_points`].
 pub const DEFAULT_ICP_POINTS: usize = 16_000;

@@ -235,12 +235,12 @@ pub(super) fn twist_search(
                 if step == TWIST_ICP_STEPS {
                     break;
                 }
-                let anchor = options.joint_anchor * pairs.len() as f64;
+                let held = pairs.len() as f64;
                 for j in [p, c] {
                     pairs.push((
                         template.joints.position(j),
                         target.joints.position(j),
-                        anchor,
+                        options.anchor(b, j) * held,
                     ));
                 }
                 match kabsch(&pairs) {
