@@ -83,8 +83,8 @@ pub mod view;
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
     keeps_turned_fit, ArticulatedTables, Correspondence, Method, MethodReport, Mode, Pipeline,
-    PipelineOptions, SurfacePoint, ViewMatch, DEFAULT_SAMPLES, MIN_VIEW_HELD, TURN_KEEP_MARGIN,
-    TURN_KEEP_POINTS_RATIO, TURN_RETRY_BELOW,
+    PipelineOptions, SurfacePoint, ViewMatch, DEFAULT_SAMPLES, MIN_VIEW_HELD, TURN_KEEP_AREA_RATIO,
+    TURN_KEEP_MARGIN, TURN_RETRY_BELOW,
 };
 pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,

@@ -655,41 +655,46 @@ pub const TURN_RETRY_BELOW: f64 = 0.75;
 /// that was itself mirrored held less. (docs/decisions/2026-12-04-turned-fit-margin.md.)
 pub const TURN_KEEP_MARGIN: f64 = 0.1;
 
-/// How many times as many template points ([`ViewHold::held`]) the fit on the joints turned
-/// half a turn must lay on the scan as the fit on the joints as given for [`keeps_turned_fit`]
-/// to keep it, whatever share of its view each holds. On a coarse or noisy scan every fit holds
-/// a small share of its view, the right one as well, and the shares of the two fits differ by
-/// less than [`TURN_KEEP_MARGIN`] or even the wrong way; the right fit still lays two to four
-/// times as many points on the scan as the one with its back to it. Measured 2026-12-04
-/// (`view_turn_eval` on the kinect scan sets, joints as given and turned 180°; `track_eval` on
-/// recordings from 160 × 120 to 640 × 480, logs as recorded and turned about the vertical): a
-/// fit with its back to the scan laid 0.14–0.70 times as many points as the right fit of the
-/// same view, a right fit 1.37–4.89 times as many as one with its back to the scan (1.46 where
-/// the right fit was itself poor); 1.2 lies between
-/// (docs/decisions/2026-12-04-turned-fit-points.md).
-pub const TURN_KEEP_POINTS_RATIO: f64 = 1.2;
+/// How many times as much template surface ([`ViewHold::held_area`]) the fit on the joints
+/// turned half a turn must lay on the scan as the fit on the joints as given for
+/// [`keeps_turned_fit`] to keep it, whatever share of its view each holds. On a coarse or noisy
+/// scan every fit holds a small share of its view, the right one as well, and the shares of the
+/// two fits differ by less than [`TURN_KEEP_MARGIN`] or even the wrong way; the right fit still
+/// lays more of the template on the scan than the one with its back to it (1.10–1.79 times,
+/// measured on a recording with its log turned about the vertical). Surface, not points: a
+/// template's face is meshed far more finely than its back, and on a body that turns its back
+/// to the camera, its log right, the fit turned to show the face laid 1.38–1.65 times as many
+/// points as the right fit but 0.63–0.78 times its surface
+/// (docs/decisions/2026-12-04-turned-fit-area.md).
+pub const TURN_KEEP_AREA_RATIO: f64 = 1.1;
 
 /// Is the fit on the joints turned half a turn about their spine, holding `turned` of its
 /// view, kept over the fit on the joints as given, holding `given`? When it holds at least
-/// [`TURN_KEEP_MARGIN`] more of its view, or lays [`TURN_KEEP_POINTS_RATIO`] times as many
-/// template points on the scan. Without both views (`None`: no viewpoint, nothing in view)
+/// [`TURN_KEEP_MARGIN`] more of its view, or lays [`TURN_KEEP_AREA_RATIO`] times as much
+/// template surface on the scan. Without both views (`None`: no viewpoint, nothing in view)
 /// there is nothing to compare, and the given fit stays.
 ///
 /// ```
 /// use symcorr::{keeps_turned_fit, ViewHold};
-/// let hold = |held, shown| Some(ViewHold { held, shown });
-/// assert!(keeps_turned_fit(hold(2200, 4000), hold(3600, 4000))); // 0.55 → 0.90 of its view
-/// assert!(!keeps_turned_fit(hold(2880, 4000), hold(3120, 4000))); // 0.72 → 0.78: no clearer
-/// assert!(keeps_turned_fit(hold(2030, 3560), hold(3600, 6900))); // 0.57 → 0.52, 1.8× the points
-/// assert!(!keeps_turned_fit(hold(4000, 6000), hold(2800, 4000))); // 0.67 → 0.70, 0.7× the points
-/// assert!(!keeps_turned_fit(hold(2400, 4000), None));
-/// assert!(!keeps_turned_fit(None, hold(3600, 4000)));
+/// let hold = |held, shown, held_area, shown_area| {
+///     Some(ViewHold { held, shown, held_area, shown_area })
+/// };
+/// // 0.55 → 0.90 of its view.
+/// assert!(keeps_turned_fit(hold(2200, 4000, 0.3, 0.6), hold(3600, 4000, 0.5, 0.6)));
+/// // 0.72 → 0.78 and the same surface: no clearer.
+/// assert!(!keeps_turned_fit(hold(2880, 4000, 0.4, 0.6), hold(3120, 4000, 0.4, 0.6)));
+/// // 0.57 → 0.52 of its view, but 1.5 times the surface.
+/// assert!(keeps_turned_fit(hold(2030, 3560, 0.3, 0.5), hold(3600, 6900, 0.45, 0.7)));
+/// // 1.5 times the points, 0.78 times the surface: the face turned onto a back.
+/// assert!(!keeps_turned_fit(hold(2395, 3392, 0.67, 0.74), hold(3576, 6828, 0.52, 0.73)));
+/// assert!(!keeps_turned_fit(hold(2400, 4000, 0.3, 0.6), None));
+/// assert!(!keeps_turned_fit(None, hold(3600, 4000, 0.5, 0.6)));
 /// ```
 pub fn keeps_turned_fit(given: Option<ViewHold>, turned: Option<ViewHold>) -> bool {
     match (given, turned) {
         (Some(g), Some(t)) => {
             t.fraction() >= g.fraction() + TURN_KEEP_MARGIN
-                || t.held as f64 >= TURN_KEEP_POINTS_RATIO * g.held as f64
+                || t.held_area >= TURN_KEEP_AREA_RATIO * g.held_area
         }
         _ => false,
     }
@@ -846,7 +851,7 @@ fn run_articulated(
         .collect();
     let report = MethodReport::Articulated {
         coverage: coverage(&shown, target.num_vertices()),
-        view_hold: out.view_hold(),
+        view_hold: out.view_hold(&template.0.mesh.vertex_areas()),
         has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
         posed: out.posed.iter().map(|p| p.coords.into()).collect(),
         transforms: Box::new(out.transforms),

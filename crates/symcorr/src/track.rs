@@ -38,7 +38,7 @@
 //!    ([`crate::Correspondence::view_held`]) may stand on a skeleton facing away from the
 //!    camera: the frame is prepared and fitted again with the joints turned half a turn about
 //!    their spine, and the turned fit is kept when it holds [`crate::TURN_KEEP_MARGIN`] more
-//!    or lays [`crate::TURN_KEEP_POINTS_RATIO`] times as many template points on the scan
+//!    or lays [`crate::TURN_KEEP_AREA_RATIO`] times as much template surface on the scan
 //!    ([`crate::keeps_turned_fit`]). A kept fit that holds less than
 //!    [`crate::MIN_VIEW_HELD`] skips the frame — never matched to garbage.
 //!
@@ -634,7 +634,7 @@ impl Fitter<'_> {
         // A fit that leaves most of what it shows the camera without a counterpart may stand on
         // a skeleton turned away from the camera: the template then shows the scan its back.
         // The joints turned half a turn get their own fit, kept when it clearly holds more of
-        // its view or lays clearly more points on the scan (`keeps_turned_fit`; a turned fit
+        // its view or lays clearly more surface on the scan (`keeps_turned_fit`; a turned fit
         // that cannot be made leaves the frame to the first).
         let mut turned_back = false;
         if corr.view_held().is_some_and(|h| h < TURN_RETRY_BELOW) {

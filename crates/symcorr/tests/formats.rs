@@ -2,8 +2,9 @@
 //! replaced (a `serde_json::json!` document; `fixtures/formats/`, generated once from the same
 //! inputs before the change): byte for byte the same text, and the files parse back. The
 //! partial file's confidences were rewritten when the articulated confidence gained its region
-//! terms on scans (docs/decisions/2026-12-03-confidence-ranking.md; pairs and every other key
-//! unchanged).
+//! terms on scans (docs/decisions/2026-12-03-confidence-ranking.md) and again when the head's
+//! anchor at the neck's base was weakened (docs/decisions/2026-12-04-head-neck-anchor.md: the
+//! confidences moved by at most 0.0005); pairs and every other key unchanged.
 
 use std::path::Path;
 use symcorr::formats::CorrespondenceFile;

@@ -12,8 +12,8 @@
 //!
 //! One line per pair: `refused` when the attachment's fit checks refuse the (turned) joints,
 //! else for the fit on the joints as given and on them turned back the fraction of its view the
-//! fit holds (`view_held`), the template points it lays on the scan (`ViewHold::held`), the
-//! mean error and the flips of the listed matches (`bench`'s evaluation). Then per retry
+//! fit holds (`view_held`), the template points it lays on the scan (`ViewHold::held`) and their
+//! surface (`ViewHold::held_area`), the mean error and the flips of the listed matches (`bench`'s evaluation). Then per retry
 //! threshold: fits turned, refused, the mean of the pairs' mean errors, the pooled flips and
 //! the pairs with more than a fifth of their matches flipped.
 
@@ -39,7 +39,7 @@ struct Args {
     turn_deg: f64,
 }
 
-/// A fit's figures: view held (share and points), mean error, (flips, counted matches).
+/// A fit's figures: view held (share, points, surface), mean error, (flips, counted matches).
 struct Fit {
     view_hold: Option<symcorr::ViewHold>,
     mean_error: f64,
@@ -137,8 +137,8 @@ fn main() -> Result<(), String> {
 
     println!("template target | given: view_held held_points error flips | turned back: the same");
     let vh = |v: Option<symcorr::ViewHold>| {
-        v.map_or("- 0".to_string(), |v| {
-            format!("{:.3} {}", v.fraction(), v.held)
+        v.map_or("- 0 0".to_string(), |v| {
+            format!("{:.3} {} {:.4}", v.fraction(), v.held, v.held_area)
         })
     };
     let mut refused_attach = 0;

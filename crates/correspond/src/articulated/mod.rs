@@ -314,42 +314,71 @@ impl ArticulatedMatches {
     /// does not hold (0.27–0.70). `None` without a viewpoint or with nothing in view.
     /// (`docs/decisions/2026-12-03-track-turned-skeletons.md`.)
     pub fn view_held(&self) -> Option<f64> {
-        self.view_hold().map(|h| h.fraction())
-    }
-
-    /// [`ArticulatedMatches::view_held`] as counts: how many template points the final pose
-    /// shows the viewpoint, and how many of them found a counterpart. `None` without a
-    /// viewpoint or with nothing in view.
-    pub fn view_hold(&self) -> Option<ViewHold> {
         let in_view = self.in_view.as_ref()?;
-        let shown = in_view.iter().filter(|&&s| s).count();
-        let held = in_view
+        let (shown, held) = in_view
             .iter()
             .zip(&self.has_counterpart)
-            .filter(|&(&s, &h)| s && h)
-            .count();
-        (shown > 0).then_some(ViewHold { shown, held })
+            .fold((0usize, 0usize), |(s, h), (&v, &c)| {
+                (s + usize::from(v), h + usize::from(v && c))
+            });
+        (shown > 0).then(|| held as f64 / shown as f64)
+    }
+
+    /// [`ArticulatedMatches::view_held`] as counts and as surface: how many template points
+    /// the final pose shows the viewpoint and how many of them found a counterpart, and the
+    /// template surface they stand for (`template_areas`: the template's barycentric vertex
+    /// areas at rest, `symcorr_mesh::TriMesh::vertex_areas`, one per template vertex; a
+    /// missing entry counts 0). `None` without a viewpoint or with nothing in view.
+    pub fn view_hold(&self, template_areas: &[f64]) -> Option<ViewHold> {
+        let in_view = self.in_view.as_ref()?;
+        let mut hold = ViewHold {
+            shown: 0,
+            held: 0,
+            shown_area: 0.0,
+            held_area: 0.0,
+        };
+        for (v, (&s, &h)) in in_view.iter().zip(&self.has_counterpart).enumerate() {
+            if s {
+                let a = template_areas.get(v).copied().unwrap_or(0.0);
+                hold.shown += 1;
+                hold.shown_area += a;
+                if h {
+                    hold.held += 1;
+                    hold.held_area += a;
+                }
+            }
+        }
+        (hold.shown > 0).then_some(hold)
     }
 }
 
-/// Of the template points a fit shows a target's viewpoint, how many found a counterpart
-/// ([`ArticulatedMatches::view_hold`], which gives `0 < shown` and `held ≤ shown`).
+/// Of the template points a fit shows a target's viewpoint, how many found a counterpart, and
+/// the template surface they stand for ([`ArticulatedMatches::view_hold`], which gives
+/// `0 < shown`, `held ≤ shown` and `held_area ≤ shown_area`). The counts weigh every vertex
+/// alike, so a finely meshed region (a template's face) counts for more than its surface; the
+/// areas do not.
 ///
 /// ```
 /// use symcorr_correspond::ViewHold;
-/// let h = ViewHold { shown: 4000, held: 3000 };
+/// let h = ViewHold { shown: 4000, held: 3000, shown_area: 0.5, held_area: 0.45 };
 /// assert_eq!(h.fraction(), 0.75);
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewHold {
     /// Template points the fit shows the viewpoint (occlusion and facing tests).
     pub shown: usize,
     /// Of those, the points with a counterpart on the target: what the fit lays on the scan.
     pub held: usize,
+    /// The template surface of the shown points (their vertex areas at rest).
+    pub shown_area: f64,
+    /// The template surface of the held points: how much of the template the fit lays on the
+    /// scan, whatever its meshing.
+    pub held_area: f64,
 }
 
 impl ViewHold {
-    /// `held / shown`: the fraction of its view the fit holds.
+    /// `held / shown`: the fraction of its view the fit holds (by points,
+    /// [`ArticulatedMatches::view_held`]).
     pub fn fraction(&self) -> f64 {
         self.held as f64 / self.shown.max(1) as f64
     }
