@@ -1,6 +1,6 @@
 //! The head's fit on a body whose skull nods against its neck: the bundled MakeHuman body at
-//! rest against its `random-7` pose (fixtures/synth/bodies, same vertex ids, so the identity
-//! is the truth). The Kinect skeleton's neck → head bone runs from the base of the neck to the
+//! rest against its `random-7` pose, chin on chest (fixtures/synth/bodies, same vertex ids, so
+//! the identity is the truth). The Kinect skeleton's neck → head bone runs from the base of the neck to the
 //! skull's centre; the neck bends between them, so the bone's direction does not give the
 //! skull's pitch, and the head's anchor at the neck's base
 //! (`ArticulatedOptions::head_neck_anchor`) is weaker than its other anchors.
@@ -34,9 +34,10 @@ fn head_error(head_neck_anchor: f64) -> f64 {
     let template = pipeline.prepare(template_mesh, &template_sk).unwrap();
     let target = pipeline.prepare(target_mesh, &target_sk).unwrap();
     let out = pipeline.run(&template, &target).unwrap();
-    // Reference labels of the bundled body (segment index per vertex; 2 is the head).
+    // Reference labels of the bundled body (segment index per vertex).
     let labels = std::fs::read_to_string(bodies().join("labels/s0_rest.txt")).unwrap();
-    let head: Vec<bool> = labels.lines().map(|l| l.trim() == "2").collect();
+    let head_label = symcorr_attach::Segment::Head.index().to_string();
+    let head: Vec<bool> = labels.lines().map(|l| l.trim() == head_label).collect();
     let errors: Vec<f64> = out
         .pairs
         .iter()
