@@ -316,7 +316,7 @@ impl SurfacePoint {
 
 /// The tables of one mesh that the articulated method derives from it alone, per frame of a
 /// recording no matter how many frames: its outward normals, and as a template its edge graph
-/// (the non-rigid step), as a target its edge graph for the pools' band (its boundary flags are
+/// (the non-rigid step) and vertex areas (what a fit lays on a view, [`ViewHold`]), as a target its edge graph for the pools' band (its boundary flags are
 /// the prepared mesh's, [`PreparedMesh::boundary_vertices`]).
 /// Built once for a template and, for a recording's frame, on the thread that observes it
 /// ([`Pipeline::run_with`]); [`Pipeline::run_from`] builds both for each call.
@@ -325,6 +325,8 @@ pub struct ArticulatedTables {
     normals: Vec<[f64; 3]>,
     /// As a template: the vertex neighbours.
     neighbors: Option<Vec<Vec<u32>>>,
+    /// As a template: the barycentric vertex areas ([`TriMesh::vertex_areas`]).
+    vertex_areas: Option<Vec<f64>>,
     /// As a target: the edge graph unless the mesh was prepared for the refined method (which
     /// holds one).
     graph: Option<EdgeGraph>,
@@ -338,6 +340,7 @@ impl ArticulatedTables {
         ArticulatedTables {
             normals: articulated_normals(m),
             neighbors: Some(m.mesh.vertex_neighbors()),
+            vertex_areas: Some(m.mesh.vertex_areas()),
             graph: None,
             index: None,
         }
@@ -348,6 +351,7 @@ impl ArticulatedTables {
         ArticulatedTables {
             normals: articulated_normals(m),
             neighbors: None,
+            vertex_areas: None,
             graph: m.refine.is_none().then(|| EdgeGraph::new(&m.mesh)),
             index: None,
         }
@@ -838,6 +842,10 @@ fn run_articulated(
     start: ArticulatedStart<'_>,
 ) -> Result<MethodOutput, PipelineError> {
     let out = articulated(template, target, options, start)?;
+    let view_hold = match &template.1.vertex_areas {
+        Some(areas) => out.view_hold(areas),
+        None => out.view_hold(&template.0.mesh.vertex_areas()),
+    };
     let target = target.0;
     // Only a partial view leaves template points without a counterpart; on a whole surface
     // every point has one, however far the fit left it.
@@ -851,7 +859,7 @@ fn run_articulated(
         .collect();
     let report = MethodReport::Articulated {
         coverage: coverage(&shown, target.num_vertices()),
-        view_hold: out.view_hold(&template.0.mesh.vertex_areas()),
+        view_hold,
         has_counterpart: partial.then(|| pick(mode, points, out.has_counterpart)),
         posed: out.posed.iter().map(|p| p.coords.into()).collect(),
         transforms: Box::new(out.transforms),

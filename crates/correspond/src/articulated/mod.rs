@@ -314,14 +314,8 @@ impl ArticulatedMatches {
     /// does not hold (0.27–0.70). `None` without a viewpoint or with nothing in view.
     /// (`docs/decisions/2026-12-03-track-turned-skeletons.md`.)
     pub fn view_held(&self) -> Option<f64> {
-        let in_view = self.in_view.as_ref()?;
-        let (shown, held) = in_view
-            .iter()
-            .zip(&self.has_counterpart)
-            .fold((0usize, 0usize), |(s, h), (&v, &c)| {
-                (s + usize::from(v), h + usize::from(v && c))
-            });
-        (shown > 0).then(|| held as f64 / shown as f64)
+        // The share is counted in points: the areas are not needed.
+        self.view_hold(&[]).map(|h| h.fraction())
     }
 
     /// [`ArticulatedMatches::view_held`] as counts and as surface: how many template points
