@@ -88,6 +88,10 @@ struct Args {
     /// Weight of the head twist prior (default: the method's; 0 turns it off).
     #[arg(long)]
     head_twist_prior: Option<f64>,
+    /// Largest share of the unturned head's score a turned start of the warm twist search may
+    /// keep (default: the method's; 0 turns the search off).
+    #[arg(long)]
+    head_warm_twist: Option<f64>,
     /// Per frame, also print the flips and jumps per template segment and how far that
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
@@ -137,6 +141,9 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     a.head_neck_anchor = args.head_neck_anchor.unwrap_or(a.head_neck_anchor);
     if let Some(w) = args.head_twist_prior {
         a.head_twist_prior = (w > 0.0).then_some(w);
+    }
+    if let Some(g) = args.head_warm_twist {
+        a.head_warm_twist = (g > 0.0).then_some(g);
     }
     let pipeline = Pipeline::new(options);
     let template = pipeline.prepare(mesh, &sk)?;

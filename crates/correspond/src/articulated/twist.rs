@@ -2,11 +2,12 @@
 //! its roll, and a roughly round head can sit in a wrong roll that nearest-neighbour ICP does
 //! not leave, so the head bone is started at several twists and the best start wins.
 
-use super::transforms::{isometry, kabsch, unit};
+use super::transforms::{isometry, kabsch, unit, FitPair};
 use super::Alignment;
+use crate::kdtree::KdTree;
 use crate::CorrespondError;
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
-use symcorr_skeleton::{Skeleton, BONES};
+use symcorr_skeleton::{Segment, Skeleton, BONES};
 
 /// Largest twist of the head about its bone against the pose the chest gives it, degrees.
 /// A neck turns about ±80° (range of motion of cervical rotation); every fit of the head —
@@ -142,29 +143,155 @@ impl TwistPrior {
     }
 }
 
+/// A bone's own points of a single-view target — the target vertices labelled with the bone's
+/// segment — and the template vertices mostly on the bone (weight > 0.5): the bone's pose is
+/// fitted and scored scan → template, every own point paired with its nearest posed vertex.
+///
+/// One view of a round head barely pins its twist template → scan: the points of the template
+/// it turns away still find scan points (the face's side on the cheek), and the nearest-point
+/// pairs of a noisy sensor's face hold any twist within ±30° about equally. Scan → template,
+/// the face the scan shows must be explained by the posed head: on a head turned 44° against
+/// its fit the mean squared distance was 1.1·10⁻⁴ m² at the true pose against 2.0·10⁻⁴ at the
+/// fit (1.2–1.6·10⁻⁴ at ±8°, 3·10⁻⁴ at ±30°), while template → scan preferred a pose 15° off
+/// the truth (`docs/decisions/2026-12-05-head-scan-to-template.md`).
+#[derive(Debug, Clone)]
+pub(super) struct OwnPoints {
+    /// The bone (index into [`BONES`]).
+    pub bone: usize,
+    /// The template vertices mostly on the bone, at rest: a pose is rigid, so the posed vertex
+    /// nearest a target point is the rest vertex nearest the point moved back by the pose.
+    tree: KdTree<3>,
+    /// Target vertices labelled with the bone's segment (an even sample of at most
+    /// [`TWIST_POINTS`]).
+    target: Vec<usize>,
+}
+
+impl OwnPoints {
+    /// The own points of bone `b`; `None` when the target has no viewpoint (a whole surface
+    /// pins a head's twist template → target), when `b` carries no segment of its own, when
+    /// the target has fewer than [`MIN_OWN_POINTS`] own points or the template fewer than
+    /// [`MIN_TWIST_VERTICES`] vertices mostly on the bone.
+    pub fn new(al: &Alignment<'_>, b: usize) -> Option<OwnPoints> {
+        al.target.viewpoint?;
+        let segment = Segment::ALL
+            .into_iter()
+            .find(|s| s.bones().contains(&BONES[b]))?;
+        let target: Vec<usize> = (0..al.target_positions.len())
+            .filter(|&q| al.target.labels.get(q) == Some(&segment))
+            .collect();
+        let template: Vec<u32> = (0..al.template_positions.len() as u32)
+            .filter(|&v| {
+                al.weights
+                    .row(v as usize)
+                    .iter()
+                    .any(|&(bb, w)| bb == b && w > 0.5)
+            })
+            .collect();
+        if target.len() < MIN_OWN_POINTS || template.len() < MIN_TWIST_VERTICES {
+            return None;
+        }
+        let target = even_sample(target, TWIST_POINTS);
+        let rest = template
+            .iter()
+            .map(|&v| al.template_positions[v as usize].coords.into())
+            .collect();
+        Some(OwnPoints {
+            bone: b,
+            tree: KdTree::new(rest, template),
+            target,
+        })
+    }
+
+    /// Every own target point within `gate` of the bone posed by `pose` paired with its
+    /// nearest posed template vertex, as (rest position, target position, weight 1), and the
+    /// mean squared distance of all own points to the posed bone, each at most `gate²`
+    /// (positions only: a sensor's normals are too noisy to score a twist by).
+    pub fn pairs(
+        &self,
+        al: &Alignment<'_>,
+        pose: &IsometryMatrix3<f64>,
+        gate: f64,
+    ) -> (Vec<FitPair>, f64) {
+        let back = pose.inverse();
+        let mut pairs = Vec::with_capacity(self.target.len());
+        let mut total = 0.0;
+        for &q in &self.target {
+            let y: [f64; 3] = (back * al.target_positions[q]).coords.into();
+            match self.tree.nearest_within(&y, (u32::MAX, gate * gate)) {
+                Some((v, d)) => {
+                    total += d;
+                    pairs.push((
+                        al.template_positions[v as usize],
+                        al.target_positions[q],
+                        1.0,
+                    ));
+                }
+                None => total += gate * gate,
+            }
+        }
+        (pairs, total / self.target.len() as f64)
+    }
+}
+
+/// Every `⌈len / at_most⌉`-th item of `items`, from the first: at most `at_most` of them.
+fn even_sample<T: Copy>(items: Vec<T>, at_most: usize) -> Vec<T> {
+    let stride = items.len().div_ceil(at_most.max(1)).max(1);
+    items.into_iter().step_by(stride).collect()
+}
+
 /// Starting twists of the head twist search of [`articulated_match`](crate::articulated_match),
 /// in degrees: within a head's range of rotation against the chest (about ±80°; the starting
 /// pose is the chest's). Wider starts let a head whose back fits about as well as its face
 /// turn round: with σ = 3 cm joints, ±180° flipped whole heads in 13 of 58 pairs.
 pub const TWISTS: [f64; 7] = [0.0, 30.0, 60.0, 90.0, -30.0, -60.0, -90.0];
+/// Starting twists of the warm twist search (after the ICP rounds from an earlier fit), in
+/// degrees around the rounds' pose: a head turns by a few degrees between frames, and a
+/// fit that lagged a turn by tens of degrees catches up in one or two frames.
+pub const WARM_TWISTS: [f64; 5] = [0.0, 15.0, -15.0, 30.0, -30.0];
+
+/// How [`twist_search`] pairs and scores a pose of the bone, and which start it keeps.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum TwistScore<'o> {
+    /// From the skeletons: an even sample of the vertices mostly on the bone (weight > 0.5)
+    /// paired with their nearest pool vertices, scored by the mean truncated squared distance
+    /// (position and normal, the search's own metric); the best start wins.
+    TemplateToTarget,
+    /// After the ICP rounds from an earlier fit: scan → template with the bone's own points
+    /// ([`OwnPoints::pairs`]); a turned start wins only when its score is below `gain` times
+    /// the unturned start's ([`ArticulatedOptions::head_warm_twist`](super::ArticulatedOptions::head_warm_twist)).
+    OwnPoints {
+        /// The bone's own points.
+        own: &'o OwnPoints,
+        /// Largest share of the unturned start's score a turned start may keep.
+        gain: f64,
+    },
+}
 /// At most this many vertices of the bone score each start of [`twist_search`].
 const TWIST_POINTS: usize = 600;
 /// Rigid ICP steps per start of [`twist_search`].
 const TWIST_ICP_STEPS: usize = 4;
+/// A target with fewer own points of the bone's segment has no [`OwnPoints`]: a head seen at
+/// 2 cm per pixel (160 pixels across, 3 m away: about 110 points) does not pin its twist, and
+/// the warm search turned such heads wrongly (7 → 23 flips on a 160×240 recording); at 320×240
+/// and 2.5 m a head shows about 650.
+const MIN_OWN_POINTS: usize = 200;
 /// A bone with fewer vertices mostly on it keeps its initial transform.
 const MIN_TWIST_VERTICES: usize = 20;
 
 /// The best twist of bone `b` about its target axis. Starting from `initial` turned by each
-/// of [`TWISTS`] about the target bone (axis through its parent joint), a few rigid ICP steps
-/// on an even sample of the vertices mostly on the bone (weight > 0.5), scored by the mean
-/// truncated squared distance (position and normal, the search's own metric) to their
-/// nearest pool vertices; the best start wins (the first on a tie). Every ICP step is held
-/// within `limit` (of bone `b`, around `initial`).
+/// of `twists` (degrees) about the target bone (axis through its parent joint), a few rigid
+/// ICP steps scored as `score` says; every ICP step is held within `limit` (of bone `b`,
+/// around `initial`). With [`TwistScore::TemplateToTarget`] the best start wins (the first on
+/// a tie); with [`TwistScore::OwnPoints`] a turned start wins only when it explains the
+/// bone's own points clearly better than the unturned one, and otherwise `initial` is kept
+/// as it was.
 pub(super) fn twist_search(
     al: &Alignment<'_>,
     b: usize,
     initial: IsometryMatrix3<f64>,
     limit: Option<&TwistLimit>,
+    twists: &[f64],
+    score: TwistScore<'_>,
 ) -> Result<IsometryMatrix3<f64>, CorrespondError> {
     let (template, target, options) = (&al.template, &al.target, al.options);
     let n = template.positions.len();
@@ -200,38 +327,47 @@ pub(super) fn twist_search(
         return Ok(initial);
     };
     let gate = options.gate_start * template.area.sqrt();
+    // Pairs and score of pose `tr`: scan → template with the bone's own target points
+    // ([`OwnPoints`]), else template → target (the sample to its nearest pool vertex,
+    // features).
+    let pairs_of = |tr: &IsometryMatrix3<f64>| -> Result<(Vec<FitPair>, f64), CorrespondError> {
+        if let TwistScore::OwnPoints { own, .. } = score {
+            return Ok(own.pairs(al, tr, gate));
+        }
+        let f: Vec<[f64; 6]> = (0..n)
+            .map(|i| {
+                if !on_bone[i] {
+                    return [0.0; 6];
+                }
+                al.feature(
+                    &(tr * al.template_positions[i]),
+                    &(tr.rotation * al.template_normals[i]),
+                )
+            })
+            .collect();
+        let near = al
+            .trees
+            .nearest(al.pools, &f, Some(&subset), None, f64::INFINITY)?;
+        let mut pairs = Vec::new();
+        let mut total = 0.0;
+        for v in (0..n).filter(|&v| on_bone[v]) {
+            let x = tr * al.template_positions[v];
+            let y = al.target_positions[near[v].0 as usize];
+            // Scored in the search's own metric (position and normal).
+            total += near[v].1.min(gate * gate);
+            if (x - y).norm() <= gate {
+                pairs.push((al.template_positions[v], y, 1.0));
+            }
+        }
+        Ok((pairs, total / count as f64))
+    };
     let fit =
         |start: IsometryMatrix3<f64>| -> Result<(IsometryMatrix3<f64>, f64), CorrespondError> {
             let mut tr = start;
             let mut score = f64::INFINITY;
             for step in 0..=TWIST_ICP_STEPS {
-                let f: Vec<[f64; 6]> = (0..n)
-                    .map(|i| {
-                        if !on_bone[i] {
-                            return [0.0; 6];
-                        }
-                        al.feature(
-                            &(tr * al.template_positions[i]),
-                            &(tr.rotation * al.template_normals[i]),
-                        )
-                    })
-                    .collect();
-                let near = al
-                    .trees
-                    .nearest(al.pools, &f, Some(&subset), None, f64::INFINITY)?;
-                let mut pairs = Vec::new();
-                let mut total = 0.0;
-                for v in (0..n).filter(|&v| on_bone[v]) {
-                    let x = tr * al.template_positions[v];
-                    let y = al.target_positions[near[v].0 as usize];
-                    let d = (x - y).norm();
-                    // Scored in the search's own metric (position and normal).
-                    total += near[v].1.min(gate * gate);
-                    if d <= gate {
-                        pairs.push((al.template_positions[v], y, 1.0));
-                    }
-                }
-                score = total / count as f64;
+                let (mut pairs, s) = pairs_of(&tr)?;
+                score = s;
                 if step == TWIST_ICP_STEPS {
                     break;
                 }
@@ -251,8 +387,9 @@ pub(super) fn twist_search(
             Ok((tr, score))
         };
     let mut best = fit(initial)?;
+    let unturned = best.1;
     let axis = Unit::new_unchecked(axis);
-    for &deg in TWISTS.iter().filter(|&&d| d != 0.0) {
+    for &deg in twists.iter().filter(|&&d| d != 0.0) {
         // The start turned about the target bone's axis through its parent joint.
         let r = *Rotation3::from_axis_angle(&axis, deg.to_radians()).matrix();
         let t = r * (initial.translation.vector - pivot.coords) + pivot.coords;
@@ -262,7 +399,10 @@ pub(super) fn twist_search(
             best = candidate;
         }
     }
-    Ok(best.0)
+    match score {
+        TwistScore::OwnPoints { gain, .. } if best.1 > gain * unturned => Ok(initial),
+        _ => Ok(best.0),
+    }
 }
 
 #[cfg(test)]
