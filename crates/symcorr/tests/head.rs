@@ -3,7 +3,9 @@
 //! the identity is the truth). The Kinect skeleton's neck → head bone runs from the base of the neck to the
 //! skull's centre; the neck bends between them, so the bone's direction does not give the
 //! skull's pitch, and the head's anchor at the neck's base
-//! (`ArticulatedOptions::head_neck_anchor`) is weaker than its other anchors.
+//! (`ArticulatedOptions::head_neck_anchor`) is weaker than its other anchors. And the head
+//! of a tracked subject who looks aside (`fixtures/synth/head_turn`), followed by the warm
+//! twist search (`ArticulatedOptions::head_warm_twist`).
 
 use std::path::{Path, PathBuf};
 use symcorr::{Mode, Pipeline, PipelineOptions};

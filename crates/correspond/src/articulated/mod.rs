@@ -210,15 +210,17 @@ pub struct ArticulatedOptions {
     /// only biased the turned heads of bodies20's random poses: 0.0025 → 0.0031 mean error).
     /// (0.1, [`DEFAULT_HEAD_TWIST_PRIOR`]: `docs/decisions/2026-12-03-head-twist-prior.md`.)
     pub head_twist_prior: Option<f64>,
-    /// Warm twist search (`None`: off): from an earlier fit onto a target seen from a
-    /// viewpoint, after the ICP rounds the head is started again at ±15° and ±30° about its
-    /// bone and each start refined scan → template on the head's own points (the scan
-    /// vertices labelled head, each paired with its nearest posed head vertex; positions only);
+    /// Warm twist search (`None`, or a share not above 0: off): from an earlier fit onto a
+    /// target seen from a viewpoint, after the ICP rounds the head is started again at ±15°
+    /// and ±30° about its bone and each start refined scan → template on the head's own points
+    /// (the scan vertices labelled head, each paired with its nearest posed head vertex;
+    /// positions only; a frame whose head shows fewer than 200 points is not searched);
     /// a turned start replaces the rounds' pose only when its mean squared distance is below
     /// this share of the unturned start's. The joints do not show a head turning against the
     /// chest, and neither the ICP rounds nor the twist prior follow it: a subject looking 40°
-    /// left and right kept a head 35–45° too little turned (0.22 % flips, all on the head). A
-    /// head that did not turn never scored below 0.92 (four recordings).
+    /// left and right kept a head 35–45° too little turned (0.22 % flips, all on the head). On
+    /// five recordings whose heads turn with the chest no frame's head turned at 0.85 (at 0.9,
+    /// one frame of the fixture's).
     /// (0.85, [`DEFAULT_HEAD_WARM_TWIST`]: `docs/decisions/2026-12-05-head-warm-twist.md`.)
     pub head_warm_twist: Option<f64>,
 }
@@ -472,7 +474,7 @@ pub fn articulated_match_indexed(
     // From an earlier fit, the head's twist is searched again on the rounds' pose: its own
     // points of the scan say when the head turned against the chest (module `twist`).
     let warm = matches!(start, ArticulatedStart::Warm { .. });
-    if let (true, Some(gain)) = (warm, options.head_warm_twist) {
+    if let (true, Some(gain)) = (warm, options.head_warm_twist.filter(|&g| g > 0.0)) {
         if let Some(own) = twist::OwnPoints::new(&al, head_bone()) {
             transforms[own.bone] = twist::twist_search(
                 &al,

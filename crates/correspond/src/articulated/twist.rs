@@ -150,10 +150,10 @@ impl TwistPrior {
 /// One view of a round head barely pins its twist template → scan: the points of the template
 /// it turns away still find scan points (the face's side on the cheek), and the nearest-point
 /// pairs of a noisy sensor's face hold any twist within ±30° about equally. Scan → template,
-/// the face the scan shows must be explained by the posed head: on a head turned 44° against
+/// the face the scan shows must be explained by the posed head: on a head turned 43° against
 /// its fit the mean squared distance was 1.1·10⁻⁴ m² at the true pose against 2.0·10⁻⁴ at the
-/// fit (1.2–1.6·10⁻⁴ at ±8°, 3·10⁻⁴ at ±30°), while template → scan preferred a pose 15° off
-/// the truth (`docs/decisions/2026-12-05-head-scan-to-template.md`).
+/// fit (1.2–1.6·10⁻⁴ at ±8°, 3–7·10⁻⁴ at ±30°), while template → scan preferred a pose 15° off
+/// the truth (`docs/decisions/2026-12-05-head-warm-twist.md`).
 #[derive(Debug, Clone)]
 pub(super) struct OwnPoints {
     /// The bone (index into [`BONES`]).
@@ -258,7 +258,8 @@ pub(super) enum TwistScore<'o> {
     TemplateToTarget,
     /// After the ICP rounds from an earlier fit: scan → template with the bone's own points
     /// ([`OwnPoints::pairs`]); a turned start wins only when its score is below `gain` times
-    /// the unturned start's ([`ArticulatedOptions::head_warm_twist`](super::ArticulatedOptions::head_warm_twist)).
+    /// the unturned start's
+    /// ([`ArticulatedOptions::head_warm_twist`](super::ArticulatedOptions::head_warm_twist)).
     OwnPoints {
         /// The bone's own points.
         own: &'o OwnPoints,
@@ -266,6 +267,7 @@ pub(super) enum TwistScore<'o> {
         gain: f64,
     },
 }
+
 /// At most this many vertices of the bone score each start of [`twist_search`].
 const TWIST_POINTS: usize = 600;
 /// Rigid ICP steps per start of [`twist_search`].
