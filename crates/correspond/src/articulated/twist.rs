@@ -206,19 +206,31 @@ impl OwnPoints {
     /// nearest posed template vertex, as (rest position, target position, weight 1), and the
     /// mean squared distance of all own points to the posed bone, each at most `gate²`
     /// (positions only: a sensor's normals are too noisy to score a twist by).
+    ///
+    /// `hints` (one per own point, `u32::MAX` for none) hold each point's vertex of an earlier
+    /// call and are updated: a pose a step away has its nearest vertex near the last one, so
+    /// the search starts from it (the same answer, found sooner).
     pub fn pairs(
         &self,
         al: &Alignment<'_>,
         pose: &IsometryMatrix3<f64>,
         gate: f64,
+        hints: &mut [u32],
     ) -> (Vec<FitPair>, f64) {
         let back = pose.inverse();
         let mut pairs = Vec::with_capacity(self.target.len());
         let mut total = 0.0;
-        for &q in &self.target {
-            let y: [f64; 3] = (back * al.target_positions[q]).coords.into();
-            match self.tree.nearest_within(&y, (u32::MAX, gate * gate)) {
+        for (&q, hint) in self.target.iter().zip(hints.iter_mut()) {
+            let y = back * al.target_positions[q];
+            let start = al
+                .template_positions
+                .get(*hint as usize)
+                .map(|x| (x - y).norm_squared())
+                .filter(|&d| d <= gate * gate)
+                .map_or((u32::MAX, gate * gate), |d| (*hint, d));
+            match self.tree.nearest_within(&y.coords.into(), start) {
                 Some((v, d)) => {
+                    *hint = v;
                     total += d;
                     pairs.push((
                         al.template_positions[v as usize],
@@ -332,9 +344,12 @@ pub(super) fn twist_search(
     // Pairs and score of pose `tr`: scan → template with the bone's own target points
     // ([`OwnPoints`]), else template → target (the sample to its nearest pool vertex,
     // features).
-    let pairs_of = |tr: &IsometryMatrix3<f64>| -> Result<(Vec<FitPair>, f64), CorrespondError> {
-        if let TwistScore::OwnPoints { own, .. } = score {
-            return Ok(own.pairs(al, tr, gate));
+    let score_kind = score;
+    let pairs_of = |tr: &IsometryMatrix3<f64>,
+                    hints: &mut [u32]|
+     -> Result<(Vec<FitPair>, f64), CorrespondError> {
+        if let TwistScore::OwnPoints { own, .. } = score_kind {
+            return Ok(own.pairs(al, tr, gate, hints));
         }
         let f: Vec<[f64; 6]> = (0..n)
             .map(|i| {
@@ -367,8 +382,12 @@ pub(super) fn twist_search(
         |start: IsometryMatrix3<f64>| -> Result<(IsometryMatrix3<f64>, f64), CorrespondError> {
             let mut tr = start;
             let mut score = f64::INFINITY;
+            let mut hints = match score_kind {
+                TwistScore::OwnPoints { own, .. } => vec![u32::MAX; own.target.len()],
+                TwistScore::TemplateToTarget => Vec::new(),
+            };
             for step in 0..=TWIST_ICP_STEPS {
-                let (mut pairs, s) = pairs_of(&tr)?;
+                let (mut pairs, s) = pairs_of(&tr, &mut hints)?;
                 score = s;
                 if step == TWIST_ICP_STEPS {
                     break;
