@@ -316,8 +316,9 @@ impl SurfacePoint {
 
 /// The tables of one mesh that the articulated method derives from it alone, per frame of a
 /// recording no matter how many frames: its outward normals, and as a template its edge graph
-/// (the non-rigid step) and vertex areas (what a fit lays on a view, [`ViewHold`]), as a target its edge graph for the pools' band (its boundary flags are
-/// the prepared mesh's, [`PreparedMesh::boundary_vertices`]).
+/// (the non-rigid step) and vertex areas (what a fit lays on a view, [`ViewHold`]), as a
+/// target its edge graph for the pools' band (its boundary flags are the prepared mesh's,
+/// [`PreparedMesh::boundary_vertices`]).
 /// Built once for a template and, for a recording's frame, on the thread that observes it
 /// ([`Pipeline::run_with`]); [`Pipeline::run_from`] builds both for each call.
 #[derive(Debug, Clone)]
