@@ -1368,11 +1368,11 @@ fn track_stops_cleanly_on_ctrl_c_and_resumes() {
     );
 }
 
-/// `--head-twist-prior`: a weight that is not a finite number ≥ 0 is refused before anything is
-/// written; 0 turns the prior off and the run says so; a run is resumed only with its own
-/// weight.
+/// `--head-twist-prior` and `--head-warm-twist`: a weight that is not a finite number ≥ 0, or a
+/// share outside [0, 1], is refused before anything is written; 0 turns the prior off and the
+/// run says so; a run is resumed only with its own weight.
 #[test]
-fn track_head_twist_prior_is_checked_recorded_and_kept_on_resume() {
+fn track_head_options_are_checked_recorded_and_kept_on_resume() {
     let dir = tempfile::tempdir().unwrap();
     let rec = sequence_recording(dir.path());
     let log = fixtures().join("../sequence/joints.json");
@@ -1397,9 +1397,19 @@ fn track_head_twist_prior_is_checked_recorded_and_kept_on_resume() {
         assert!(e.contains("--head-twist-prior"), "{e}");
         assert!(!out.exists(), "{bad}: {}", out.display());
     }
+    for bad in ["-0.5", "1.5", "NaN"] {
+        let o = track(&["--head-warm-twist", bad]);
+        let e = assert_one_line_error(&o);
+        assert!(e.contains("--head-warm-twist"), "{e}");
+        assert!(!out.exists(), "{bad}: {}", out.display());
+    }
     assert!(track(&["--head-twist-prior", "0"]).status.success());
     let doc = read_json(&out.join("track.json"));
     assert_eq!(doc["run"]["head_twist_prior"], 0.0);
+    assert_eq!(
+        doc["run"]["head_warm_twist"],
+        symcorr_correspond::DEFAULT_HEAD_WARM_TWIST
+    );
     // The default weight is another run: --resume refuses to mix the two.
     let e = assert_one_line_error(&track(&["--resume"]));
     assert!(e.contains("cannot resume"), "{e}");

@@ -179,14 +179,7 @@ impl OwnPoints {
         let target: Vec<usize> = (0..al.target_positions.len())
             .filter(|&q| al.target.labels.get(q) == Some(&segment))
             .collect();
-        let template: Vec<u32> = (0..al.template_positions.len() as u32)
-            .filter(|&v| {
-                al.weights
-                    .row(v as usize)
-                    .iter()
-                    .any(|&(bb, w)| bb == b && w > 0.5)
-            })
-            .collect();
+        let template = mostly_on_bone(al, b);
         if target.len() < MIN_OWN_POINTS || template.len() < MIN_TWIST_VERTICES {
             return None;
         }
@@ -308,86 +301,32 @@ pub(super) fn twist_search(
     score: TwistScore<'_>,
 ) -> Result<IsometryMatrix3<f64>, CorrespondError> {
     let (template, target, options) = (&al.template, &al.target, al.options);
-    let n = template.positions.len();
-    let mostly_on_bone: Vec<bool> = (0..n)
-        .map(|v| al.weights.row(v).iter().any(|&(bb, w)| bb == b && w > 0.5))
-        .collect();
-    // An even sample of at most TWIST_POINTS of them: enough to score a rigid pose.
-    let stride = mostly_on_bone
-        .iter()
-        .filter(|&&x| x)
-        .count()
-        .div_ceil(TWIST_POINTS)
-        .max(1);
-    let mut seen = 0usize;
-    let on_bone: Vec<bool> = mostly_on_bone
-        .iter()
-        .map(|&x| {
-            if !x {
-                return false;
-            }
-            seen += 1;
-            (seen - 1).is_multiple_of(stride)
-        })
-        .collect();
-    let subset = al.pools.members_where(|v| on_bone[v as usize]);
-    let count = on_bone.iter().filter(|&&x| x).count();
-    if count < MIN_TWIST_VERTICES {
-        return Ok(initial);
-    }
+    let pairing = match score {
+        TwistScore::TemplateToTarget => match Sample::new(al, b) {
+            Some(sample) => Pairing::Sample(sample),
+            None => return Ok(initial),
+        },
+        TwistScore::OwnPoints { own, .. } => Pairing::Own(own),
+    };
     let (p, c) = (BONES[b].parent, BONES[b].child);
     let pivot = target.joints.position(p);
     let Some(axis) = unit(target.joints.position(c) - pivot) else {
         return Ok(initial);
     };
     let gate = options.gate_start * template.area.sqrt();
-    // Pairs and score of pose `tr`: scan → template with the bone's own target points
-    // ([`OwnPoints`]), else template → target (the sample to its nearest pool vertex,
-    // features).
-    let score_kind = score;
-    let pairs_of = |tr: &IsometryMatrix3<f64>,
-                    hints: &mut [u32]|
-     -> Result<(Vec<FitPair>, f64), CorrespondError> {
-        if let TwistScore::OwnPoints { own, .. } = score_kind {
-            return Ok(own.pairs(al, tr, gate, hints));
-        }
-        let f: Vec<[f64; 6]> = (0..n)
-            .map(|i| {
-                if !on_bone[i] {
-                    return [0.0; 6];
-                }
-                al.feature(
-                    &(tr * al.template_positions[i]),
-                    &(tr.rotation * al.template_normals[i]),
-                )
-            })
-            .collect();
-        let near = al
-            .trees
-            .nearest(al.pools, &f, Some(&subset), None, f64::INFINITY)?;
-        let mut pairs = Vec::new();
-        let mut total = 0.0;
-        for v in (0..n).filter(|&v| on_bone[v]) {
-            let x = tr * al.template_positions[v];
-            let y = al.target_positions[near[v].0 as usize];
-            // Scored in the search's own metric (position and normal).
-            total += near[v].1.min(gate * gate);
-            if (x - y).norm() <= gate {
-                pairs.push((al.template_positions[v], y, 1.0));
-            }
-        }
-        Ok((pairs, total / count as f64))
-    };
     let fit =
         |start: IsometryMatrix3<f64>| -> Result<(IsometryMatrix3<f64>, f64), CorrespondError> {
             let mut tr = start;
             let mut score = f64::INFINITY;
-            let mut hints = match score_kind {
-                TwistScore::OwnPoints { own, .. } => vec![u32::MAX; own.target.len()],
-                TwistScore::TemplateToTarget => Vec::new(),
+            let mut hints = match &pairing {
+                Pairing::Own(own) => vec![u32::MAX; own.target.len()],
+                Pairing::Sample(_) => Vec::new(),
             };
             for step in 0..=TWIST_ICP_STEPS {
-                let (mut pairs, s) = pairs_of(&tr, &mut hints)?;
+                let (mut pairs, s) = match &pairing {
+                    Pairing::Own(own) => own.pairs(al, &tr, gate, &mut hints),
+                    Pairing::Sample(sample) => sample.pairs(al, &tr, gate)?,
+                };
                 score = s;
                 if step == TWIST_ICP_STEPS {
                     break;
@@ -424,6 +363,88 @@ pub(super) fn twist_search(
         TwistScore::OwnPoints { gain, .. } if best.1 > gain * unturned => Ok(initial),
         _ => Ok(best.0),
     }
+}
+
+/// How [`twist_search`] pairs a pose of the bone: what its [`TwistScore`] needs, built once
+/// per search.
+enum Pairing<'o> {
+    /// [`TwistScore::TemplateToTarget`].
+    Sample(Sample),
+    /// [`TwistScore::OwnPoints`].
+    Own(&'o OwnPoints),
+}
+
+/// The template → target pairing of [`TwistScore::TemplateToTarget`]: an even sample of the
+/// template vertices mostly on the bone and the pool members each may pair with.
+struct Sample {
+    /// The sampled template vertices.
+    vertices: Vec<u32>,
+    /// Per pool, its members among `vertices`.
+    subset: Vec<Vec<u32>>,
+}
+
+impl Sample {
+    /// An even sample of at most [`TWIST_POINTS`] of bone `b`'s vertices (enough to score a
+    /// rigid pose); `None` when it has fewer than [`MIN_TWIST_VERTICES`].
+    fn new(al: &Alignment<'_>, b: usize) -> Option<Sample> {
+        let vertices = even_sample(mostly_on_bone(al, b), TWIST_POINTS);
+        if vertices.len() < MIN_TWIST_VERTICES {
+            return None;
+        }
+        let mut sampled = vec![false; al.template_positions.len()];
+        for &v in &vertices {
+            sampled[v as usize] = true;
+        }
+        let subset = al.pools.members_where(|v| sampled[v as usize]);
+        Some(Sample { vertices, subset })
+    }
+
+    /// Every sampled vertex, posed by `pose`, paired with its nearest pool vertex in the
+    /// search's own metric (position and normal) when within `gate`, as (rest position,
+    /// target position, weight 1); and the mean of those squared feature distances, each at
+    /// most `gate²`.
+    fn pairs(
+        &self,
+        al: &Alignment<'_>,
+        pose: &IsometryMatrix3<f64>,
+        gate: f64,
+    ) -> Result<(Vec<FitPair>, f64), CorrespondError> {
+        let mut f = vec![[0.0; 6]; al.template_positions.len()];
+        for &v in &self.vertices {
+            let v = v as usize;
+            f[v] = al.feature(
+                &(pose * al.template_positions[v]),
+                &(pose.rotation * al.template_normals[v]),
+            );
+        }
+        let near = al
+            .trees
+            .nearest(al.pools, &f, Some(&self.subset), None, f64::INFINITY)?;
+        let mut pairs = Vec::new();
+        let mut total = 0.0;
+        for &v in &self.vertices {
+            let v = v as usize;
+            let x = pose * al.template_positions[v];
+            let y = al.target_positions[near[v].0 as usize];
+            total += near[v].1.min(gate * gate);
+            if (x - y).norm() <= gate {
+                pairs.push((al.template_positions[v], y, 1.0));
+            }
+        }
+        Ok((pairs, total / self.vertices.len() as f64))
+    }
+}
+
+/// The template vertices mostly on bone `b` (skinning weight > 0.5), ascending.
+fn mostly_on_bone(al: &Alignment<'_>, b: usize) -> Vec<u32> {
+    (0..al.template_positions.len() as u32)
+        .filter(|&v| {
+            al.weights
+                .row(v as usize)
+                .iter()
+                .any(|&(bb, w)| bb == b && w > 0.5)
+        })
+        .collect()
 }
 
 #[cfg(test)]

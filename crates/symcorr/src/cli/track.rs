@@ -85,6 +85,16 @@ pub struct TrackArgs {
         allow_hyphen_values = true
     )]
     pub head_twist_prior: f64,
+    /// Share of its unturned score a turned head must reach to be kept, when the head's twist
+    /// is searched again in every frame (a subject looking aside, which the joints do not
+    /// show); in (0, 1], 0 turns the search off.
+    #[arg(
+        long,
+        value_name = "G",
+        default_value_t = symcorr_correspond::DEFAULT_HEAD_WARM_TWIST,
+        allow_hyphen_values = true
+    )]
+    pub head_warm_twist: f64,
     /// Worker threads of each half, the observer and the matcher (default: every core;
     /// they share the cores).
     #[arg(long, value_name = "N")]
@@ -187,6 +197,7 @@ fn journal_header(args: &TrackArgs, frames: &[usize], template: &str, vertices: 
         "frames": frames,
         "joint_offset_s": args.joint_offset,
         "head_twist_prior": args.head_twist_prior,
+        "head_warm_twist": args.head_warm_twist,
         "scans": args.scans,
     })
 }
@@ -247,6 +258,12 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             args.head_twist_prior
         )));
     }
+    if !(0.0..=1.0).contains(&args.head_warm_twist) {
+        return Err(CliError(format!(
+            "--head-warm-twist {}: expected a share in (0, 1], or 0 for off",
+            args.head_warm_twist
+        )));
+    }
     if args.out.exists() && !args.out.is_dir() {
         return Err(CliError(format!(
             "{}: --out must be a folder",
@@ -270,6 +287,8 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     };
     options.articulated.head_twist_prior =
         (args.head_twist_prior > 0.0).then_some(args.head_twist_prior);
+    options.articulated.head_warm_twist =
+        (args.head_warm_twist > 0.0).then_some(args.head_warm_twist);
     let pipeline = Pipeline::new(options);
     let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
     let n = template.input_mesh().num_vertices();
