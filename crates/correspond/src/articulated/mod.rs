@@ -263,7 +263,8 @@ pub enum ArticulatedStart<'a> {
     Skeletons,
     /// From a nearby earlier fit onto the same template — the previous frame of a recording:
     /// its bone transforms, each moved by how its bone moved between that fit's target
-    /// skeleton and this one's (`bone_transforms(joints, target joints)[b] ∘ transforms[b]`).
+    /// skeleton and this one's (the smallest rotation of each limb bone, without
+    /// [`bone_transforms`]' hinge twist, composed with `transforms[b]`).
     /// What the joints cannot say (a bone's roll, the head's twist) carries over from the
     /// earlier fit instead of being searched again; [`ArticulatedOptions::warm_iterations`]
     /// ICP rounds from [`ArticulatedOptions::warm_gate_start`] follow.
@@ -1087,7 +1088,7 @@ fn initial_transforms(
             t
         }
         ArticulatedStart::Warm { transforms, joints } => {
-            let motion = bone_transforms(joints, al.target.joints);
+            let motion = transforms::bone_motion(joints, al.target.joints);
             let mut t = *transforms;
             for (b, tr) in t.iter_mut().enumerate() {
                 *tr = motion[b] * *tr;
