@@ -509,24 +509,27 @@ mod tests {
         out
     }
 
+    /// The two limbs the hinge tests bend: root, hinge, end and tip joints.
+    const LIMBS: [[Joint; 4]; 2] = [
+        [
+            Joint::ShoulderLeft,
+            Joint::ElbowLeft,
+            Joint::WristLeft,
+            Joint::HandLeft,
+        ],
+        [
+            Joint::HipRight,
+            Joint::KneeRight,
+            Joint::AnkleRight,
+            Joint::FootRight,
+        ],
+    ];
+
     /// A T-pose with its left arm and right leg straightened, then the left elbow and right
     /// knee bent by `bend` radians (forearm about z, shin about x).
     fn bent_limbs(bend: f64) -> Skeleton {
         let mut s = symcorr_attach::testbody::t_pose(1.0);
-        for [root, hinge, end, tip] in [
-            [
-                Joint::ShoulderLeft,
-                Joint::ElbowLeft,
-                Joint::WristLeft,
-                Joint::HandLeft,
-            ],
-            [
-                Joint::HipRight,
-                Joint::KneeRight,
-                Joint::AnkleRight,
-                Joint::FootRight,
-            ],
-        ] {
+        for [root, hinge, end, tip] in LIMBS {
             let dir = (s.position(hinge) - s.position(root)).normalize();
             for (from, j) in [(hinge, end), (end, tip)] {
                 let l = (s.position(j) - s.position(from)).norm();
@@ -556,7 +559,8 @@ mod tests {
     /// A bent elbow and a bent knee turned about the upper arm and the thigh: the joints show
     /// the turn (the hinge's plane turns with it), and every bone of the two limbs carries
     /// the template's joints onto the target's and turns by exactly that angle. Without the
-    /// hinge the upper arm and thigh, whose direction does not change, would not turn at all.
+    /// hinge ([`bone_motion`]) the upper arm and thigh, whose direction does not change, do
+    /// not turn at all.
     #[test]
     fn bone_transforms_turn_a_bent_limb_with_its_hinge() {
         let s = bent_limbs(1.0);
@@ -566,20 +570,8 @@ mod tests {
         let t = turned(&s, &arm, Joint::ShoulderLeft, Joint::ElbowLeft, angle);
         let t = turned(&t, &leg, Joint::HipRight, Joint::KneeRight, angle);
         let tr = bone_transforms(&s, &t);
-        for (root, hinge, end, lower) in [
-            (
-                Joint::ShoulderLeft,
-                Joint::ElbowLeft,
-                Joint::WristLeft,
-                Joint::HandLeft,
-            ),
-            (
-                Joint::HipRight,
-                Joint::KneeRight,
-                Joint::AnkleRight,
-                Joint::FootRight,
-            ),
-        ] {
+        let motion = bone_motion(&s, &t);
+        for [root, hinge, end, lower] in LIMBS {
             let axis = (s.position(hinge) - s.position(root)).normalize();
             let want = Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(axis), angle);
             for (p, c) in [(root, hinge), (hinge, end), (end, lower)] {
@@ -592,6 +584,17 @@ mod tests {
                     assert!((tr[b] * s.position(j) - t.position(j)).norm() < 1e-9);
                 }
             }
+            // Between two frames the limb keeps its fitted twist: the upper segment, whose
+            // direction did not change, does not move.
+            let upper = BONES
+                .iter()
+                .position(|x| x.parent == root && x.child == hinge)
+                .unwrap();
+            approx::assert_relative_eq!(
+                motion[upper].rotation.matrix(),
+                &Matrix3::identity(),
+                epsilon = 1e-12
+            );
         }
     }
 
