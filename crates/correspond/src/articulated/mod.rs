@@ -15,7 +15,9 @@
 //! 2. **Pose the template** onto the target's skeleton by linear blend skinning with the
 //!    template's bone-heat weights ([`bone_transforms`]: the pelvis and the chest get full frames
 //!    from the hips and shoulders, every other bone the smallest rotation taking its direction
-//!    onto the target's, composed down the kinematic chain; [`skin`]; module `transforms`).
+//!    onto the target's, composed down the kinematic chain, the upper arm and the thigh then
+//!    turned so that a bent elbow's or knee's plane falls on the target's; [`skin`]; module
+//!    `transforms`).
 //! 3. **Head twist search.** The joints fix a bone's direction, not its roll, and a roughly
 //!    round head can sit in a wrong roll that ICP does not leave: the head bone is started at
 //!    each of [`TWISTS`] about the target's neck → head axis, refined by a few rigid ICP steps on
