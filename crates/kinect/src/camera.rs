@@ -233,25 +233,74 @@ impl Intrinsics {
         )
     }
 
-    /// Reads a `symcorr.intrinsics/1` JSON file and checks it ([`Intrinsics::validate`]).
+    /// Reads a `symcorr.intrinsics/1` JSON file and checks it ([`Intrinsics::validate`]): the
+    /// file is read (at most symcorr-mesh's `DEFAULT_MAX_INPUT_BYTES`) and its text parsed by
+    /// [`Intrinsics::from_json_str`].
     ///
-    /// Errors: [`KinectError::Io`]; [`KinectError::Json`] naming the file, for malformed JSON, a
-    /// wrong `format` or implausible values.
+    /// Errors: [`KinectError::Io`]; [`KinectError::Json`] naming the file, for text that is not
+    /// UTF-8, malformed JSON, a wrong `format` or implausible values.
     pub fn read(path: impl AsRef<Path>) -> Result<Intrinsics, KinectError> {
         let file = path.as_ref().display().to_string();
-        let text = std::fs::read_to_string(path.as_ref()).map_err(|e| KinectError::io(&file, e))?;
-        let json_err = |message: String| KinectError::Json {
+        let bytes = crate::error::read_input(path.as_ref())?;
+        let text = String::from_utf8(bytes).map_err(|e| KinectError::Json {
             file: file.clone(),
+            message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        })?;
+        Intrinsics::from_json_str(&text, &file)
+    }
+
+    /// Parses the text of a `symcorr.intrinsics/1` JSON file and checks it
+    /// ([`Intrinsics::validate`]); `file` names it in errors. Every field is required and no
+    /// other is allowed.
+    ///
+    /// Errors: [`KinectError::Json`] naming `file`, for malformed JSON, a missing or unknown
+    /// field, a wrong `format` or implausible values (the message is [`Intrinsics::validate`]'s).
+    ///
+    /// ```
+    /// use symcorr_kinect::{Intrinsics, KinectError};
+    /// let text = r#"{"format":"symcorr.intrinsics/1","width":320,"height":240,
+    ///   "fx":285.63,"fy":285.63,"cx":160.0,"cy":120.0}"#;
+    /// let k = Intrinsics::from_json_str(text, "<memory>").unwrap();
+    /// assert_eq!((k.width, k.fx), (320, 285.63));
+    /// assert_eq!(Intrinsics::from_json_str(&k.to_json(), "<memory>").unwrap(), k);
+    /// let e = Intrinsics::from_json_str(&text.replace("285.63,\"fy", "0.5,\"fy"), "k.json");
+    /// assert!(matches!(e, Err(KinectError::Json { .. })));
+    /// assert_eq!(
+    ///     e.unwrap_err().to_string(),
+    ///     "k.json: invalid intrinsics: fx = 0.5: expected a focal length in 1..=100000 px"
+    /// );
+    /// ```
+    pub fn from_json_str(text: &str, file: &str) -> Result<Intrinsics, KinectError> {
+        let json_err = |message: String| KinectError::Json {
+            file: file.to_string(),
             message,
         };
         let raw: IntrinsicsJson =
-            serde_json::from_str(&text).map_err(|e| json_err(e.to_string()))?;
+            serde_json::from_str(text).map_err(|e| json_err(e.to_string()))?;
         Intrinsics::try_from(raw).map_err(json_err)
     }
 
-    /// Writes a `symcorr.intrinsics/1` JSON file atomically.
+    /// The `symcorr.intrinsics/1` JSON text of these intrinsics (one line, no newline), as
+    /// [`Intrinsics::write`] writes it; [`Intrinsics::from_json_str`] reads it back equal when
+    /// the intrinsics validate (non-finite values are written as `null`).
+    ///
+    /// ```
+    /// use symcorr_kinect::Intrinsics;
+    /// let k = Intrinsics { width: 4, height: 3, fx: 5.0, fy: 5.0, cx: 1.5, cy: 1.0 };
+    /// assert_eq!(
+    ///     k.to_json(),
+    ///     concat!(
+    ///         r#"{"format":"symcorr.intrinsics/1","width":4,"height":3,"#,
+    ///         r#""fx":5.0,"fy":5.0,"cx":1.5,"cy":1.0}"#
+    ///     )
+    /// );
+    /// ```
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(&IntrinsicsJson::from(*self)).unwrap_or_default()
+    }
+
+    /// Writes a `symcorr.intrinsics/1` JSON file ([`Intrinsics::to_json`]) atomically.
     pub fn write(&self, path: impl AsRef<Path>) -> Result<(), KinectError> {
-        let text = serde_json::to_string(self).unwrap_or_default();
-        crate::atomic_write(path.as_ref(), text.as_bytes())
+        crate::atomic_write(path.as_ref(), self.to_json().as_bytes())
     }
 }

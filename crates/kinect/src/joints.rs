@@ -150,7 +150,7 @@ pub const QUOTE_CHARS: usize = 40;
 
 /// The start of `line`, control characters escaped (`\t`, `\u{1d}`), at most [`QUOTE_CHARS`]
 /// characters in all, then `…` if cut.
-fn quote(line: &str) -> String {
+pub(crate) fn quote(line: &str) -> String {
     let mut out = String::new();
     let mut len = 0;
     for c in line.chars() {

@@ -83,8 +83,8 @@ pub use joints::{
 };
 pub use mapping::SkeletonKind;
 pub use recording::{
-    arms_swapped, legs_swapped, limb_swap_evidence, swap_evidence, JointTrack, LimbPair,
-    OneEuroFilter, Recording, SkeletonFilter, SkipReason, TimedSkeleton,
+    arms_swapped, legs_swapped, limb_swap_evidence, parse_depth_times, swap_evidence, JointTrack,
+    LimbPair, OneEuroFilter, Recording, SkeletonFilter, SkipReason, TimedSkeleton,
 };
 pub use replay::{BoneLengthReport, FrameSelect};
 pub use scan::{fuse_depth_frames, scan_mesh, ComponentFilter, ScanMesh, ScanOptions};

@@ -17,8 +17,9 @@
 //! six of them is refused: it is a mis-numbered frame). [`Recording::open`] checks the layout
 //! up front (intrinsics, contiguous frame files, one finite and strictly increasing time per
 //! frame) without decoding any PNG; [`Recording::frame`] decodes one frame on demand and checks
-//! its size against the intrinsics. A recording holds its intrinsics and one `f64` per frame
-//! (its time), never the depth images.
+//! its size against the intrinsics. The two text files are parsed in memory by
+//! [`Intrinsics::from_json_str`] and [`parse_depth_times`]. A recording holds its intrinsics
+//! and one `f64` per frame (its time), never the depth images.
 //!
 //! ```
 //! use symcorr_kinect::{write_depth_png16, DepthFrame, Intrinsics, Recording};
@@ -229,7 +230,8 @@ fn count_frames(depth_dir: &Path) -> Result<usize, KinectError> {
     Ok(numbers.len())
 }
 
-/// The times of `depth_times.txt`: `frames` lines, each a finite time, strictly increasing.
+/// The times of `depth_times.txt` ([`parse_depth_times`] on the file's text, which must be
+/// UTF-8).
 fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
     let file = path.display().to_string();
     let bytes = crate::error::read_input(path)?;
@@ -237,21 +239,56 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
         file: file.clone(),
         message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
     })?;
+    parse_depth_times(&text, frames, &file)
+}
+
+/// Parses the text of a recording folder's `depth_times.txt` ([`DEPTH_TIMES_FILE`]) for a
+/// recording of `frames` depth frames; `file` names it in errors. Line `i + 1` is the time of
+/// depth frame `i` in seconds: a number (surrounding whitespace and a `\r\n` line end are
+/// allowed), finite and greater than the line before. There must be exactly `frames` lines (a
+/// final newline is optional; an empty line is an error, also at the end).
+///
+/// Errors: [`KinectError::Parse`] naming `file` and the line (1-based): an empty line, not a
+/// number, not finite, not after the previous time; then [`KinectError::Recording`] naming
+/// `file` when the number of times is not `frames`.
+///
+/// ```
+/// use symcorr_kinect::{parse_depth_times, KinectError};
+/// let times = parse_depth_times("0.0\n0.0333\r\n 0.0667 \n", 3, "<memory>").unwrap();
+/// assert_eq!(times, vec![0.0, 0.0333, 0.0667]);
+/// let e = parse_depth_times("0.0\n0.0\n", 2, "depth_times.txt").unwrap_err();
+/// assert!(matches!(e, KinectError::Parse { line: 2, .. }));
+/// assert_eq!(
+///     e.to_string(),
+///     "depth_times.txt:2: time 0 s is not after the previous frame's 0 s \
+///      (times must increase strictly)"
+/// );
+/// let e = parse_depth_times("0.0\n", 2, "depth_times.txt").unwrap_err();
+/// assert_eq!(e.to_string(), "depth_times.txt: 1 times for 2 depth frames (one line per frame)");
+/// ```
+pub fn parse_depth_times(text: &str, frames: usize, file: &str) -> Result<Vec<f64>, KinectError> {
     let parse_err = |line: usize, message: String| KinectError::Parse {
-        file: file.clone(),
+        file: file.to_string(),
         line,
         message,
     };
-    let mut times: Vec<f64> = Vec::with_capacity(frames.min(1 << 20));
+    // Every time but the last takes at least two bytes ("0\n"): no more room than the text has.
+    let mut times: Vec<f64> = Vec::with_capacity(frames.min(text.len() / 2 + 1));
     for (i, line) in text.lines().enumerate() {
         let field = line.trim();
         let what = format!("the time of depth frame {i} in seconds");
         if field.is_empty() {
             return Err(parse_err(i + 1, format!("empty line; expected {what}")));
         }
-        let t: f64 = field
-            .parse()
-            .map_err(|_| parse_err(i + 1, format!("`{field}` is not a number; expected {what}")))?;
+        let t: f64 = field.parse().map_err(|_| {
+            parse_err(
+                i + 1,
+                format!(
+                    "`{}` is not a number; expected {what}",
+                    crate::joints::quote(field)
+                ),
+            )
+        })?;
         if !t.is_finite() {
             return Err(parse_err(i + 1, format!("time {t} is not finite")));
         }
@@ -270,7 +307,7 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
     }
     if times.len() != frames {
         return Err(KinectError::Recording {
-            file,
+            file: file.to_string(),
             message: format!(
                 "{} times for {frames} depth frames (one line per frame)",
                 times.len()
