@@ -278,6 +278,24 @@ fn lines_of(times: &[f64]) -> Vec<String> {
 }
 
 /// The error must be `Parse` naming `file` and `line`, with `what` in its message.
+/// The times file of `times` with the line `at` picks replaced by `word`, parsed, and that
+/// line's number (1-based).
+fn with_line_replaced(
+    times: &[f64],
+    at: prop::sample::Index,
+    word: &str,
+    layout: Layout,
+) -> (Result<Vec<f64>, KinectError>, usize) {
+    let k = at.index(times.len());
+    let mut lines = lines_of(times);
+    lines[k] = word.to_string();
+    let text = times_file(&lines, layout);
+    (
+        parse_depth_times(&text, lines.len(), "depth_times.txt"),
+        k + 1,
+    )
+}
+
 fn assert_parse_error(
     result: Result<Vec<f64>, KinectError>,
     line: usize,
@@ -362,12 +380,8 @@ proptest! {
         ),
         layout in layout(),
     ) {
-        let k = at.index(times.len());
-        let mut lines = lines_of(&times);
-        lines[k] = word.to_string();
-        let text = times_file(&lines, layout);
-        let result = parse_depth_times(&text, lines.len(), "depth_times.txt");
-        assert_parse_error(result, k + 1, "is not finite")?;
+        let (result, line) = with_line_replaced(&times, at, word, layout);
+        assert_parse_error(result, line, "is not finite")?;
     }
 
     #[test]
@@ -397,12 +411,8 @@ proptest! {
         word in prop::sample::select(&["abc", "1,5", "0x10", "1 2", "--1", "1e", ".", "0.1s"][..]),
         layout in layout(),
     ) {
-        let k = at.index(times.len());
-        let mut lines = lines_of(&times);
-        lines[k] = word.to_string();
-        let text = times_file(&lines, layout);
-        let result = parse_depth_times(&text, lines.len(), "depth_times.txt");
-        assert_parse_error(result, k + 1, &format!("`{word}` is not a number"))?;
+        let (result, line) = with_line_replaced(&times, at, word, layout);
+        assert_parse_error(result, line, &format!("`{word}` is not a number"))?;
     }
 
     #[test]
