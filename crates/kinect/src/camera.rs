@@ -251,7 +251,7 @@ impl Intrinsics {
 
     /// Parses the text of a `symcorr.intrinsics/1` JSON file and checks it
     /// ([`Intrinsics::validate`]); `file` names it in errors. Every field is required and no
-    /// other is allowed.
+    /// other is allowed; a leading byte-order mark is skipped.
     ///
     /// Errors: [`KinectError::Json`] naming `file`, for malformed JSON, a missing or unknown
     /// field, a wrong `format` or implausible values (the message is [`Intrinsics::validate`]'s).
@@ -275,6 +275,8 @@ impl Intrinsics {
             file: file.to_string(),
             message,
         };
+        // A byte-order mark, as Windows tools write UTF-8, is no part of the JSON.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let raw: IntrinsicsJson =
             serde_json::from_str(text).map_err(|e| json_err(e.to_string()))?;
         Intrinsics::try_from(raw).map_err(json_err)

@@ -246,7 +246,8 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
 /// recording of `frames` depth frames; `file` names it in errors. Line `i + 1` is the time of
 /// depth frame `i` in seconds: a number (surrounding whitespace and a `\r\n` line end are
 /// allowed), finite and greater than the line before. There must be exactly `frames` lines (a
-/// final newline is optional; an empty line is an error, also at the end).
+/// final newline is optional; an empty line is an error, also at the end); a leading
+/// byte-order mark is skipped.
 ///
 /// Errors: [`KinectError::Parse`] naming `file` and the line (1-based): an empty line, not a
 /// number, not finite, not after the previous time; then [`KinectError::Recording`] naming
@@ -272,6 +273,8 @@ pub fn parse_depth_times(text: &str, frames: usize, file: &str) -> Result<Vec<f6
         line,
         message,
     };
+    // A byte-order mark, as Windows tools write UTF-8, is no part of the first line.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     // Every time but the last takes at least two bytes ("0\n"): no more room than the text has.
     let mut times: Vec<f64> = Vec::with_capacity(frames.min(text.len() / 2 + 1));
     for (i, line) in text.lines().enumerate() {

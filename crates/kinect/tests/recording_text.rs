@@ -501,3 +501,16 @@ fn a_long_line_that_is_not_a_number_is_quoted_briefly() {
     );
     assert!(message.contains('…'), "{message}");
 }
+
+/// A byte-order mark before either file, as Windows tools write UTF-8, is skipped: the same
+/// intrinsics and times as without it.
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let k = Intrinsics::kinect_v1();
+    let with_bom = format!("\u{feff}{}", k.to_json());
+    assert_eq!(Intrinsics::from_json_str(&with_bom, "k.json").unwrap(), k);
+    let times = parse_depth_times("\u{feff}0.5\n0.6\n", 2, "depth_times.txt").unwrap();
+    assert_eq!(times, vec![0.5, 0.6]);
+    // Only one mark, and only at the start.
+    assert!(parse_depth_times("0.5\n\u{feff}0.6\n", 2, "depth_times.txt").is_err());
+}
