@@ -240,11 +240,8 @@ impl Intrinsics {
     /// Errors: [`KinectError::Io`]; [`KinectError::Json`] naming the file, for text that is not
     /// UTF-8, malformed JSON, a wrong `format` or implausible values.
     pub fn read(path: impl AsRef<Path>) -> Result<Intrinsics, KinectError> {
-        let file = path.as_ref().display().to_string();
-        let bytes = crate::error::read_input(path.as_ref())?;
-        let text = String::from_utf8(bytes).map_err(|e| KinectError::Json {
-            file: file.clone(),
-            message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        let (text, file) = crate::error::read_input_text(path.as_ref(), |file, message| {
+            KinectError::Json { file, message }
         })?;
         Intrinsics::from_json_str(&text, &file)
     }

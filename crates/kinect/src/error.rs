@@ -176,3 +176,21 @@ pub(crate) fn read_input(path: &std::path::Path) -> Result<Vec<u8>, KinectError>
         other => Ok(other?),
     }
 }
+
+/// A whole input file ([`read_input`]) as UTF-8 text, and the file's name for messages. Bytes
+/// that are not UTF-8 give the error `not_utf8` builds from the file's name and a message
+/// naming the first bad byte (each reader says which kind of error that is for its format).
+pub(crate) fn read_input_text(
+    path: &std::path::Path,
+    not_utf8: impl FnOnce(String, String) -> KinectError,
+) -> Result<(String, String), KinectError> {
+    let file = path.display().to_string();
+    let bytes = read_input(path)?;
+    match String::from_utf8(bytes) {
+        Ok(text) => Ok((text, file)),
+        Err(e) => {
+            let message = format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to());
+            Err(not_utf8(file, message))
+        }
+    }
+}

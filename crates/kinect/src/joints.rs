@@ -233,13 +233,10 @@ pub fn parse_joints_as(
 }
 
 fn read_text(path: &Path) -> Result<(String, String), KinectError> {
-    let file = path.display().to_string();
-    let bytes = crate::error::read_input(path)?;
-    let text = String::from_utf8(bytes).map_err(|e| KinectError::UnknownFormat {
-        file: file.clone(),
-        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
-    })?;
-    Ok((text, file))
+    crate::error::read_input_text(path, |file, message| KinectError::UnknownFormat {
+        file,
+        message,
+    })
 }
 
 /// The `symcorr.joints/1` file as written (`F` = [`FrameFile`]) and as read (`F` = a frame not

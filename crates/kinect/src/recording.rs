@@ -233,11 +233,8 @@ fn count_frames(depth_dir: &Path) -> Result<usize, KinectError> {
 /// The times of `depth_times.txt` ([`parse_depth_times`] on the file's text, which must be
 /// UTF-8).
 fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
-    let file = path.display().to_string();
-    let bytes = crate::error::read_input(path)?;
-    let text = String::from_utf8(bytes).map_err(|e| KinectError::Recording {
-        file: file.clone(),
-        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+    let (text, file) = crate::error::read_input_text(path, |file, message| {
+        KinectError::Recording { file, message }
     })?;
     parse_depth_times(&text, frames, &file)
 }
