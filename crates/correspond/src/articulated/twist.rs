@@ -453,12 +453,6 @@ mod tests {
     use super::*;
     use symcorr_skeleton::{Bone, Joint};
 
-    /// The head bone's index in [`BONES`].
-    fn head() -> usize {
-        let h = Bone::new(Joint::ShoulderCenter, Joint::Head);
-        BONES.iter().position(|&b| b == h).unwrap()
-    }
-
     /// The prior's pairs alone fit the head to its rest pose against the chest: a whole body
     /// turned by 70° about the vertical with the head left facing the camera (the lag the
     /// prior is for) gets its head turned by the same 70°.
@@ -467,7 +461,7 @@ mod tests {
         let rest = symcorr_attach::testbody::t_pose(1.0);
         let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), 70f64.to_radians());
         let turned = rest.map_positions(|x| turn * x);
-        let h = head();
+        let h = super::super::head_bone();
         let prior = TwistPrior::new(&rest, h, 1.0).unwrap();
         let mut transforms = bone_transforms(&rest, &turned);
         let chest = transforms[prior.parent].rotation;
@@ -491,7 +485,7 @@ mod tests {
     #[test]
     fn the_prior_holds_the_twist_not_the_tilt() {
         let rest = symcorr_attach::testbody::t_pose(1.0);
-        let h = head();
+        let h = super::super::head_bone();
         let prior = TwistPrior::new(&rest, h, 1.0).unwrap();
         let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians());
         let axis = nalgebra::Unit::new_normalize(prior.template_axis);
