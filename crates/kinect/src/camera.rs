@@ -299,7 +299,24 @@ impl Intrinsics {
     }
 
     /// Writes a `symcorr.intrinsics/1` JSON file ([`Intrinsics::to_json`]) atomically.
+    ///
+    /// Errors: [`KinectError::Intrinsics`] when the intrinsics do not validate
+    /// ([`Intrinsics::validate`]; nothing is written: [`Intrinsics::read`] would refuse the
+    /// file), else an I/O error.
+    ///
+    /// ```
+    /// use symcorr_kinect::{Intrinsics, KinectError};
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let path = dir.path().join("intrinsics.json");
+    /// let bad = Intrinsics { width: 4, height: 3, fx: f64::NAN, fy: 5.0, cx: 1.5, cy: 1.0 };
+    /// assert!(matches!(bad.write(&path), Err(KinectError::Intrinsics(_))));
+    /// assert!(!path.exists());
+    /// let k = Intrinsics { fx: 5.0, ..bad };
+    /// k.write(&path).unwrap();
+    /// assert_eq!(Intrinsics::read(&path).unwrap(), k);
+    /// ```
     pub fn write(&self, path: impl AsRef<Path>) -> Result<(), KinectError> {
+        self.validate()?;
         crate::atomic_write(path.as_ref(), self.to_json().as_bytes())
     }
 }

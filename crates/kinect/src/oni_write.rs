@@ -537,7 +537,7 @@ pub fn timestamp_us(time_s: f64) -> Option<u64> {
 /// timestamp, the folder's intrinsics as the field of view. Returns the file's size in bytes.
 ///
 /// A recording folder written by `symcorr-synth recording` keeps its times in whole µs, so
-/// [`crate::oni::OniRecording`] reads back the very same times.
+/// `OniRecording` (feature `openni2`) reads back the very same times.
 ///
 /// Errors: as [`write_oni`]; [`OniWriteError::NoFrames`] for an empty range or one past the
 /// last frame, [`OniWriteError::BadTime`] for a negative time.

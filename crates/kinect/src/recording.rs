@@ -242,8 +242,9 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
 /// Parses the text of a recording folder's `depth_times.txt` ([`DEPTH_TIMES_FILE`]) for a
 /// recording of `frames` depth frames; `file` names it in errors. Line `i + 1` is the time of
 /// depth frame `i` in seconds: a number (surrounding whitespace and a `\r\n` line end are
-/// allowed), finite and greater than the line before. There must be exactly `frames` lines (a
-/// final newline is optional; an empty line is an error, also at the end); a leading
+/// allowed), finite and greater than the line before. There must be exactly `frames` such
+/// lines: a final newline is optional and blank lines after the last time are ignored, but a
+/// blank line before a time is an error (it would shift every later frame); a leading
 /// byte-order mark is skipped.
 ///
 /// Errors: [`KinectError::Parse`] naming `file` and the line (1-based): an empty line, not a
@@ -261,8 +262,8 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
 ///     "depth_times.txt:2: time 0 s is not after the previous frame's 0 s \
 ///      (times must increase strictly)"
 /// );
-/// let e = parse_depth_times("0.0\n", 2, "depth_times.txt").unwrap_err();
-/// assert_eq!(e.to_string(), "depth_times.txt: 1 times for 2 depth frames (one line per frame)");
+/// let e = parse_depth_times("0.0\n\n", 2, "depth_times.txt").unwrap_err();
+/// assert_eq!(e.to_string(), "depth_times.txt: 1 time for 2 depth frames (one line per frame)");
 /// ```
 pub fn parse_depth_times(text: &str, frames: usize, file: &str) -> Result<Vec<f64>, KinectError> {
     let parse_err = |line: usize, message: String| KinectError::Parse {
@@ -272,6 +273,9 @@ pub fn parse_depth_times(text: &str, frames: usize, file: &str) -> Result<Vec<f6
     };
     // A byte-order mark, as Windows tools write UTF-8, is no part of the first line.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    // Blank lines after the last time are no frames (scripts often end with one); a blank line
+    // before a time is refused below, since it would shift every later frame's number.
+    let text = text.trim_end();
     // Every time but the last takes at least two bytes ("0\n"): no more room than the text has.
     let mut times: Vec<f64> = Vec::with_capacity(frames.min(text.len() / 2 + 1));
     for (i, line) in text.lines().enumerate() {
@@ -290,7 +294,10 @@ pub fn parse_depth_times(text: &str, frames: usize, file: &str) -> Result<Vec<f6
             )
         })?;
         if !t.is_finite() {
-            return Err(parse_err(i + 1, format!("time {t} is not finite")));
+            return Err(parse_err(
+                i + 1,
+                format!("time `{}` is not finite", crate::joints::quote(field)),
+            ));
         }
         if let Some(&prev) = times.last() {
             if t <= prev {
@@ -309,12 +316,18 @@ pub fn parse_depth_times(text: &str, frames: usize, file: &str) -> Result<Vec<f6
         return Err(KinectError::Recording {
             file: file.to_string(),
             message: format!(
-                "{} times for {frames} depth frames (one line per frame)",
-                times.len()
+                "{} for {} (one line per frame)",
+                count(times.len(), "time", "times"),
+                count(frames, "depth frame", "depth frames")
             ),
         });
     }
     Ok(times)
+}
+
+/// `n` and its noun, singular for one: "1 time", "2 times".
+fn count(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
 }
 
 /// How many log frame periods from a time a log frame may be and still be used

@@ -1,6 +1,6 @@
 //! One way to read a recorded session, whatever it was recorded as ([`DepthSource`]): a
 //! recording folder ([`Recording`]) or, with the `openni2` feature, an OpenNI2 `.oni` file
-//! ([`crate::oni::OniRecording`]). Both give a frame count, each frame's time in seconds, the
+//! (`OniRecording`). Both give a frame count, each frame's time in seconds, the
 //! camera's intrinsics and one depth frame at a time, never all frames at once.
 //!
 //! ```
@@ -39,7 +39,7 @@ impl DepthSource {
     /// Opens `path`: a file whose name ends in `.oni` (any case) as an OpenNI2 recording,
     /// anything else as a recording folder ([`Recording::open`]).
     ///
-    /// Errors: those of [`Recording::open`] or [`crate::oni::OniRecording::open`];
+    /// Errors: those of [`Recording::open`] or `OniRecording::open`;
     /// [`KinectError::OniNotBuilt`] for a `.oni` file in a build without the `openni2` feature.
     pub fn open(path: impl AsRef<Path>) -> Result<DepthSource, KinectError> {
         let path = path.as_ref();
@@ -97,7 +97,7 @@ impl DepthSource {
         }
     }
 
-    /// Depth frame `i` ([`Recording::frame`], [`crate::oni::OniRecording::frame`]).
+    /// Depth frame `i` ([`Recording::frame`], `OniRecording::frame`).
     pub fn frame(&mut self, i: usize) -> Result<DepthFrame, KinectError> {
         match self {
             DepthSource::Folder(r) => r.frame(i),

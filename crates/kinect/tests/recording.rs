@@ -144,8 +144,8 @@ fn times_file_errors_name_the_file_and_line() {
             2,
             "`abc` is not a number; expected the time of depth frame 1 in seconds",
         ),
-        ("0\n0.1\nNaN\n", 3, "time NaN is not finite"),
-        ("0\ninf\n0.2\n", 2, "time inf is not finite"),
+        ("0\n0.1\nNaN\n", 3, "time `NaN` is not finite"),
+        ("0\n1e400\n0.2\n", 2, "time `1e400` is not finite"),
         (
             "0\n0.1\n0.1\n",
             3,
@@ -175,14 +175,17 @@ fn times_file_errors_name_the_file_and_line() {
         assert!(matches!(e, KinectError::Parse { line: l, .. } if l == line));
     }
     // Fewer or more times than frames.
-    for (text, n) in [("0\n0.1\n", 2), ("0\n0.1\n0.2\n0.3\n", 4)] {
+    for (text, n) in [("0\n", 1), ("0\n0.1\n", 2), ("0\n0.1\n0.2\n0.3\n", 4)] {
         let tmp = tempfile::tempdir().unwrap();
         write_recording(tmp.path(), &[0, 1, 2], text);
         let e = open_err(tmp.path());
         let file = tmp.path().join("depth_times.txt").display().to_string();
         assert_eq!(
             e.to_string(),
-            format!("{file}: {n} times for 3 depth frames (one line per frame)")
+            format!(
+                "{file}: {n} time{} for 3 depth frames (one line per frame)",
+                if n == 1 { "" } else { "s" }
+            )
         );
     }
     // Missing times file.

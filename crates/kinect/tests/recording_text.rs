@@ -277,7 +277,6 @@ fn lines_of(times: &[f64]) -> Vec<String> {
     times.iter().map(|t| format!("{t}")).collect()
 }
 
-/// The error must be `Parse` naming `file` and `line`, with `what` in its message.
 /// The times file of `times` with the line `at` picks replaced by `word`, parsed, and that
 /// line's number (1-based).
 fn with_line_replaced(
@@ -296,6 +295,7 @@ fn with_line_replaced(
     )
 }
 
+/// The error must be `Parse` naming `file` and `line`, with `what` in its message.
 fn assert_parse_error(
     result: Result<Vec<f64>, KinectError>,
     line: usize,
@@ -347,11 +347,13 @@ proptest! {
         let text = times_file(&lines_of(&times), layout);
         let e = parse_depth_times(&text, frames, "depth_times.txt").unwrap_err();
         prop_assert!(matches!(e, KinectError::Recording { .. }), "{}", e);
+        let noun = |n: usize, one: &str| format!("{n} {one}{}", if n == 1 { "" } else { "s" });
         prop_assert_eq!(
             e.to_string(),
             format!(
-                "depth_times.txt: {} times for {frames} depth frames (one line per frame)",
-                times.len()
+                "depth_times.txt: {} for {} (one line per frame)",
+                noun(times.len(), "time"),
+                noun(frames, "depth frame")
             )
         );
     }
@@ -391,17 +393,27 @@ proptest! {
         blank in prop::sample::select(&["", " ", "\t", " \t "][..]),
         layout in layout(),
     ) {
+        prop_assume!(!times.is_empty());
         let mut lines = lines_of(&times);
-        let k = at.index(lines.len() + 1);
+        // Before some time: blank lines after the last one are no frames (the next test).
+        let k = at.index(lines.len());
         lines.insert(k, blank.to_string());
-        // A last line that is empty is one only when a line end follows it.
-        let layout = Layout {
-            final_newline: layout.final_newline || k + 1 == lines.len(),
-            ..layout
-        };
         let text = times_file(&lines, layout);
         let result = parse_depth_times(&text, lines.len(), "depth_times.txt");
         assert_parse_error(result, k + 1, "empty line; expected the time of depth frame")?;
+    }
+
+    #[test]
+    fn blank_lines_after_the_last_time_are_ignored(
+        times in increasing_times(),
+        blanks in prop::collection::vec(prop::sample::select(&["", " ", "\t", "\r"][..]), 1..4),
+        layout in layout(),
+    ) {
+        let mut lines = lines_of(&times);
+        lines.extend(blanks.iter().map(|b| b.to_string()));
+        let text = times_file(&lines, layout);
+        let back = parse_depth_times(&text, times.len(), "depth_times.txt").unwrap();
+        prop_assert_eq!(back, times, "{:?}", text);
     }
 
     #[test]
@@ -435,7 +447,8 @@ proptest! {
             }
             Err(KinectError::Recording { file, message }) => {
                 prop_assert_eq!(file, "depth_times.txt");
-                let end = format!("for {frames} depth frames (one line per frame)");
+                let frames = if frames == 1 { "1 depth frame".to_string() } else { format!("{frames} depth frames") };
+                let end = format!("for {frames} (one line per frame)");
                 prop_assert!(message.ends_with(&end), "{}", message);
             }
             Err(e) => prop_assert!(false, "unexpected error kind: {:?}", e),

@@ -66,7 +66,7 @@ pub(crate) fn write_camera_json(
     write_text(&out.join("camera.json"), &(text + "\n"))
 }
 
-/// The `symcorr.synth-camera/1` object of [`write_camera_json`].
+/// The `symcorr.synth-camera/1` object of `write_camera_json` (a scan's `camera.json`).
 pub fn camera_json(camera: &Camera, mesh_ref: &str, realism: &Realism) -> serde_json::Value {
     let t = camera.world_to_camera();
     // The file keeps its layout: rotation as rows, translation as an array.

@@ -465,7 +465,7 @@ fn decimate(r: &Rendering, k: &Intrinsics) -> Rendering {
 
 /// Renders `mesh` (world frame) with `camera`. An image whose width divides 640 (320, 160) is
 /// rendered at the native 640 pixels across and delivered one pixel in every s × s block
-/// ([`native_camera`]): a Kinect's artefacts — silhouette dropout, flying pixels, the
+/// (`native_camera`): a Kinect's artefacts — silhouette dropout, flying pixels, the
 /// projector's shadow, speckle dropout — are one or two *native* pixels wide, and its smaller
 /// streams are the native image scaled down, so they lose a thinner band along a silhouette
 /// than the same terms drawn at the small image's pixel size would
