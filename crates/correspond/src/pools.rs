@@ -240,9 +240,15 @@ impl SegmentPools {
         self.pools.is_empty()
     }
 
-    /// The target vertices template vertex `p` may be matched to.
+    /// The target vertices template vertex `p` may be matched to, in ascending order.
     pub fn pool_of(&self, p: u32) -> &[u32] {
         &self.pools[self.groups[p as usize] as usize]
+    }
+
+    /// May template vertex `p` be matched to target vertex `q` (is `q` in
+    /// [`SegmentPools::pool_of`] `p`)? A binary search: every pool is built in ascending order.
+    pub fn pool_contains(&self, p: u32, q: u32) -> bool {
+        self.pool_of(p).binary_search(&q).is_ok()
     }
 
     /// Number of template vertices.

@@ -92,6 +92,10 @@ struct Args {
     /// keep (default: the method's; 0 turns the search off).
     #[arg(long)]
     head_warm_twist: Option<f64>,
+    /// Weight of the target → template pairs in the ICP rounds against the template → target
+    /// pairs (default: the method's; 0 turns them off).
+    #[arg(long)]
+    target_to_template: Option<f64>,
     /// Per frame, also print the flips and jumps per template segment and how far that
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
@@ -144,6 +148,12 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Some(g) = args.head_warm_twist {
         a.head_warm_twist = (g > 0.0).then_some(g);
+    }
+    if let Some(w) = args.target_to_template {
+        a.target_to_template = (w > 0.0).then_some(symcorr_correspond::TargetPairs {
+            weight: w,
+            ..symcorr_correspond::TargetPairs::default()
+        });
     }
     let pipeline = Pipeline::new(options);
     let template = pipeline.prepare(mesh, &sk)?;

@@ -27,6 +27,9 @@ pub(super) struct Rounds {
     pub gate_start: f64,
     /// When the occlusion test runs.
     pub occlusion: OcclusionTest,
+    /// About how many target vertices pair with the template the other way round
+    /// ([`TargetPairs`](crate::TargetPairs)).
+    pub target_points: usize,
 }
 
 /// When the ICP rounds test which template vertices the target's viewpoint shows.
@@ -46,10 +49,12 @@ pub(super) enum OcclusionTest {
 /// `sample` of the template (per pool group). Each round pairs every sampled posed vertex
 /// with its nearest pool vertex, keeps the pairs that hold at the round's gate (shrinking
 /// geometrically from the rounds' `gate_start` to `gate_end`), the template vertices the
-/// target's viewpoint cannot see excluded, re-fits each bone with enough pairs by weighted
-/// Kabsch plus its two joints as anchors (held within `limit` for its bone), and re-skins.
-/// Visibility is tested as `rounds.occlusion` says. Returns the final posed positions and normals, and the last round's matches (hints for the
-/// searches after it).
+/// target's viewpoint cannot see excluded, adds the target → template pairs of the round
+/// ([`TargetPairs`](crate::TargetPairs), about `rounds.target_points` target vertices each
+/// paired with its nearest shown posed template vertex), re-fits each bone with enough pairs
+/// by weighted Kabsch plus its two joints as anchors (held within `limit` for its bone), and
+/// re-skins. Visibility is tested as `rounds.occlusion` says. Returns the final posed
+/// positions and normals, and the last round's matches (hints for the searches after it).
 pub(super) fn articulated_icp(
     al: &Alignment<'_>,
     transforms: &mut BoneTransforms,
@@ -65,6 +70,13 @@ pub(super) fn articulated_icp(
     let gate_start = rounds.gate_start.max(options.gate_end);
     let mut last: Option<Vec<(u32, f64)>> = None;
     let mut visible = al.visibility(&posed, &posed_normals);
+    let target_pairs = options.target_to_template.filter(|t| t.weight > 0.0);
+    let target_sample = if target_pairs.is_some() {
+        al.target_sample(rounds.target_points)
+    } else {
+        Vec::new()
+    };
+    let mut target_hints = vec![u32::MAX; target_sample.len()];
     for it in 0..iterations {
         if it > 0 && rounds.occlusion == OcclusionTest::EveryRound {
             visible = al.visibility(&posed, &posed_normals);
@@ -104,6 +116,34 @@ pub(super) fn articulated_icp(
                     per_bone[b].push((al.template_positions[v], y, w));
                 }
             }
+        }
+        if let Some(share) = target_pairs.map(|t| t.weight) {
+            // The reciprocal check's tree is this pose's shown template; without the check,
+            // one of its own.
+            let own;
+            let shown = match &reverse {
+                Some(r) => &r.tree,
+                None => {
+                    own = al.shown_tree(&posed, &posed_normals, visible.as_deref());
+                    &own
+                }
+            };
+            let back = al.target_pairs(
+                shown,
+                &posed,
+                &posed_normals,
+                visible.as_deref(),
+                &target_sample,
+                &mut target_hints,
+                gate,
+            );
+            add_target_pairs(
+                &mut per_bone,
+                &back,
+                |v| al.weights.row(v),
+                (&al.template_positions, &al.target_positions),
+                share,
+            );
         }
         // The prior's pairs from this round's pose, before the bones move.
         let prior_pairs = prior.map(|pr| {
@@ -145,4 +185,80 @@ pub(super) fn articulated_icp(
     }
     let last = last.unwrap_or_else(|| vec![(0, f64::INFINITY); posed.len()]);
     Ok((posed, posed_normals, last))
+}
+
+/// Adds the target → template pairs `back` (`(target vertex, template vertex)`,
+/// [`ArticulatedOptions::target_to_template`](crate::ArticulatedOptions)) to the bones' pairs
+/// `per_bone` as the template → target pairs are: per bone carrying the template vertex with a
+/// skinning weight above [`MIN_PAIR_WEIGHT`] (`row`: a vertex's `(bone, weight)` entries), the
+/// vertex's rest position, the target position and the weight — all scaled so that their total
+/// weight is `share` times the total already in `per_bone`. `points`: the template's rest
+/// positions and the target's positions.
+fn add_target_pairs<'w>(
+    per_bone: &mut [Vec<FitPair>],
+    back: &[(u32, u32)],
+    row: impl Fn(usize) -> &'w [(usize, f64)],
+    points: (&[Point3<f64>], &[Point3<f64>]),
+    share: f64,
+) {
+    let (rest, target) = points;
+    let forward: f64 = per_bone.iter().flatten().map(|p| p.2).sum();
+    let mut added: Vec<Vec<FitPair>> = vec![Vec::new(); per_bone.len()];
+    for &(q, v) in back {
+        for &(b, w) in row(v as usize) {
+            if w > MIN_PAIR_WEIGHT {
+                added[b].push((rest[v as usize], target[q as usize], w));
+            }
+        }
+    }
+    let total: f64 = added.iter().flatten().map(|p| p.2).sum();
+    // Zero-weight pairs would still count towards a bone's MIN_BONE_PAIRS.
+    if total <= 0.0 || forward <= 0.0 {
+        return;
+    }
+    let scale = share * forward / total;
+    for (pairs, extra) in per_bone.iter_mut().zip(added) {
+        pairs.extend(extra.into_iter().map(|(x, y, w)| (x, y, w * scale)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn target_pairs_join_their_bones_scaled_to_the_share() {
+        let p = |x: f64| Point3::new(x, 0.0, 0.0);
+        let rest = [p(0.0), p(1.0), p(2.0)];
+        let target = [p(10.0), p(11.0)];
+        // Vertex 0 on bone 0; vertex 1 split 0.5/0.5 over bones 0 and 1; vertex 2 on bone 1
+        // with a weight too small to pair (0.05) and on bone 2.
+        let rows: [&[(usize, f64)]; 3] =
+            [&[(0, 1.0)], &[(0, 0.5), (1, 0.5)], &[(1, 0.05), (2, 0.95)]];
+        let mut per_bone: Vec<Vec<FitPair>> = vec![vec![(p(0.0), p(5.0), 3.0)], vec![], vec![]];
+        // Target 0 pairs with vertex 1, target 1 with vertex 2.
+        add_target_pairs(
+            &mut per_bone,
+            &[(0, 1), (1, 2)],
+            |v| rows[v],
+            (&rest, &target),
+            2.0,
+        );
+        // Added weight before scaling: 0.5 + 0.5 + 0.95 = 1.95; scaled to 2 × 3 = 6.
+        let s = 6.0 / 1.95;
+        assert_eq!(per_bone[0].len(), 2);
+        assert_eq!(per_bone[0][1].0, rest[1]);
+        assert_eq!(per_bone[0][1].1, target[0]);
+        assert_relative_eq!(per_bone[0][1].2, 0.5 * s, epsilon = 1e-12);
+        assert_eq!(per_bone[1].len(), 1); // vertex 2's 0.05 on bone 1 does not pair
+        assert_relative_eq!(per_bone[1][0].2, 0.5 * s, epsilon = 1e-12);
+        assert_eq!((per_bone[2][0].0, per_bone[2][0].1), (rest[2], target[1]));
+        let added: f64 = per_bone.iter().flatten().skip(1).map(|x| x.2).sum();
+        assert_relative_eq!(added, 6.0, epsilon = 1e-12);
+        // Without template → target pairs there is nothing to scale against: nothing is added.
+        let mut empty: Vec<Vec<FitPair>> = vec![vec![]; 3];
+        add_target_pairs(&mut empty, &[(0, 1)], |v| rows[v], (&rest, &target), 1.0);
+        assert!(empty.iter().all(Vec::is_empty));
+    }
 }
