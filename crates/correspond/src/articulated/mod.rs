@@ -32,12 +32,13 @@
 //!    front view) and its target point is not on the target's border beyond
 //!    [`ArticulatedOptions::boundary_gate`]. With a target viewpoint, a posed vertex hidden
 //!    behind the posed template (module `visibility`) or facing away from the viewpoint
-//!    ([`ArticulatedOptions::min_facing_cosine`]) takes no pair. The other way round, an even
-//!    sample of the target's vertices is paired with their nearest shown posed template vertex
-//!    under the same tests and pools ([`ArticulatedOptions::target_to_template`]): a sensor's
-//!    view is all surface the template must explain, while template points can pair with
-//!    what the view lacks. Each bone with at least 20 pairs of weight > 0.1 is
-//!    re-fitted by weighted Kabsch (Arun et al. 1987) to both sets plus its two joints as anchors
+//!    ([`ArticulatedOptions::min_facing_cosine`]) takes no pair. The other way round, a
+//!    scattered sample of the target's vertices is paired with their nearest shown posed
+//!    template vertex under the same tests and pools
+//!    ([`ArticulatedOptions::target_to_template`]): a sensor's view is all surface the template
+//!    must explain, while template points can pair with what the view lacks. Each bone with at
+//!    least 20 pairs of weight > 0.1 is re-fitted by weighted Kabsch (Arun et al. 1987) to both
+//!    sets plus its two joints as anchors
 //!    ([`ArticulatedOptions::joint_anchor`]; the head's anchor at the neck's base is weaker,
 //!    [`ArticulatedOptions::head_neck_anchor`]: the neck bends below the skull, so the two
 //!    joints do not give the skull's pitch); with a target viewpoint the head's fit also pulls
@@ -320,8 +321,8 @@ pub struct TargetPairs {
 impl Default for TargetPairs {
     /// Weight 1 (each direction has the same say); 4,000 points (on `bodies20_kinect` 0.0160
     /// mean error, as with every scan vertex, at 15 % less time per pair) and 1,000 from a
-    /// warm start (recordings as accurate as with 4,000; `track` at 640×480 kept its frame
-    /// rate, 4,000 cost it 10 %).
+    /// warm start (recordings as accurate as with 4,000; `track` at 640×480 lost 4–7 % of its
+    /// frame rate to the pairs, with 4,000 10 %).
     fn default() -> Self {
         TargetPairs {
             weight: 1.0,
