@@ -1416,4 +1416,17 @@ fn track_head_options_are_checked_recorded_and_kept_on_resume() {
     assert!(track(&["--resume", "--head-twist-prior", "0"])
         .status
         .success());
+    // The header names the build's method (a digest of every option): a run written by a build
+    // whose method differs is not resumed.
+    let method = doc["run"]["method"].as_str().unwrap().to_string();
+    assert_eq!(method.len(), 16, "{method}");
+    assert!(method.bytes().all(|b| b.is_ascii_hexdigit()), "{method}");
+    let journal = out.join("journal.jsonl");
+    let text = std::fs::read_to_string(&journal).unwrap();
+    let other = text.replacen(&method, "0123456789abcdef", 1);
+    assert_ne!(other, text);
+    std::fs::write(&journal, &other).unwrap();
+    let e = assert_one_line_error(&track(&["--resume", "--head-twist-prior", "0"]));
+    assert!(e.contains("cannot resume") && e.contains("`method`"), "{e}");
+    assert_eq!(std::fs::read_to_string(&journal).unwrap(), other);
 }

@@ -187,7 +187,13 @@ fn load_template(
 }
 
 /// The journal's first line: what the run is, so `--resume` continues only the same run.
-fn journal_header(args: &TrackArgs, frames: &[usize], template: &str, vertices: usize) -> Value {
+/// `method`: [`method_fingerprint`] of the run's options.
+fn journal_header(
+    args: &TrackArgs,
+    frames: &[usize],
+    (template, vertices): (&str, usize),
+    method: &str,
+) -> Value {
     json!({
         "format": "symcorr.track-journal/1",
         "recording": args.recording.display().to_string(),
@@ -199,7 +205,18 @@ fn journal_header(args: &TrackArgs, frames: &[usize], template: &str, vertices: 
         "head_twist_prior": args.head_twist_prior,
         "head_warm_twist": args.head_warm_twist,
         "scans": args.scans,
+        "method": method,
     })
+}
+
+/// The first 64 bits (hex) of a SHA-256 digest of every option the run matches with (their
+/// `Debug` text: the pipeline's and the tracker's, defaults included): a build whose method
+/// changed — another default, a new step — neither resumes nor merges with a run of the one
+/// before, whose frames it would not reproduce.
+fn method_fingerprint(pipeline: &PipelineOptions, track: &TrackOptions) -> String {
+    use sha2::{Digest, Sha256};
+    let digest = Sha256::digest(format!("{pipeline:?}\n{track:?}").as_bytes());
+    digest[..8].iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// The journal's name in a run folder.
@@ -231,7 +248,9 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
     let (first, frames, complete) = parse_journal(&text).map_err(err)?;
     if &first != header {
         return Err(err(
-            "it was written for another recording, template, joints, frame list or options".into(),
+            "it was written for another recording, template, joints, frame list or options, or by \
+             a build whose method differs (the header's `method`)"
+                .into(),
         ));
     }
     if complete < text.len() {
@@ -289,10 +308,15 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         (args.head_twist_prior > 0.0).then_some(args.head_twist_prior);
     options.articulated.head_warm_twist =
         (args.head_warm_twist > 0.0).then_some(args.head_warm_twist);
+    let track_options = TrackOptions {
+        joint_offset_s: args.joint_offset,
+        ..TrackOptions::default()
+    };
+    let method = method_fingerprint(&options, &track_options);
     let pipeline = Pipeline::new(options);
     let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
     let n = template.input_mesh().num_vertices();
-    let header = journal_header(&args, &frames, &template_name, n);
+    let header = journal_header(&args, &frames, (&template_name, n), &method);
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::with(args.out.display(), e))?;
     if args.scans {
         let d = args.out.join("scans");
@@ -332,16 +356,12 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         .append(true)
         .open(&journal_path)
         .map_err(|e| CliError::with(journal_path.display(), e))?;
-    let options = TrackOptions {
-        joint_offset_s: args.joint_offset,
-        ..TrackOptions::default()
-    };
     let mut tracker = Tracker::new(
         &pipeline,
         &template,
         *recording.intrinsics(),
         joints,
-        options,
+        track_options,
     );
     // Ctrl-C stops after the frame in progress; track.json then covers the frames done and
     // --resume continues. A second Ctrl-C (or any other kill) leaves the journal and the
