@@ -321,7 +321,7 @@ pub struct TargetPairs {
 impl Default for TargetPairs {
     /// Weight 1 (each direction has the same say); 4,000 points (on `bodies20_kinect` 0.0160
     /// mean error, as with every scan vertex, at 15 % less time per pair) and 1,000 from a
-    /// warm start (recordings as accurate as with 4,000; `track` at 640×480 lost 4–7 % of its
+    /// warm start (recordings as accurate as with 4,000; `track` at 640×480 lost 2–7 % of its
     /// frame rate to the pairs, with 4,000 10 %).
     fn default() -> Self {
         TargetPairs {
