@@ -1179,6 +1179,44 @@ fn turn_about_vertical(log: &mut Value) {
     }
 }
 
+/// A joint log whose x axis is mirrored against the depth camera's (another tool's convention)
+/// is refused before anything is written: its skeletons stick out of the body the camera sees
+/// (each frame alone was matched with a third of its matches flipped). `--no-log-check` runs
+/// it anyway.
+#[test]
+fn track_refuses_a_mirrored_joint_log_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let mut log = read_json(&rec.join("joints.json"));
+    for f in log["frames"].as_array_mut().unwrap() {
+        for p in f["joints"].as_object_mut().unwrap().values_mut() {
+            if let Some(x) = p.get(0).and_then(Value::as_f64) {
+                p[0] = serde_json::json!(-x);
+            }
+        }
+    }
+    let mirrored = dir.path().join("mirrored.json");
+    std::fs::write(&mirrored, log.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let track = |extra: &[&str]| {
+        run(bin()
+            .args(["track", rec.to_str().unwrap(), "--joint-offset", "0.04"])
+            .args(extra)
+            .arg("--joints")
+            .arg(&mirrored)
+            .arg("--out")
+            .arg(&out))
+    };
+    let o = track(&[]);
+    let msg = assert_one_line_error(&o);
+    assert!(msg.contains("does not fit the depth frames"), "{msg}");
+    assert!(msg.contains("mirrored"), "{msg}");
+    assert!(!out.exists(), "nothing is written for a refused log");
+    let o = track(&["--no-log-check", "--frames", "20..21"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("track.json").exists());
+}
+
 /// The fixture recording's frames 44–49 with the log turned about the vertical (not about the
 /// body's spine, which the tracker turns back about). In frame 49 the fit turned back holds
 /// hardly more of its view than the fit with its back to the scan, but lays more of the

@@ -1319,7 +1319,10 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 /// tracker's joint log (a path); ``template`` a ``symcorr.Body``, a ``(vertices, faces, joints)``
 /// tuple or a ``symcorr.Prepared`` (dense). ``frames`` is an iterable of frame indices (default:
 /// all, in order). Yields one ``symcorr.Frame`` per frame; frames are computed on a worker
-/// thread, without the GIL.
+/// thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed and a
+/// joint log that does not belong to the frames (its bones stick out of the body the camera
+/// sees: another recording or clock, x mirrored) raises ``ValueError``; ``check_log=False``
+/// skips that check.
 ///
 /// Example::
 ///
@@ -1327,7 +1330,7 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 ///     for f in symcorr.track(rec, f"{rec}/joints.json", body("s0_rest"), frames=range(0, 60, 10)):
 ///         print(f.index, f.status, f.coverage)
 #[pyfunction]
-#[pyo3(signature = (recording, joints, template, *, frames=None, joint_offset=0.0))]
+#[pyo3(signature = (recording, joints, template, *, frames=None, joint_offset=0.0, check_log=true))]
 fn track(
     py: Python<'_>,
     recording: PathBuf,
@@ -1335,6 +1338,7 @@ fn track(
     template: &Bound<'_, PyAny>,
     frames: Option<&Bound<'_, PyAny>>,
     joint_offset: f64,
+    check_log: bool,
 ) -> PyResult<FrameIterator> {
     if !joint_offset.is_finite() {
         return Err(value_err(format!(
@@ -1390,6 +1394,26 @@ fn track(
         joint_offset_s: joint_offset,
         ..TrackOptions::default()
     };
+    if check_log {
+        // As `symcorr track`: a log that does not belong to the frames is refused first.
+        let check = py.detach(|| {
+            symcorr::track::log_check::check_log(
+                &pipeline,
+                &prepared,
+                &mut source,
+                &track,
+                &options,
+                &list,
+                symcorr::track::log_check::LOG_CHECK_FRAMES,
+            )
+        });
+        check.verdict().map_err(|e| {
+            value_err(format!(
+                "{}: {e} (check_log=False runs anyway)",
+                joints.display()
+            ))
+        })?;
+    }
     let n = list.len();
     let (tx, rx) = sync_channel::<TrackedFrame>(1);
     let intrinsics = *source.intrinsics();

@@ -227,6 +227,21 @@ def test_track_equals_the_command_line(cli, tmp_path):
         symcorr.track(RECORDING / "missing", RECORDING / "joints.json", template)
 
 
+def test_track_refuses_a_mirrored_joint_log(tmp_path):
+    log = json.loads((RECORDING / "joints.json").read_text())
+    for f in log["frames"]:
+        for p in f["joints"].values():
+            p[0] = -p[0]
+    mirrored = tmp_path / "mirrored.json"
+    mirrored.write_text(json.dumps(log))
+    template = symcorr.Body(*body("s0_rest"))
+    with pytest.raises(ValueError, match="does not fit the depth frames"):
+        symcorr.track(RECORDING, mirrored, template, joint_offset=0.04)
+    it = symcorr.track(RECORDING, mirrored, template, frames=[20], joint_offset=0.04,
+                       check_log=False)
+    assert len(it) == 1
+
+
 def test_help_reads_well():
     doc = symcorr.match.__doc__
     assert "Example" in doc and "Correspondence" in doc

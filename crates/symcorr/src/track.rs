@@ -42,6 +42,11 @@
 //!    ([`crate::keeps_turned_fit`]). A kept fit that holds less than
 //!    [`crate::MIN_VIEW_HELD`] skips the frame — never matched to garbage.
 //!
+//! Before a run, [`log_check::check_log`] observes a few frames on their own and refuses a
+//! joint log that does not belong to the depth frames (another recording or clock, mirrored
+//! axes): such a log's skeletons stick out of the body the camera sees, while every frame
+//! alone can pass the guards above.
+//!
 //! Steps 1–4 ([`Observer`]) follow the joint log and the depth frames only, never a match;
 //! step 5 ([`Fitter`]) follows the previous fit. The two can run on two threads, frame k + 1
 //! observed while frame k is matched ([`Tracker::parts`]; `symcorr track` does), with the same
@@ -52,6 +57,7 @@
 //! with a confidence, and what was corrected.
 
 pub mod animation;
+pub mod log_check;
 
 use crate::{
     keeps_turned_fit, ArticulatedStart, ArticulatedTables, BoneTransforms, Correspondence, Method,

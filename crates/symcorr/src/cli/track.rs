@@ -32,6 +32,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use symcorr::npy::{NpyType, NpyWriter};
+use symcorr::track::log_check::{check_log, LOG_CHECK_FRAMES};
 use symcorr::track::{FrameOutcome, TrackOptions, TrackedFrame, Tracker};
 use symcorr::{Pipeline, PipelineOptions};
 use symcorr_kinect::{DepthSource, JointTrack};
@@ -108,6 +109,10 @@ pub struct TrackArgs {
     /// Also write a self-contained HTML page of the run (as `symcorr view DIR` makes it).
     #[arg(long, value_name = "HTML")]
     pub view: Option<PathBuf>,
+    /// Run without first checking on a few frames that the joint log fits the depth frames
+    /// (a log of another recording or clock, or mirrored, is otherwise refused).
+    #[arg(long)]
+    pub no_log_check: bool,
 }
 
 /// The bundled template: the CC0 MakeHuman body in its rest pose and its exact joints.
@@ -317,6 +322,26 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
     let n = template.input_mesh().num_vertices();
     let header = journal_header(&args, &frames, (&template_name, n), &method);
+    let resuming = args.resume && journal_path.exists();
+    // The log against the frames, before anything is written (a resumed run was checked when
+    // it started).
+    if !resuming && !args.no_log_check {
+        let check = check_log(
+            &pipeline,
+            &template,
+            &mut recording,
+            &joints,
+            &track_options,
+            &frames,
+            LOG_CHECK_FRAMES,
+        );
+        check.verdict().map_err(|e| {
+            CliError(format!(
+                "{}: {e} (--no-log-check runs anyway)",
+                args.joints.display()
+            ))
+        })?;
+    }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::with(args.out.display(), e))?;
     if args.scans {
         let d = args.out.join("scans");
@@ -327,7 +352,6 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         args.out.join("confidence.npy"),
     );
     let npy = |e: symcorr::npy::NpyError| CliError(e.to_string());
-    let resuming = args.resume && journal_path.exists();
     // What stays in memory of each frame done: a few numbers (the frame lines are on disk, in
     // the journal), so that memory does not grow with the recording.
     let (mut done, mut corr_npy, mut conf_npy) = if resuming {

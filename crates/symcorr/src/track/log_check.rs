@@ -1,0 +1,214 @@
+//! Does a joint log belong to a recording's depth frames? Checked on a few frames before a run
+//! ([`check_log`]), so that a log of another recording or clock, or with axes other than the
+//! depth camera's, is refused with its cause instead of tracked into plausible garbage.
+//!
+//! Each frame's own guards do not catch such a log. Its skeletons still lie near the body (a
+//! mirrored log of a subject near the image's centre, a log a second off of a subject walking
+//! in place), the attachment swaps sides or turns the skeleton to fit the scan, a frame's poor
+//! skeleton fit is accepted (a correct log's can be poor in one frame: a profile view), and the
+//! match pulls the template onto the view well enough to hold more than
+//! [`MIN_VIEW_HELD`](crate::MIN_VIEW_HELD) of it — with a third of its matches flipped.
+//! Across frames the skeletons tell: the points along a log's bones
+//! ([`FitCheckKind::Outside`]: each joint and three points per bone) lie inside the body the
+//! camera sees (its visual hull) when the log was recorded with the frames, and a fifth to a
+//! third of them outside it when not (docs/decisions/2026-12-05-joint-log-check.md).
+
+use super::TrackOptions;
+use super::Tracker;
+use crate::{Pipeline, PreparedMesh};
+use symcorr_attach::{FitCheckKind, FitQuality};
+use symcorr_kinect::{DepthSource, JointTrack};
+
+/// Frames [`check_log`] looks at by default, spread over the run.
+pub const LOG_CHECK_FRAMES: usize = 8;
+
+/// The largest median share of a sampled frame's bone points outside the body the camera sees
+/// ([`FitCheckKind::Outside`]) a log passes with ([`LogCheck::verdict`]). On 14 recordings,
+/// logs recorded with their frames measured at most 0.065 (0.104 for one logged facing away,
+/// read turned); logs mirrored, half a second or a second off, or of another recording at
+/// least 0.182: docs/decisions/2026-12-05-joint-log-check.md.
+pub const MAX_LOG_OUTSIDE: f64 = 0.15;
+
+/// Fewer frames with a skeleton fit than this give no verdict: each frame's own guards decide.
+pub const MIN_LOG_CHECK_FITS: usize = 3;
+
+/// The share of the bone points outside the body the camera sees, when the fit measured it.
+fn outside(fit: &FitQuality) -> Option<f64> {
+    Some(fit.check(FitCheckKind::Outside)?.value)
+}
+
+/// What the sampled frames of [`check_log`] showed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogCheck {
+    /// Per sampled frame, its index in the recording and how well the log's skeleton at its
+    /// time sits in its scan — as logged or turned half a turn about its spine, whichever
+    /// leaves fewer bone points outside — or why the frame has no skeleton fit (no log frame
+    /// near its time, no body in the depth, joints the scan refuses, an unreadable frame).
+    pub frames: Vec<(usize, Result<FitQuality, String>)>,
+}
+
+/// A joint log refused by [`LogCheck::verdict`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "the joint log does not fit the depth frames: on {fits} frames spread over the run a \
+     median {median:.0} % of the points along its bones lie outside the body the camera sees \
+     (at most {max:.0} % accepted; logs recorded with their frames measured 0–10 %). The log \
+     may belong to another recording or clock (check the joint offset), or its axes may differ \
+     from the depth camera's (mirrored, another up axis)",
+    median = 100.0 * median_outside,
+    max = 100.0 * MAX_LOG_OUTSIDE
+)]
+pub struct LogMismatch {
+    /// Frames with a skeleton fit.
+    pub fits: usize,
+    /// Their median share of bone points outside the visual hull.
+    pub median_outside: f64,
+}
+
+impl LogCheck {
+    /// Per sampled frame with a skeleton fit, the share of its bone points outside the body
+    /// the camera sees ([`FitCheckKind::Outside`]).
+    pub fn outside(&self) -> Vec<f64> {
+        self.frames
+            .iter()
+            .filter_map(|(_, r)| outside(r.as_ref().ok()?))
+            .collect()
+    }
+
+    /// The median of [`LogCheck::outside`] (the mean of the middle two for an even count);
+    /// `None` without a skeleton fit.
+    pub fn median_outside(&self) -> Option<f64> {
+        let mut v = self.outside();
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        let m = v.len() / 2;
+        Some(if v.len() % 2 == 1 {
+            v[m]
+        } else {
+            0.5 * (v[m - 1] + v[m])
+        })
+    }
+
+    /// Refuses the log when at least [`MIN_LOG_CHECK_FITS`] frames have a skeleton fit and
+    /// their median share of bone points outside the body the camera sees is above
+    /// [`MAX_LOG_OUTSIDE`].
+    pub fn verdict(&self) -> Result<(), LogMismatch> {
+        let fits = self.outside().len();
+        match self.median_outside() {
+            Some(median) if fits >= MIN_LOG_CHECK_FITS && median > MAX_LOG_OUTSIDE => {
+                Err(LogMismatch {
+                    fits,
+                    median_outside: median,
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Observes `samples` frames of `frames` (indices into `source`, spread evenly over the list),
+/// each on its own — a fresh [`Tracker`]'s observer per frame, so no frame borrows from
+/// another — and records how well the log's skeleton at its time sits in its scan. Nothing is
+/// matched or written. [`LogCheck::verdict`] judges the log.
+pub fn check_log(
+    pipeline: &Pipeline,
+    template: &PreparedMesh,
+    source: &mut DepthSource,
+    joints: &JointTrack,
+    options: &TrackOptions,
+    frames: &[usize],
+    samples: usize,
+) -> LogCheck {
+    let k = samples.min(frames.len());
+    let picked = (0..k).map(|i| frames[(2 * i + 1) * frames.len() / (2 * k)]);
+    let frames = picked
+        .map(|index| {
+            let time_s = source.time(index).unwrap_or(f64::NAN);
+            let fit = source
+                .frame(index)
+                .map_err(|e| e.to_string())
+                .and_then(|depth| {
+                    let mut tracker = Tracker::new(
+                        pipeline,
+                        template,
+                        *source.intrinsics(),
+                        joints.clone(),
+                        options.clone(),
+                    );
+                    let (observer, _) = tracker.parts();
+                    let observation = observer.observe(time_s, &depth)?;
+                    let given = observation.target.attachment.diagnostics.fit.clone();
+                    // A skeleton logged facing away from the camera is one the tracker turns back
+                    // (module `track`, step 5): its turned reading is judged too.
+                    if outside(&given).is_none_or(|o| o <= MAX_LOG_OUTSIDE) {
+                        return Ok(given);
+                    }
+                    let turned = observer
+                        .pipeline
+                        .prepare_turned(&observation.target)
+                        .map(|t| t.attachment.diagnostics.fit);
+                    Ok(match turned {
+                        Some(t) if outside(&t) < outside(&given) => t,
+                        _ => given,
+                    })
+                });
+            (index, fit)
+        })
+        .collect();
+    LogCheck { frames }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use symcorr_attach::FitCheck;
+
+    fn fit(outside: Option<f64>) -> FitQuality {
+        FitQuality {
+            score: 0.8,
+            checks: outside
+                .map(|value| FitCheck {
+                    kind: FitCheckKind::Outside,
+                    value,
+                    limit: FitCheckKind::Outside.limit(),
+                    passed: value <= FitCheckKind::Outside.limit(),
+                })
+                .into_iter()
+                .collect(),
+            unreached: Vec::new(),
+            accepted_poor_fit: false,
+        }
+    }
+
+    fn check(frames: &[Option<f64>]) -> LogCheck {
+        LogCheck {
+            frames: frames
+                .iter()
+                .enumerate()
+                .map(|(i, &o)| (i, Ok(fit(o))))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn the_median_frame_decides_and_too_few_frames_give_no_verdict() {
+        // One frame of a correct log far outside (a poor frame) does not refuse it.
+        assert!(check(&[Some(0.0), Some(0.05), Some(0.4), Some(0.02)])
+            .verdict()
+            .is_ok());
+        let refused = check(&[Some(0.3), Some(0.25), Some(0.0), Some(0.29)])
+            .verdict()
+            .unwrap_err();
+        assert_eq!(refused.fits, 4);
+        assert!((refused.median_outside - 0.27).abs() < 1e-12);
+        assert!(refused.to_string().contains("a median 27 %"));
+        // Two fits are too few; frames without the check (or skipped) do not count.
+        assert!(check(&[Some(0.3), Some(0.3), None]).verdict().is_ok());
+        let mut skipped = check(&[Some(0.3), Some(0.3)]);
+        skipped.frames.push((2, Err("no body".into())));
+        assert!(skipped.verdict().is_ok());
+        assert_eq!(check(&[]).median_outside(), None);
+    }
+}
