@@ -16,6 +16,7 @@
 use super::TrackOptions;
 use super::Tracker;
 use crate::{Pipeline, PreparedMesh};
+use rayon::prelude::*;
 use symcorr_attach::{FitCheckKind, FitQuality};
 use symcorr_kinect::{DepthSource, JointTrack};
 
@@ -110,8 +111,8 @@ impl LogCheck {
 
 /// Observes `samples` frames of `frames` (indices into `source`, spread evenly over the list),
 /// each on its own — a fresh [`Tracker`]'s observer per frame, so no frame borrows from
-/// another — and records how well the log's skeleton at its time sits in its scan. Nothing is
-/// matched or written. [`LogCheck::verdict`] judges the log.
+/// another; in parallel — and records how well the log's skeleton at its time sits in its
+/// scan. Nothing is matched or written. [`LogCheck::verdict`] judges the log.
 pub fn check_log(
     pipeline: &Pipeline,
     template: &PreparedMesh,
@@ -122,38 +123,48 @@ pub fn check_log(
     samples: usize,
 ) -> LogCheck {
     let k = samples.min(frames.len());
-    let picked = (0..k).map(|i| frames[(2 * i + 1) * frames.len() / (2 * k)]);
-    let frames = picked
+    // Read one after the other (the source is sequential), observed side by side: each
+    // observation is independent, and an observer alone leaves cores idle in its serial parts.
+    let read: Vec<_> = (0..k)
+        .map(|i| frames[(2 * i + 1) * frames.len() / (2 * k)])
         .map(|index| {
             let time_s = source.time(index).unwrap_or(f64::NAN);
-            let fit = source
-                .frame(index)
-                .map_err(|e| e.to_string())
-                .and_then(|depth| {
-                    let mut tracker = Tracker::new(
-                        pipeline,
-                        template,
-                        *source.intrinsics(),
-                        joints.clone(),
-                        options.clone(),
-                    );
-                    let (observer, _) = tracker.parts();
-                    let observation = observer.observe(time_s, &depth)?;
-                    let given = observation.target.attachment.diagnostics.fit.clone();
-                    // A skeleton logged facing away from the camera is one the tracker turns back
-                    // (module `track`, step 5): its turned reading is judged too.
-                    if outside(&given).is_none_or(|o| o <= MAX_LOG_OUTSIDE) {
-                        return Ok(given);
-                    }
-                    let turned = observer
-                        .pipeline
-                        .prepare_turned(&observation.target)
-                        .map(|t| t.attachment.diagnostics.fit);
-                    Ok(match turned {
-                        Some(t) if outside(&t) < outside(&given) => t,
-                        _ => given,
-                    })
-                });
+            (
+                index,
+                time_s,
+                source.frame(index).map_err(|e| e.to_string()),
+            )
+        })
+        .collect();
+    let intrinsics = *source.intrinsics();
+    let frames = read
+        .into_par_iter()
+        .map(|(index, time_s, depth)| {
+            let fit = depth.and_then(|depth| {
+                let mut tracker = Tracker::new(
+                    pipeline,
+                    template,
+                    intrinsics,
+                    joints.clone(),
+                    options.clone(),
+                );
+                let (observer, _) = tracker.parts();
+                let observation = observer.observe(time_s, &depth)?;
+                let given = observation.target.attachment.diagnostics.fit.clone();
+                // A skeleton logged facing away from the camera is one the tracker turns back
+                // (module `track`, step 5): its turned reading is judged too.
+                if outside(&given).is_none_or(|o| o <= MAX_LOG_OUTSIDE) {
+                    return Ok(given);
+                }
+                let turned = observer
+                    .pipeline
+                    .prepare_turned(&observation.target)
+                    .map(|t| t.attachment.diagnostics.fit);
+                Ok(match turned {
+                    Some(t) if outside(&t) < outside(&given) => t,
+                    _ => given,
+                })
+            });
             (index, fit)
         })
         .collect();
