@@ -1,7 +1,7 @@
 """Type stubs of the ``symcorr`` extension module (see ``help(symcorr)``)."""
 
 import os
-from typing import Dict, Iterable, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Dict, Iterable, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -183,6 +183,9 @@ def track(
     template: Union[BodyLike, Prepared],
     *,
     frames: Optional[Iterable[int]] = None,
-    joint_offset: float = 0.0,
+    joint_offset: Union[float, Literal["auto"], None] = None,
+    check_log: bool = True,
 ) -> FrameIterator:
-    """The frames of a recording matched one by one, as ``symcorr track``."""
+    """The frames of a recording matched one by one, as ``symcorr track``: the joint log read
+    at each frame's time + ``joint_offset`` seconds (``None``: 0; ``"auto"``: estimated from the
+    frames), refused first when it does not fit the frames (``check_log``)."""

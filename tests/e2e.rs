@@ -1217,6 +1217,48 @@ fn track_refuses_a_mirrored_joint_log_before_writing() {
     assert!(out.join("track.json").exists());
 }
 
+/// `--joint-offset auto` finds a log whose clock runs a second and 40 ms ahead (the fixture's
+/// log, restamped), records the estimate, and tracks with it; a fixed offset that is wrong by
+/// the second is refused by the log check; a value that is neither is a usage error.
+#[test]
+fn track_estimates_the_joint_offset_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let mut log = read_json(&rec.join("joints.json"));
+    for f in log["frames"].as_array_mut().unwrap() {
+        f["time_s"] = serde_json::json!(f["time_s"].as_f64().unwrap() + 1.0);
+    }
+    let late = dir.path().join("late.json");
+    std::fs::write(&late, log.to_string()).unwrap();
+    let track = |offset: &str, frames: &str, out: &Path| {
+        run(bin()
+            .args(["track", rec.to_str().unwrap(), "--frames", frames])
+            .args(["--joint-offset", offset, "--joints"])
+            .arg(&late)
+            .arg("--out")
+            .arg(out))
+    };
+    let out = dir.path().join("auto");
+    let o = track("auto", "40..43", &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc = read_json(&out.join("track.json"));
+    let estimate = doc["run"]["joint_offset_s"].as_f64().unwrap();
+    assert!((estimate - 1.04).abs() <= 0.03, "estimated {estimate} s");
+    assert_eq!(doc["run"]["joint_offset_estimated"], true);
+    assert!(doc["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|f| f["status"] == "ok"));
+    // The same log read 0.04 s ahead, as the fixture's own: its bones stick out.
+    let o = track("0.04", "30..60", &dir.path().join("fixed"));
+    let msg = assert_one_line_error(&o);
+    assert!(msg.contains("does not fit the depth frames"), "{msg}");
+    let o = track("soon", "40..43", &dir.path().join("bad"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("auto"));
+}
+
 /// The fixture recording's frames 44–49 with the log turned about the vertical (not about the
 /// body's spine, which the tracker turns back about). In frame 49 the fit turned back holds
 /// hardly more of its view than the fit with its back to the scan, but lays more of the

@@ -1318,8 +1318,10 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 /// folder (intrinsics.json, depth/NNNNNN.png, depth_times.txt); ``joints`` the skeleton
 /// tracker's joint log (a path); ``template`` a ``symcorr.Body``, a ``(vertices, faces, joints)``
 /// tuple or a ``symcorr.Prepared`` (dense). ``frames`` is an iterable of frame indices (default:
-/// all, in order). Yields one ``symcorr.Frame`` per frame; frames are computed on a worker
-/// thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed and a
+/// all, in order); ``joint_offset`` the seconds added to each depth frame's time before the
+/// log is read (default 0), or ``"auto"``: estimated from the frames, as ``symcorr track
+/// --joint-offset auto`` does. Yields one ``symcorr.Frame`` per frame; frames are computed on a
+/// worker thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed and a
 /// joint log that does not belong to the frames (its bones stick out of the body the camera
 /// sees: another recording or clock, x mirrored) raises ``ValueError``; ``check_log=False``
 /// skips that check.
@@ -1330,21 +1332,29 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 ///     for f in symcorr.track(rec, f"{rec}/joints.json", body("s0_rest"), frames=range(0, 60, 10)):
 ///         print(f.index, f.status, f.coverage)
 #[pyfunction]
-#[pyo3(signature = (recording, joints, template, *, frames=None, joint_offset=0.0, check_log=true))]
+#[pyo3(signature = (recording, joints, template, *, frames=None, joint_offset=None, check_log=true))]
 fn track(
     py: Python<'_>,
     recording: PathBuf,
     joints: PathBuf,
     template: &Bound<'_, PyAny>,
     frames: Option<&Bound<'_, PyAny>>,
-    joint_offset: f64,
+    joint_offset: Option<&Bound<'_, PyAny>>,
     check_log: bool,
 ) -> PyResult<FrameIterator> {
-    if !joint_offset.is_finite() {
-        return Err(value_err(format!(
-            "joint_offset {joint_offset:?}: expected a finite number of seconds"
-        )));
-    }
+    // Seconds (None: 0), or "auto" (`None` here: estimated once the log is read).
+    let given_offset: Option<f64> = match joint_offset {
+        None => Some(0.0),
+        Some(o) if o.extract::<String>().is_ok_and(|s| s == "auto") => None,
+        Some(o) => match o.extract::<f64>() {
+            Ok(x) if x.is_finite() => Some(x),
+            _ => {
+                return Err(value_err(format!(
+                    "joint_offset {o}: expected a finite number of seconds or \"auto\""
+                )))
+            }
+        },
+    };
     let mut source = py
         .detach(|| DepthSource::open(&recording))
         .map_err(kinect_err)?;
@@ -1389,6 +1399,23 @@ fn track(
             .detach(|| pipeline.prepare((*body.mesh).clone(), &body.skeleton))
             .map_err(|e| py_err(e, Some("template")))?;
         (pipeline, Arc::new(prepared))
+    };
+    let search = symcorr_kinect::clock::OffsetSearch::default();
+    let joint_offset = match given_offset {
+        Some(x) => x,
+        None => py
+            .detach(|| {
+                use symcorr_kinect::clock::{estimate_recording_offset, OFFSET_FRAMES};
+                estimate_recording_offset(&mut source, &track, OFFSET_FRAMES, &search)
+            })
+            .map(|e| e.offset_s)
+            .ok_or_else(|| {
+                value_err(format!(
+                    "joint_offset \"auto\": no offset within {}..{} s reads a tracked joint of \
+                     the log on the recording's frames (the log and the recording share no time)",
+                    search.range_s.0, search.range_s.1
+                ))
+            })?,
     };
     let options = TrackOptions {
         joint_offset_s: joint_offset,

@@ -242,6 +242,22 @@ def test_track_refuses_a_mirrored_joint_log(tmp_path):
     assert len(it) == 1
 
 
+def test_track_estimates_the_joint_offset(tmp_path):
+    # The log's clock a second later still: "auto" finds it, a fixed 0.04 is refused.
+    log = json.loads((RECORDING / "joints.json").read_text())
+    for f in log["frames"]:
+        f["time_s"] += 1.0
+    late = tmp_path / "late.json"
+    late.write_text(json.dumps(log))
+    template = symcorr.Body(*body("s0_rest"))
+    frames = list(symcorr.track(RECORDING, late, template, frames=[30], joint_offset="auto"))
+    assert frames[0].status == "ok"
+    with pytest.raises(ValueError, match="does not fit the depth frames"):
+        symcorr.track(RECORDING, late, template, frames=range(20, 60), joint_offset=0.04)
+    with pytest.raises(ValueError, match="auto"):
+        symcorr.track(RECORDING, late, template, frames=[30], joint_offset="later")
+
+
 def test_help_reads_well():
     doc = symcorr.match.__doc__
     assert "Example" in doc and "Correspondence" in doc

@@ -15,12 +15,15 @@
 //! * Recordings: a recording folder ([`Recording`]: intrinsics, numbered PNG-16 depth frames, their
 //!   times) → per depth frame, the joint log's skeleton at its time ([`JointTrack`], interpolated
 //!   or skipped), smoothed over time ([`SkeletonFilter`], one-euro) and checked for left/right
-//!   swaps between frames ([`swap_evidence`]; [`recording`]). A tracker reads either a folder
-//!   or (feature `openni2`) an OpenNI2 `.oni` file through one type, [`DepthSource`]
-//!   ([`source`]; the `.oni` side: `oni::OniRecording`, times from the file's frame timestamps,
-//!   intrinsics from the stream's field of view). Listing an `.oni` file's depth frames and
-//!   their times needs no OpenNI2 ([`oni_index`], in every build), and neither does writing one
-//!   that OpenNI2's player plays ([`oni_write`]: from timed depth frames or a recording folder).
+//!   swaps between frames ([`swap_evidence`]; [`recording`]). The offset between the log's
+//!   clock and the depth clock can be estimated from the frames themselves ([`clock`]: the
+//!   offset whose joints lie least in front of the surface the camera saw). A tracker reads
+//!   either a folder or (feature `openni2`) an OpenNI2 `.oni` file through one type,
+//!   [`DepthSource`] ([`source`]; the `.oni` side: `oni::OniRecording`, times from the file's
+//!   frame timestamps, intrinsics from the stream's field of view). Listing an `.oni` file's
+//!   depth frames and their times needs no OpenNI2 ([`oni_index`], in every build), and neither
+//!   does writing one that OpenNI2's player plays ([`oni_write`]: from timed depth frames or a
+//!   recording folder).
 //!
 //! ```
 //! use symcorr_skeleton::Joint;
@@ -56,6 +59,7 @@
 //! [`Skeleton`]: symcorr_skeleton::Skeleton
 
 pub mod camera;
+pub mod clock;
 pub mod depth;
 mod error;
 mod geom;

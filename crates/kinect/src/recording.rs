@@ -477,8 +477,10 @@ impl JointTrack {
     /// * two frames → per joint, linear interpolation of the positions with confidence the
     ///   smaller of the two; a joint tracked (confidence > 0) in only one of them keeps that
     ///   frame's position and confidence if that frame is within half a period of the time, and
-    ///   is otherwise untracked (confidence 0, position interpolated). The `interpolated` flag
-    ///   of a joint is that of the frame(s) it came from;
+    ///   is otherwise untracked (confidence 0, position interpolated). A limb pair exchanged
+    ///   between the two frames (a tracker's left/right swap: [`limb_swap_evidence`] above
+    ///   [`SWAP_EVIDENCE_THRESHOLD`]) is not interpolated: its joints are the nearer frame's.
+    ///   The `interpolated` flag of a joint is that of the frame(s) it came from;
     /// * a result with every confidence 0 → [`SkipReason::NoBody`].
     ///
     /// ```
@@ -538,7 +540,26 @@ impl JointTrack {
     fn blend(&self, a: &Skeleton, b: &Skeleton, w: f64, gap_a: f64, gap_b: f64) -> Skeleton {
         let half = 0.5 * self.period_s;
         let mut out = a.clone();
-        for j in 0..Joint::COUNT {
+        // A limb pair the tracker swapped between the two frames is not blended: halfway
+        // between a left leg and the right one is neither, and a continuity check against such
+        // legs lets a swap in gradually. Each joint of the pair takes the nearer frame's.
+        let mut unblended = [false; Joint::COUNT];
+        for pair in [LimbPair::Arms, LimbPair::Legs] {
+            if limb_swap_evidence(a, b, pair) > SWAP_EVIDENCE_THRESHOLD {
+                for l in pair.left_joints() {
+                    unblended[l.index()] = true;
+                    unblended[l.mirror().index()] = true;
+                }
+            }
+        }
+        for (j, &whole) in unblended.iter().enumerate() {
+            if whole {
+                let near = if w < 0.5 { a } else { b };
+                out.positions[j] = near.positions[j];
+                out.confidence[j] = near.confidence[j];
+                out.interpolated[j] = near.interpolated[j];
+                continue;
+            }
             let (ca, cb) = (a.confidence[j], b.confidence[j]);
             let lerp = a.positions[j] + (b.positions[j] - a.positions[j]) * w;
             let (p, c, flag) = match (ca > 0.0, cb > 0.0) {

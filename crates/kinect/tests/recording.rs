@@ -302,6 +302,48 @@ fn track_interpolates_linearly_between_the_nearest_frames() {
     assert_eq!(shifted.offset_s(), 2.0 * P);
 }
 
+/// Between a log frame and the next, where the tracker exchanged the legs, the legs are not
+/// blended (halfway between the left and the right leg is neither): each leg joint is the
+/// nearer frame's, the rest interpolated as usual.
+#[test]
+fn a_limb_pair_swapped_between_two_log_frames_is_not_blended() {
+    let mut xyz = [[0.0, 1.0, 2.0]; 20];
+    for j in Joint::ALL {
+        let side = match j.name() {
+            n if n.ends_with("left") => 0.15,
+            n if n.ends_with("right") => -0.15,
+            _ => 0.0,
+        };
+        xyz[j.index()] = [side, 1.0 - 0.05 * j.index() as f64, 2.0];
+    }
+    let a = Skeleton::from_arrays(xyz);
+    let mut b = a.clone();
+    for l in LimbPair::Legs.left_joints() {
+        b.positions.swap(l.index(), l.mirror().index());
+    }
+    // The head moves 10 cm between the frames: still interpolated.
+    b.positions[Joint::Head.index()].x += 0.1;
+    let log = JointLog::from_skeletons(vec![a.clone(), b.clone()], 30.0);
+    let track = JointTrack::new(log, 0.0).unwrap();
+    for (w, near) in [(0.3, &a), (0.7, &b)] {
+        let s = track.at(w * P).unwrap().skeleton;
+        for l in LimbPair::Legs.left_joints() {
+            for j in [l, l.mirror()] {
+                assert_eq!(
+                    s.positions[j.index()],
+                    near.positions[j.index()],
+                    "{j:?} at {w}"
+                );
+            }
+        }
+        let head = s.positions[Joint::Head.index()].x;
+        assert!((head - 0.1 * w).abs() < 1e-9, "{head}");
+        // The arms did not swap: blended (here equal in both frames).
+        let hand = Joint::HandLeft.index();
+        assert_eq!(s.positions[hand], a.positions[hand]);
+    }
+}
+
 #[test]
 fn track_skips_times_without_a_log_frame_nearby() {
     // Frames dropped between 2P and 10P; the median period stays P.

@@ -68,14 +68,17 @@ pub struct TrackArgs {
     /// Process every N-th frame of the slice.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub every: usize,
-    /// Seconds added to every depth frame's time before the joint log is read.
+    /// Seconds added to every depth frame's time before the joint log is read, or `auto`:
+    /// estimated from the frames (the offset whose joints lie least in front of the surface
+    /// the camera saw, within ±2 s; recorded in track.json's `run`).
     #[arg(
         long,
-        value_name = "SECONDS",
-        default_value_t = 0.0,
+        value_name = "SECONDS|auto",
+        default_value = "0",
+        value_parser = parse_joint_offset,
         allow_hyphen_values = true
     )]
-    pub joint_offset: f64,
+    pub joint_offset: JointOffset,
     /// Weight of the head twist prior, which holds the head's twist at the chest's where one
     /// view does not pin it (a body turning into profile); 0 turns it off for a subject who
     /// turns the head against the body.
@@ -113,6 +116,52 @@ pub struct TrackArgs {
     /// (a log of another recording or clock, or mirrored, is otherwise refused).
     #[arg(long)]
     pub no_log_check: bool,
+}
+
+/// `--joint-offset`: seconds, or estimated from the frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointOffset {
+    /// This many seconds.
+    Seconds(f64),
+    /// Estimated ([`symcorr_kinect::clock::estimate_joint_offset`]).
+    Auto,
+}
+
+fn parse_joint_offset(s: &str) -> Result<JointOffset, String> {
+    if s == "auto" {
+        return Ok(JointOffset::Auto);
+    }
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(JointOffset::Seconds(x)),
+        _ => Err(format!("{s:?}: expected seconds (e.g. 0.04) or auto")),
+    }
+}
+
+/// The joint offset of the run: `--joint-offset` as given, or estimated on frames spread over
+/// the whole recording ([`symcorr_kinect::clock::estimate_recording_offset`]: the same
+/// estimate for every slice, so that slices of one run merge).
+fn resolve_joint_offset(
+    arg: JointOffset,
+    recording: &mut DepthSource,
+    joints: &JointTrack,
+) -> Result<f64, CliError> {
+    use symcorr_kinect::clock::{estimate_recording_offset, OffsetSearch, OFFSET_FRAMES};
+    match arg {
+        JointOffset::Seconds(s) => Ok(s),
+        JointOffset::Auto => {
+            let search = OffsetSearch::default();
+            estimate_recording_offset(recording, joints, OFFSET_FRAMES, &search)
+                .map(|e| e.offset_s)
+                .ok_or_else(|| {
+                    CliError(format!(
+                        "--joint-offset auto: no offset within {}..{} s reads a tracked joint of \
+                         the log on the recording's frames (the log and the recording share no \
+                         time)",
+                        search.range_s.0, search.range_s.1
+                    ))
+                })
+        }
+    }
 }
 
 /// The bundled template: the CC0 MakeHuman body in its rest pose and its exact joints.
@@ -198,6 +247,7 @@ fn journal_header(
     frames: &[usize],
     (template, vertices): (&str, usize),
     method: &str,
+    joint_offset_s: f64,
 ) -> Value {
     json!({
         "format": "symcorr.track-journal/1",
@@ -206,7 +256,8 @@ fn journal_header(
         "template": template,
         "template_vertices": vertices,
         "frames": frames,
-        "joint_offset_s": args.joint_offset,
+        "joint_offset_s": joint_offset_s,
+        "joint_offset_estimated": args.joint_offset == JointOffset::Auto,
         "head_twist_prior": args.head_twist_prior,
         "head_warm_twist": args.head_warm_twist,
         "scans": args.scans,
@@ -313,15 +364,16 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         (args.head_twist_prior > 0.0).then_some(args.head_twist_prior);
     options.articulated.head_warm_twist =
         (args.head_warm_twist > 0.0).then_some(args.head_warm_twist);
+    let joint_offset_s = resolve_joint_offset(args.joint_offset, &mut recording, &joints)?;
     let track_options = TrackOptions {
-        joint_offset_s: args.joint_offset,
+        joint_offset_s,
         ..TrackOptions::default()
     };
     let method = method_fingerprint(&options, &track_options);
     let pipeline = Pipeline::new(options);
     let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
     let n = template.input_mesh().num_vertices();
-    let header = journal_header(&args, &frames, (&template_name, n), &method);
+    let header = journal_header(&args, &frames, (&template_name, n), &method, joint_offset_s);
     let resuming = args.resume && journal_path.exists();
     // The log against the frames, before anything is written (a resumed run was checked when
     // it started).
