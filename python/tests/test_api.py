@@ -250,12 +250,12 @@ def test_track_estimates_the_joint_offset(tmp_path):
     late = tmp_path / "late.json"
     late.write_text(json.dumps(log))
     template = symcorr.Body(*body("s0_rest"))
-    frames = list(symcorr.track(RECORDING, late, template, frames=[30], joint_offset="auto"))
+    frames = list(symcorr.track(RECORDING, late, template, frames=[40], joint_offset="auto"))
     assert frames[0].status == "ok"
     with pytest.raises(ValueError, match="does not fit the depth frames"):
-        symcorr.track(RECORDING, late, template, frames=range(20, 60), joint_offset=0.04)
+        symcorr.track(RECORDING, late, template, frames=range(30, 60), joint_offset=0.04)
     with pytest.raises(ValueError, match="auto"):
-        symcorr.track(RECORDING, late, template, frames=[30], joint_offset="later")
+        symcorr.track(RECORDING, late, template, frames=[40], joint_offset="later")
 
 
 def test_help_reads_well():

@@ -495,6 +495,62 @@ impl Observer<'_> {
     }
 
     fn observe_inner(&mut self, time_s: f64, depth: &DepthFrame) -> Result<Observation, String> {
+        let (corrections, skeleton, scan, t_scan) = self.joints_and_scan(time_s, depth)?;
+        let t = Instant::now();
+        let template = (self.template.0, &*self.template.1);
+        let (target, tables) = prepare_scan(&self.pipeline, template, &scan, &skeleton)?;
+        let t_prepare = t.elapsed().as_secs_f64();
+        let d = &target.attachment.diagnostics;
+        let mut timings = vec![
+            ("scan".to_string(), t_scan),
+            ("prepare".to_string(), t_prepare),
+        ];
+        timings.extend(
+            d.timings_s
+                .iter()
+                .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
+        );
+        timings.extend(tables.iter().flat_map(|t| {
+            t.index_timings()
+                .iter()
+                .map(|(stage, t)| (format!("prepare.{stage}"), *t))
+        }));
+        Ok(Observation {
+            corrections,
+            scan,
+            target,
+            tables,
+            timings,
+        })
+    }
+
+    /// Steps 1–4 up to the attachment, without the search index: the frame's scan prepared
+    /// with the joints at `time_s` ([`Observer::observe`]'s, and like it a frame that cannot
+    /// be observed resets the observer). For the joint-log check ([`log_check`]), which asks
+    /// only how the joints sit in the scan.
+    fn prepared(&mut self, time_s: f64, depth: &DepthFrame) -> Result<PreparedMesh, String> {
+        let prepared = self
+            .joints_and_scan(time_s, depth)
+            .and_then(|(_, skeleton, scan, _)| {
+                Ok(self
+                    .pipeline
+                    .prepare(scan.mesh, &skeleton)
+                    .map_err(|e| e.to_string())?
+                    .seen_from(nalgebra::Point3::origin()))
+            });
+        if prepared.is_err() {
+            self.reset();
+        }
+        prepared
+    }
+
+    /// Steps 1–3 and the scan (4): the corrections, the joints as used (corrected and
+    /// smoothed, and kept as the next frame's reference), the scan and its seconds.
+    fn joints_and_scan(
+        &mut self,
+        time_s: f64,
+        depth: &DepthFrame,
+    ) -> Result<(Vec<Correction>, Skeleton, ScanMesh, f64), String> {
         let mut corrections = Vec::new();
         let timed = self
             .joints
@@ -527,34 +583,9 @@ impl Observer<'_> {
         let scan = scan_mesh(depth, &self.intrinsics, Some(&skeleton), &self.options.scan)
             .map_err(|e| e.to_string())?;
         let t_scan = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let template = (self.template.0, &*self.template.1);
-        let (target, tables) = prepare_scan(&self.pipeline, template, &scan, &skeleton)?;
-        let t_prepare = t.elapsed().as_secs_f64();
-        let d = &target.attachment.diagnostics;
-        let mut timings = vec![
-            ("scan".to_string(), t_scan),
-            ("prepare".to_string(), t_prepare),
-        ];
-        timings.extend(
-            d.timings_s
-                .iter()
-                .map(|(stage, t)| (format!("prepare.attach.{stage}"), *t)),
-        );
-        timings.extend(tables.iter().flat_map(|t| {
-            t.index_timings()
-                .iter()
-                .map(|(stage, t)| (format!("prepare.{stage}"), *t))
-        }));
         // Continuity is judged against what was used, the corrected and smoothed joints.
-        self.previous = Some(skeleton);
-        Ok(Observation {
-            corrections,
-            scan,
-            target,
-            tables,
-            timings,
-        })
+        self.previous = Some(skeleton.clone());
+        Ok((corrections, skeleton, scan, t_scan))
     }
 }
 

@@ -64,6 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..TrackOptions::default()
     };
     let frames: Vec<usize> = (0..source.len()).collect();
+    let started = std::time::Instant::now();
     let check = check_log(
         &pipeline,
         &template,
@@ -90,8 +91,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(()) => "pass".to_string(),
         Err(e) => format!("refused: {e}"),
     };
+    let seconds = started.elapsed().as_secs_f64();
     println!(
-        "ALL fits {} median_outside {} {verdict}",
+        "ALL fits {} median_outside {} seconds {seconds:.2} {verdict}",
         check.outside().len(),
         check
             .median_outside()

@@ -7,7 +7,7 @@
 //! in place), the attachment swaps sides or turns the skeleton to fit the scan, a frame's poor
 //! skeleton fit is accepted (a correct log's can be poor in one frame: a profile view), and the
 //! match pulls the template onto the view well enough to hold more than
-//! [`MIN_VIEW_HELD`](crate::MIN_VIEW_HELD) of it — with a third of its matches flipped.
+//! [`MIN_VIEW_HELD`](crate::MIN_VIEW_HELD) of it — with 28–34 % of its matches flipped.
 //! Across frames the skeletons tell: the points along a log's bones
 //! ([`FitCheckKind::Outside`]: each joint and three points per bone) lie inside the body the
 //! camera sees (its visual hull) when the log was recorded with the frames, and a fifth to a
@@ -16,7 +16,6 @@
 use super::TrackOptions;
 use super::Tracker;
 use crate::{Pipeline, PreparedMesh};
-use rayon::prelude::*;
 use symcorr_attach::{FitCheckKind, FitQuality};
 use symcorr_kinect::{DepthSource, JointTrack};
 
@@ -25,9 +24,9 @@ pub const LOG_CHECK_FRAMES: usize = 8;
 
 /// The largest median share of a sampled frame's bone points outside the body the camera sees
 /// ([`FitCheckKind::Outside`]) a log passes with ([`LogCheck::verdict`]). On 14 recordings,
-/// logs recorded with their frames measured at most 0.065 (0.104 for one logged facing away,
-/// read turned); logs mirrored, half a second or a second off, or of another recording at
-/// least 0.182: docs/decisions/2026-12-05-joint-log-check.md.
+/// logs recorded with their frames measured at most 0.091 (a close view, the feet out of the
+/// image; 0.104 for a log facing away, read turned); logs mirrored, half a second or a second
+/// off, or of another recording at least 0.182: docs/decisions/2026-12-05-joint-log-check.md.
 pub const MAX_LOG_OUTSIDE: f64 = 0.15;
 
 /// Fewer frames with a skeleton fit than this give no verdict: each frame's own guards decide.
@@ -53,9 +52,9 @@ pub struct LogCheck {
 #[error(
     "the joint log does not fit the depth frames: on {fits} frames spread over the run a \
      median {median:.0} % of the points along its bones lie outside the body the camera sees \
-     (at most {max:.0} % accepted; logs recorded with their frames measured 0–10 %). The log \
-     may belong to another recording or clock (check the joint offset), or its axes may differ \
-     from the depth camera's (mirrored, another up axis)",
+     (at most {max:.0} % accepted; logs recorded with their frames measured 0–11 %). The log \
+     may belong to another recording or clock (check the joint offset, or estimate it from the \
+     frames), or its axes may differ from the depth camera's (mirrored, another up axis)",
     median = 100.0 * median_outside,
     max = 100.0 * MAX_LOG_OUTSIDE
 )]
@@ -110,9 +109,10 @@ impl LogCheck {
 }
 
 /// Observes `samples` frames of `frames` (indices into `source`, spread evenly over the list),
-/// each on its own — a fresh [`Tracker`]'s observer per frame, so no frame borrows from
-/// another; in parallel — and records how well the log's skeleton at its time sits in its
-/// scan. Nothing is matched or written. [`LogCheck::verdict`] judges the log.
+/// each on its own — a [`Tracker`]'s observer reset before each frame, so no frame borrows
+/// from another; its scan prepared, without the search index a match needs — and records how
+/// well the log's skeleton at its time sits in its scan. Nothing is matched or written.
+/// [`LogCheck::verdict`] judges the log.
 pub fn check_log(
     pipeline: &Pipeline,
     template: &PreparedMesh,
@@ -123,48 +123,40 @@ pub fn check_log(
     samples: usize,
 ) -> LogCheck {
     let k = samples.min(frames.len());
-    // Read one after the other (the source is sequential), observed side by side: each
-    // observation is independent, and an observer alone leaves cores idle in its serial parts.
-    let read: Vec<_> = (0..k)
+    // One tracker, forgotten before each frame: the template's tables are built once.
+    let mut tracker = Tracker::new(
+        pipeline,
+        template,
+        *source.intrinsics(),
+        joints.clone(),
+        options.clone(),
+    );
+    let frames = (0..k)
         .map(|i| frames[(2 * i + 1) * frames.len() / (2 * k)])
         .map(|index| {
             let time_s = source.time(index).unwrap_or(f64::NAN);
-            (
-                index,
-                time_s,
-                source.frame(index).map_err(|e| e.to_string()),
-            )
-        })
-        .collect();
-    let intrinsics = *source.intrinsics();
-    let frames = read
-        .into_par_iter()
-        .map(|(index, time_s, depth)| {
-            let fit = depth.and_then(|depth| {
-                let mut tracker = Tracker::new(
-                    pipeline,
-                    template,
-                    intrinsics,
-                    joints.clone(),
-                    options.clone(),
-                );
-                let (observer, _) = tracker.parts();
-                let observation = observer.observe(time_s, &depth)?;
-                let given = observation.target.attachment.diagnostics.fit.clone();
-                // A skeleton logged facing away from the camera is one the tracker turns back
-                // (module `track`, step 5): its turned reading is judged too.
-                if outside(&given).is_none_or(|o| o <= MAX_LOG_OUTSIDE) {
-                    return Ok(given);
-                }
-                let turned = observer
-                    .pipeline
-                    .prepare_turned(&observation.target)
-                    .map(|t| t.attachment.diagnostics.fit);
-                Ok(match turned {
-                    Some(t) if outside(&t) < outside(&given) => t,
-                    _ => given,
-                })
-            });
+            let fit = source
+                .frame(index)
+                .map_err(|e| e.to_string())
+                .and_then(|depth| {
+                    tracker.reset();
+                    let (observer, _) = tracker.parts();
+                    let target = observer.prepared(time_s, &depth)?;
+                    let given = target.attachment.diagnostics.fit.clone();
+                    // A skeleton logged facing away from the camera is one the tracker turns back
+                    // (module `track`, step 5): its turned reading is judged too.
+                    if outside(&given).is_none_or(|o| o <= MAX_LOG_OUTSIDE) {
+                        return Ok(given);
+                    }
+                    let turned = observer
+                        .pipeline
+                        .prepare_turned(&target)
+                        .map(|t| t.attachment.diagnostics.fit);
+                    Ok(match turned {
+                        Some(t) if outside(&t) < outside(&given) => t,
+                        _ => given,
+                    })
+                });
             (index, fit)
         })
         .collect();
