@@ -531,13 +531,7 @@ impl Observer<'_> {
     fn prepared(&mut self, time_s: f64, depth: &DepthFrame) -> Result<PreparedMesh, String> {
         let prepared = self
             .joints_and_scan(time_s, depth)
-            .and_then(|(_, skeleton, scan, _)| {
-                Ok(self
-                    .pipeline
-                    .prepare(scan.mesh, &skeleton)
-                    .map_err(|e| e.to_string())?
-                    .seen_from(nalgebra::Point3::origin()))
-            });
+            .and_then(|(_, skeleton, scan, _)| prepare_view(&self.pipeline, &scan, &skeleton));
         if prepared.is_err() {
             self.reset();
         }
@@ -771,12 +765,22 @@ fn prepare_scan(
     scan: &ScanMesh,
     skeleton: &Skeleton,
 ) -> Result<(PreparedMesh, Option<ArticulatedTables>), String> {
-    let target = pipeline
-        .prepare(scan.mesh.clone(), skeleton)
-        .map_err(|e| e.to_string())?
-        .seen_from(nalgebra::Point3::origin());
+    let target = prepare_view(pipeline, scan, skeleton)?;
     let tables = scan_tables(pipeline, template, &target)?;
     Ok((target, tables))
+}
+
+/// A frame's scan prepared with its joints, seen from the camera at the origin (its
+/// viewpoint, for the occlusion test).
+fn prepare_view(
+    pipeline: &Pipeline,
+    scan: &ScanMesh,
+    skeleton: &Skeleton,
+) -> Result<PreparedMesh, String> {
+    Ok(pipeline
+        .prepare(scan.mesh.clone(), skeleton)
+        .map_err(|e| e.to_string())?
+        .seen_from(nalgebra::Point3::origin()))
 }
 
 /// A prepared scan's articulated tables against `template`, with its search index (`None`
