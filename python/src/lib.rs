@@ -1321,10 +1321,10 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 /// all, in order); ``joint_offset`` the seconds added to each depth frame's time before the
 /// log is read (default 0), or ``"auto"``: estimated from the frames, as ``symcorr track
 /// --joint-offset auto`` does. Yields one ``symcorr.Frame`` per frame; frames are computed on a
-/// worker thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed and a
-/// joint log that does not belong to the frames (its bones stick out of the body the camera
-/// sees: another recording or clock, x mirrored) raises ``ValueError``; ``check_log=False``
-/// skips that check.
+/// worker thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed
+/// and a joint log that does not belong to the frames (its bones stick out of the body the
+/// camera sees: another recording or clock, x mirrored) raises ``ValueError``;
+/// ``check_log=False`` skips that check.
 ///
 /// Example::
 ///
