@@ -5,7 +5,7 @@
 //! recording's log is read at `depth time + offset` ([`JointTrack`]). A wrong offset puts a
 //! swinging foot or hand where it was a few frames earlier or later: on the synthetic fixture
 //! recording (its log 40 ms ahead), tracking with an offset of 0 instead of 0.04 s doubled the
-//! matches that jump between frames (0.44 → 0.94 %).
+//! matches that jump between frames (0.44 → 0.96 %).
 //!
 //! Where the offset is right, every tracked joint lies inside the body the depth camera sees —
 //! behind the surface at its pixel, never in front of it. A joint read at the wrong time leaves
