@@ -1400,22 +1400,22 @@ fn track(
             .map_err(|e| py_err(e, Some("template")))?;
         (pipeline, Arc::new(prepared))
     };
-    let search = symcorr_kinect::clock::OffsetSearch::default();
     let joint_offset = match given_offset {
         Some(x) => x,
         None => py
             .detach(|| {
-                use symcorr_kinect::clock::{estimate_recording_offset, OFFSET_FRAMES};
-                estimate_recording_offset(&mut source, &track, OFFSET_FRAMES, &search)
+                use symcorr_kinect::clock::{
+                    estimate_recording_offset, OffsetSearch, OFFSET_FRAMES,
+                };
+                estimate_recording_offset(
+                    &mut source,
+                    &track,
+                    OFFSET_FRAMES,
+                    &OffsetSearch::default(),
+                )
             })
             .map(|e| e.offset_s)
-            .ok_or_else(|| {
-                value_err(format!(
-                    "joint_offset \"auto\": no offset within {}..{} s reads a tracked joint of \
-                     the log on the recording's frames (the log and the recording share no time)",
-                    search.range_s.0, search.range_s.1
-                ))
-            })?,
+            .map_err(|e| value_err(format!("joint_offset \"auto\": {e}")))?,
     };
     let options = TrackOptions {
         joint_offset_s: joint_offset,

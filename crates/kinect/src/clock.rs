@@ -17,7 +17,7 @@
 //! 0.02–0.06 s, and a log shifted by half a second or a second is found shifted by as much
 //! (docs/decisions/2026-12-05-joint-offset-estimate.md).
 
-use crate::{DepthFrame, DepthSource, Intrinsics, JointTrack};
+use crate::{DepthFrame, DepthSource, Intrinsics, JointTrack, KinectError};
 
 /// How an offset is searched ([`estimate_joint_offset`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,18 +171,27 @@ pub const OFFSET_FRAMES: usize = 30;
 /// [`estimate_joint_offset`] on `frames` depth frames spread evenly over the whole of `source`
 /// (a frame that cannot be read, or has no time, is left out): the same estimate for every
 /// slice of a recording, so that slices tracked apart are one run.
+///
+/// Errors: [`KinectError::Track`] when there is no estimate (no offset of `search` reads a
+/// tracked joint of the log on these frames, or `search` is empty or too long).
 pub fn estimate_recording_offset(
     source: &mut DepthSource,
     track: &JointTrack,
     frames: usize,
     search: &OffsetSearch,
-) -> Option<OffsetEstimate> {
+) -> Result<OffsetEstimate, KinectError> {
     let (n, k) = (source.len(), frames.min(source.len()));
     let sample: Vec<(f64, DepthFrame)> = (0..k)
         .map(|i| (2 * i + 1) * n / (2 * k))
         .filter_map(|i| Some((source.time(i)?, source.frame(i).ok()?)))
         .collect();
-    estimate_joint_offset(&sample, source.intrinsics(), track, search)
+    estimate_joint_offset(&sample, source.intrinsics(), track, search).ok_or_else(|| {
+        KinectError::Track(format!(
+            "no offset within {}..{} s reads a tracked joint of the log on the recording's \
+             frames (the log and the recording share no time)",
+            search.range_s.0, search.range_s.1
+        ))
+    })
 }
 
 /// `t` rounded to the nanosecond.

@@ -116,7 +116,8 @@ pub enum KinectError {
         /// The `.oni` file.
         file: String,
     },
-    /// A joint log cannot be used as a track (empty, times not increasing, bad offset).
+    /// A joint log cannot be used as a track (empty, times not increasing, bad offset), or its
+    /// clock offset cannot be estimated from a recording ([`crate::clock`]).
     #[error("joint track: {0}")]
     Track(String),
     /// A one-euro filter parameter is out of range ([`crate::OneEuroFilter::new`]).

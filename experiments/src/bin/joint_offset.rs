@@ -1,5 +1,5 @@
 //! The joint-log clock offset `symcorr track --joint-offset auto` estimates
-//! ([`symcorr_kinect::clock::estimate_joint_offset`]) on one recording and log (a
+//! ([`symcorr_kinect::clock::estimate_recording_offset`]) on one recording and log (a
 //! `symcorr-synth` recording's `recording.json` holds the offset it was made with).
 //!
 //! ```text
@@ -8,8 +8,8 @@
 
 use clap::Parser;
 use std::path::PathBuf;
-use symcorr_kinect::clock::{estimate_joint_offset, OffsetSearch};
-use symcorr_kinect::{DepthFrame, DepthSource, JointTrack};
+use symcorr_kinect::clock::{estimate_recording_offset, OffsetSearch};
+use symcorr_kinect::{DepthSource, JointTrack};
 
 /// The joint-log clock offset estimated from a recording's frames
 #[derive(Parser, Debug)]
@@ -31,21 +31,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     let mut source = DepthSource::open(&args.recording)?;
     let track = JointTrack::new(symcorr_kinect::read_joints(&args.joints)?, 0.0)?;
-    let (n, k) = (source.len(), args.frames.min(source.len()));
-    let mut sample: Vec<(f64, DepthFrame)> = Vec::new();
-    for i in (0..k).map(|i| (2 * i + 1) * n / (2 * k)) {
-        if let Some(t) = source.time(i) {
-            sample.push((t, source.frame(i)?));
-        }
-    }
-    let estimate = estimate_joint_offset(
-        &sample,
-        source.intrinsics(),
-        &track,
-        &OffsetSearch::default(),
-    );
+    let estimate =
+        estimate_recording_offset(&mut source, &track, args.frames, &OffsetSearch::default());
     match estimate {
-        Some(e) => {
+        Ok(e) => {
             if args.curve {
                 for (o, s, m) in &e.curve {
                     println!("offset {o:.3} score {s:.5} lookups {m}");
@@ -53,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             println!("estimate {:.3} s score {:.5} m", e.offset_s, e.score_m);
         }
-        None => println!("no estimate: the log covers no frame"),
+        Err(e) => println!("no estimate: {e}"),
     }
     Ok(())
 }

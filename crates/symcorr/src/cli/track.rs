@@ -149,17 +149,9 @@ fn resolve_joint_offset(
     match arg {
         JointOffset::Seconds(s) => Ok(s),
         JointOffset::Auto => {
-            let search = OffsetSearch::default();
-            estimate_recording_offset(recording, joints, OFFSET_FRAMES, &search)
+            estimate_recording_offset(recording, joints, OFFSET_FRAMES, &OffsetSearch::default())
                 .map(|e| e.offset_s)
-                .ok_or_else(|| {
-                    CliError(format!(
-                        "--joint-offset auto: no offset within {}..{} s reads a tracked joint of \
-                         the log on the recording's frames (the log and the recording share no \
-                         time)",
-                        search.range_s.0, search.range_s.1
-                    ))
-                })
+                .map_err(|e| CliError(format!("--joint-offset auto: {e}")))
         }
     }
 }
