@@ -14,7 +14,7 @@
 //! estimate is the candidate offset whose joints lie least in front of the surface, on average
 //! over the tracked joints of frames spread over the recording: a visual-hull test in the depth
 //! image, without meshing. Measured on 14 synthetic recordings (log 40 ms ahead): estimates
-//! 0.02–0.06 s, and a log shifted by half a second or a second is found shifted by as much
+//! 0.02–0.07 s, and a log shifted by half a second or a second is found shifted by as much
 //! (docs/decisions/2026-12-05-joint-offset-estimate.md).
 
 use crate::{DepthFrame, DepthSource, Intrinsics, JointTrack, KinectError};
