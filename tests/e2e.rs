@@ -1217,6 +1217,94 @@ fn track_refuses_a_mirrored_joint_log_before_writing() {
     assert!(out.join("track.json").exists());
 }
 
+/// A NiTE tracker's log (15 joints: no wrists, no feet, its `foot` at the ankle) of the fixture
+/// recording, the two frames in which the tracker lost the body included (every joint at the
+/// origin with confidence 0): tracked like the Kinect v1 log, those two frames skipped with the
+/// reason, the others matched.
+#[test]
+fn track_reads_a_nite_log_with_frames_that_lost_the_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let v1 = read_json(&rec.join("joints.json"));
+    // NiTE name ← the Kinect v1 joint at its place (symcorr-kinect's mapping table).
+    let nite = [
+        ("head", "head"),
+        ("neck", "shoulder_center"),
+        ("torso", "spine"),
+        ("shoulder_left", "shoulder_left"),
+        ("shoulder_right", "shoulder_right"),
+        ("elbow_left", "elbow_left"),
+        ("elbow_right", "elbow_right"),
+        ("hand_left", "hand_left"),
+        ("hand_right", "hand_right"),
+        ("hip_left", "hip_left"),
+        ("hip_right", "hip_right"),
+        ("knee_left", "knee_left"),
+        ("knee_right", "knee_right"),
+        ("foot_left", "ankle_left"),
+        ("foot_right", "ankle_right"),
+    ];
+    let frames: Vec<Value> = v1["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let pick = |key: &str| {
+                nite.iter()
+                    .map(|(n, v)| (n.to_string(), f[key][v].clone()))
+                    .collect::<serde_json::Map<_, _>>()
+            };
+            serde_json::json!({
+                "time_s": f["time_s"], "joints": pick("joints"), "confidence": pick("confidence")
+            })
+        })
+        .collect();
+    let lost = frames
+        .iter()
+        .filter(|f| {
+            f["confidence"]
+                .as_object()
+                .unwrap()
+                .values()
+                .all(|c| c == 0.0)
+        })
+        .count();
+    assert_eq!(lost, 2, "the fixture's log loses the body in two frames");
+    let log = dir.path().join("nite.json");
+    let doc = serde_json::json!({
+        "format": "symcorr.joints/1", "skeleton": "nite", "units": "m", "frames": frames
+    });
+    std::fs::write(&log, doc.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let o = run(bin()
+        .args(["track", rec.to_str().unwrap(), "--joint-offset", "0.04"])
+        .args(["--frames", "53..58", "--joints"])
+        .arg(&log)
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc = read_json(&out.join("track.json"));
+    let status: Vec<&str> = doc["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["status"].as_str().unwrap())
+        .collect();
+    assert_eq!(status.len(), 5, "{status:?}");
+    assert_eq!(
+        status.iter().filter(|s| **s == "ok").count(),
+        3,
+        "{status:?}"
+    );
+    assert!(
+        status
+            .iter()
+            .filter(|s| **s != "ok")
+            .all(|s| s.contains("track no joint")),
+        "{status:?}"
+    );
+}
+
 /// `--joint-offset auto` finds a log whose clock runs a second and 40 ms ahead (the fixture's
 /// log, restamped), records the estimate, and tracks with it; a fixed offset that is wrong by
 /// the second is refused by the log check; a value that is neither is a usage error.

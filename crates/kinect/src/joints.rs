@@ -218,18 +218,31 @@ pub fn parse_joints(text: &str, file: &str) -> Result<(JointLog, JointFormat), K
     parse_joints_as(text, file, format, BodySelect::MostTracked).map(|log| (log, format))
 }
 
-/// Parses joint-file text in a given format.
+/// Parses joint-file text in a given format. A log in which no frame tracks a joint (every
+/// joint untracked, as when the tracker never saw a body) is [`KinectError::NoBody`].
 pub fn parse_joints_as(
     text: &str,
     file: &str,
     format: JointFormat,
     body: BodySelect,
 ) -> Result<JointLog, KinectError> {
-    match format {
+    let log = match format {
         JointFormat::Json => parse_joints_json(text, file),
         JointFormat::KinectText => crate::sdk_text::parse_kinect_text(text, file),
         JointFormat::NtuSkeleton => crate::ntu::parse_ntu(text, file, body),
+    }?;
+    let tracks =
+        |s: &Skeleton| (0..Joint::COUNT).any(|j| s.confidence[j] > 0.0 || s.interpolated[j]);
+    if !log.frames.iter().any(|f| tracks(&f.skeleton)) {
+        return Err(KinectError::NoBody {
+            file: file.to_string(),
+            message: format!(
+                "no frame of the {} tracks a joint (every confidence is 0)",
+                log.frames.len()
+            ),
+        });
     }
+    Ok(log)
 }
 
 fn read_text(path: &Path) -> Result<(String, String), KinectError> {
@@ -549,7 +562,7 @@ fn frame_from_json(
     }
     let mut skeleton = partial.complete().map_err(|j| {
         format!(
-            "missing joint {:?} cannot be interpolated (or its estimate is not finite)",
+            "joint {:?}: its estimate from its neighbours is not a finite position",
             j.name()
         )
     })?;

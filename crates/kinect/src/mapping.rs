@@ -29,16 +29,24 @@
 //!
 //! ## Interpolation rules (any source)
 //!
-//! A canonical joint that is missing is estimated from its bone-chain neighbours, in this order
-//! of preference, and flagged in [`Skeleton::interpolated`](symcorr_skeleton::Skeleton) with
-//! confidence `0.5 × min(confidence of the joints used)`:
+//! A canonical joint that is missing is estimated from its tracked bone-chain neighbours
+//! (confidence > 0), in this order of preference, and flagged in
+//! [`Skeleton::interpolated`](symcorr_skeleton::Skeleton) with confidence
+//! `0.5 × min(confidence of the joints used)`:
 //! hip_center = mid(hips); shoulder_center = mid(shoulders); spine = 30 % hip_center → shoulder_center;
 //! head = shoulder_center + 0.5·(shoulder_center − spine); wrist = 80 % elbow → hand;
 //! hand = wrist + 0.25·(wrist − elbow); elbow = mid(shoulder, wrist or hand); knee = mid(hip, ankle);
 //! ankle = knee + (knee − hip) (shin ≈ thigh); foot = ankle + 0.3·|knee − ankle| · facing, where
-//! facing = (left − right) × up from the hips (or shoulders) and up = shoulder_center − hip_center
+//! facing = (left − right) × up from the hips (or, where the hips give no direction, the
+//! shoulders) and up = shoulder_center − hip_center (or − spine without a hip centre)
 //! (DESIGN.md: left/right are the subject's sides; in Kinect camera space a subject facing the
 //! sensor faces −z).
+//!
+//! A joint that no tracked neighbour can estimate is left **untracked**: at (0, 0, 0) with
+//! confidence 0 and not flagged, as the Kinect SDK reports a joint it does not track. A frame in
+//! which the tracker lost the body (every joint untracked) is therefore kept as such — `track`
+//! skips it with that reason, a single-frame command refuses it — and one untracked hip does not
+//! make a whole log unreadable.
 
 use crate::geom::normalize;
 use nalgebra::{distance, Point3, Vector3};
@@ -251,12 +259,17 @@ impl Partial {
         self.confidence[j.index()] = c;
     }
 
+    /// A tracked joint (confidence > 0): what estimates may be built from.
     fn get(&self, j: Joint) -> Option<(Point3<f64>, f64)> {
-        self.positions[j.index()].map(|p| (p, self.confidence[j.index()]))
+        let c = self.confidence[j.index()];
+        self.positions[j.index()]
+            .filter(|_| c > 0.0)
+            .map(|p| (p, c))
     }
 
-    /// Completes the skeleton with the interpolation rules of the module docs. Returns the
-    /// first joint that cannot be estimated (or whose estimate overflows) as the error.
+    /// Completes the skeleton with the interpolation rules of the module docs; a joint nothing
+    /// tracked can estimate is left untracked. Returns the first joint whose position is not
+    /// finite (an estimate between huge coordinates overflows) as the error.
     pub fn complete(mut self) -> Result<Skeleton, Joint> {
         let mut interpolated = [false; 20];
         // Each pass fills what its neighbours allow; three passes settle every chain.
@@ -281,7 +294,9 @@ impl Partial {
             match self.positions[j.index()] {
                 // Interpolating between huge (finite) coordinates can overflow to infinity.
                 Some(p) if p.iter().all(|c| c.is_finite()) => positions[j.index()] = p,
-                _ => return Err(j),
+                Some(_) => return Err(j),
+                // Untracked: the SDK's (0, 0, 0) with confidence 0.
+                None => self.confidence[j.index()] = 0.0,
             }
         }
         Ok(Skeleton {
@@ -304,18 +319,17 @@ impl Partial {
 
     /// Facing direction of the subject: (left − right) × up.
     fn facing(&self) -> Option<Vector3<f64>> {
-        let (hc, _) = self.get(Joint::HipCenter)?;
+        let (low, _) = self
+            .get(Joint::HipCenter)
+            .or_else(|| self.get(Joint::Spine))?;
         let (sc, _) = self.get(Joint::ShoulderCenter)?;
-        let up = sc - hc;
-        let lr = self
-            .get(Joint::HipLeft)
-            .zip(self.get(Joint::HipRight))
-            .or_else(|| {
-                self.get(Joint::ShoulderLeft)
-                    .zip(self.get(Joint::ShoulderRight))
-            })?;
-        let left = lr.0 .0 - lr.1 .0;
-        normalize(left.cross(&up))
+        let up = sc - low;
+        let across = |l: Joint, r: Joint| {
+            let ((pl, _), (pr, _)) = self.get(l).zip(self.get(r))?;
+            normalize((pl - pr).cross(&up))
+        };
+        across(Joint::HipLeft, Joint::HipRight)
+            .or_else(|| across(Joint::ShoulderLeft, Joint::ShoulderRight))
     }
 
     fn estimate(&self, j: Joint) -> Option<(Point3<f64>, f64)> {

@@ -2,8 +2,9 @@
 //!
 //! 1. Every pixel with a depth in `[min_depth_m, max_depth_m]` is unprojected with
 //!    [`Intrinsics::unproject`] (the organised cloud keeps the pixel grid).
-//! 2. Background: with a skeleton, points outside the skeleton's bounding box grown by
-//!    `background_margin_m` are dropped (walls, furniture, other people). First the joints must
+//! 2. Background: with a skeleton, points outside the bounding box of its tracked joints grown
+//!    by `background_margin_m` are dropped (walls, furniture, other people); a skeleton that
+//!    tracks no joint (the tracker lost the body) is refused. First the joints must
 //!    lie on the body the frame shows (at least half within [`JOINT_DEPTH_TOLERANCE_M`] of the
 //!    surface at their pixel); joints of another frame, camera or unit are refused rather than
 //!    left to crop the body.
@@ -440,6 +441,16 @@ fn ransac_floor(
 /// camera sees (a far-side joint in a profile view), plus the sensor's noise.
 pub const JOINT_DEPTH_TOLERANCE_M: f64 = 0.35;
 
+/// The joints a skeleton tracks (confidence > 0, or interpolated by the joint reader) at finite
+/// positions; an untracked joint's position — the SDK's (0, 0, 0) — says nothing.
+fn usable_joints(s: &Skeleton) -> impl Iterator<Item = Point3<f64>> + '_ {
+    Joint::ALL
+        .into_iter()
+        .filter(|j| s.confidence[j.index()] > 0.0 || s.interpolated[j.index()])
+        .map(|j| s.position(j))
+        .filter(|p| p.coords.iter().all(|x| x.is_finite()))
+}
+
 /// Refuses a skeleton whose joints do not lie on the body this depth frame shows (joints of
 /// another frame, camera or unit): fewer than half of the usable joints project into the image
 /// onto a surface within [`JOINT_DEPTH_TOLERANCE_M`] of their depth (a 7×7 pixel window, so a
@@ -454,13 +465,7 @@ fn check_joints_on_depth(
     let (w, h) = (frame.width as i64, frame.height as i64);
     let mut usable = 0;
     let mut on_body = 0;
-    for j in Joint::ALL {
-        let p = s.position(j);
-        if !(s.confidence[j.index()] > 0.0 || s.interpolated[j.index()])
-            || !p.coords.iter().all(|x| x.is_finite())
-        {
-            continue;
-        }
+    for p in usable_joints(s) {
         usable += 1;
         if p.z <= 0.0 {
             continue;
@@ -512,11 +517,19 @@ pub fn scan_mesh(
         ..ScanReport::default()
     };
     if let Some(s) = skeleton {
+        if usable_joints(s).next().is_none() {
+            return Err(KinectError::Scan(
+                "the skeleton tracks no joint (every confidence is 0): the tracker saw no body \
+                 in this frame"
+                    .into(),
+            ));
+        }
         check_joints_on_depth(frame, k, &points, s)?;
         let margin = Vector3::repeat(opts.background_margin_m);
         let mut lo = Point3::from([f64::INFINITY; 3]);
         let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
-        for p in &s.positions {
+        // The box of the tracked joints: an untracked joint at the camera would stretch it.
+        for p in usable_joints(s) {
             lo = lo.inf(&(p - margin));
             hi = hi.sup(&(p + margin));
         }

@@ -2,7 +2,9 @@
 //! metres, SDK joint order), separated by whitespace or commas. Empty lines and lines starting
 //! with `#` are skipped. The first value is the frame number; the time is `frame / 30 s`.
 //! A joint at exactly (0, 0, 0) is how the SDK writes an untracked joint: it is interpolated
-//! along its bone chain (see [`crate::mapping`]) and flagged.
+//! along its bone chain where tracked neighbours allow and flagged, otherwise kept untracked
+//! (confidence 0; see [`crate::mapping`]). A line of zeros is a frame in which the tracker saw
+//! no body.
 
 use crate::error::KinectError;
 use crate::joints::{JointFrame, JointLog, KINECT_FPS};
@@ -62,7 +64,7 @@ pub fn parse_kinect_text(text: &str, file: &str) -> Result<JointLog, KinectError
         }
         let skeleton = partial.complete().map_err(|j| {
             err(format!(
-                "joint {:?} is untracked (0 0 0) and cannot be interpolated to a finite position",
+                "joint {:?}: its estimate from its neighbours is not a finite position",
                 j.name()
             ))
         })?;

@@ -289,11 +289,20 @@ fn bad_json_gives_typed_errors_naming_file_and_frame() {
         Err(KinectError::Json { .. })
     ));
 
-    // A nite file missing a shoulder cannot be completed.
+    // A nite frame naming only its head: what nothing tracked can estimate is untracked.
     let nite =
         r#"{"format":"symcorr.joints/1","skeleton":"nite","frames":[{"joints":{"head":[0,1,2]}}]}"#;
-    let e = parse_joints(nite, "n.json").unwrap_err();
-    assert!(matches!(e, KinectError::Frame { frame: 0, .. }), "{e}");
+    let (log, _) = parse_joints(nite, "n.json").unwrap();
+    let s = &log.frames[0].skeleton;
+    assert_eq!(s.confidence[Joint::Head.index()], 1.0);
+    let untracked = Joint::ALL.into_iter().filter(|&j| j != Joint::Head);
+    assert!(untracked
+        .into_iter()
+        .all(|j| s.confidence[j.index()] == 0.0));
+    // A log in which no frame tracks a joint has no body.
+    let nite = nite.replace("\"joints\"", "\"confidence\":{\"head\":0},\"joints\"");
+    let e = parse_joints(&nite, "n.json").unwrap_err();
+    assert!(matches!(e, KinectError::NoBody { .. }), "{e}");
 }
 
 fn parse_joints_json_ok(text: &str) -> bool {
@@ -352,11 +361,11 @@ fn bad_text_dumps_name_the_line() {
         parse_kinect_text("# nothing\n", "k.txt"),
         Err(KinectError::NoBody { .. })
     ));
-    // All-zero joints with nothing to interpolate from.
+    // All-zero joints: a frame without a body, and no other frame.
     let zeros = format!("0{}\n", " 0".repeat(60));
     assert!(matches!(
-        parse_kinect_text(&zeros, "k.txt"),
-        Err(KinectError::Parse { line: 1, .. })
+        parse_joints(&zeros, "k.txt"),
+        Err(KinectError::NoBody { .. })
     ));
 }
 
@@ -484,6 +493,110 @@ mod props {
             }
         }
     }
+}
+
+/// A NiTE frame (15 joints) at time `t` of a subject standing 2 m from the sensor, facing it,
+/// every joint tracked; `set` overrides joints by name (position, confidence).
+fn nite_frame(t: f64, set: &[(&str, [f64; 3], f64)]) -> String {
+    let standing = [
+        ("head", [0.0, 0.6, 2.0]),
+        ("neck", [0.0, 0.4, 2.0]),
+        ("torso", [0.0, 0.1, 2.0]),
+        ("shoulder_left", [-0.2, 0.4, 2.0]),
+        ("shoulder_right", [0.2, 0.4, 2.0]),
+        ("elbow_left", [-0.3, 0.1, 2.0]),
+        ("elbow_right", [0.3, 0.1, 2.0]),
+        ("hand_left", [-0.3, -0.2, 2.0]),
+        ("hand_right", [0.3, -0.2, 2.0]),
+        ("hip_left", [-0.1, -0.2, 2.0]),
+        ("hip_right", [0.1, -0.2, 2.0]),
+        ("knee_left", [-0.1, -0.6, 2.0]),
+        ("knee_right", [0.1, -0.6, 2.0]),
+        ("foot_left", [-0.1, -1.0, 2.0]),
+        ("foot_right", [0.1, -1.0, 2.0]),
+    ];
+    let (mut joints, mut conf) = (Vec::new(), Vec::new());
+    for (name, p) in standing {
+        let (p, c) = set
+            .iter()
+            .find(|s| s.0 == name)
+            .map_or((p, 1.0), |s| (s.1, s.2));
+        joints.push(format!("\"{name}\":[{},{},{}]", p[0], p[1], p[2]));
+        conf.push(format!("\"{name}\":{c}"));
+    }
+    format!(
+        r#"{{"time_s":{t},"joints":{{{}}},"confidence":{{{}}}}}"#,
+        joints.join(","),
+        conf.join(",")
+    )
+}
+
+#[test]
+fn a_lost_body_or_an_untracked_hip_leaves_joints_untracked_not_the_log_unreadable() {
+    let lost: Vec<_> = symcorr_kinect::mapping::NITE_NAMES
+        .iter()
+        .map(|&n| (n, [0.0; 3], 0.0))
+        .collect();
+    let frames = [
+        nite_frame(0.0, &[]),
+        // The tracker lost the body: every joint at the origin with confidence 0.
+        nite_frame(1.0 / 30.0, &lost),
+        // The left hip untracked: no hip centre, so no facing from the hips.
+        nite_frame(2.0 / 30.0, &[("hip_left", [0.0; 3], 0.0)]),
+    ];
+    let text = format!(
+        r#"{{"format":"symcorr.joints/1","skeleton":"nite","frames":[{}]}}"#,
+        frames.join(",")
+    );
+    let (log, _) = parse_joints(&text, "lost.json").unwrap();
+    assert_eq!(log.frames.len(), 3);
+    let tracked = &log.frames[0].skeleton;
+    assert!(tracked.confidence.iter().all(|&c| c > 0.0));
+    let lost = &log.frames[1].skeleton;
+    assert!(lost.confidence.iter().all(|&c| c == 0.0), "{lost:?}");
+    assert!(lost.interpolated.iter().all(|&i| !i), "{lost:?}");
+    let hip = &log.frames[2].skeleton;
+    for j in [Joint::HipLeft, Joint::HipCenter] {
+        assert_eq!(hip.confidence[j.index()], 0.0, "{j:?}");
+        assert!(!hip.interpolated[j.index()], "{j:?}");
+    }
+    // Facing comes from the shoulders instead: the feet still point at the camera (−z).
+    for (a, f) in [
+        (Joint::AnkleLeft, Joint::FootLeft),
+        (Joint::AnkleRight, Joint::FootRight),
+    ] {
+        assert!(hip.interpolated[f.index()] && hip.confidence[f.index()] > 0.0);
+        assert!(hip.position(f).z < hip.position(a).z - 0.05, "{f:?}");
+    }
+    // The same in a Kinect SDK text dump: a line of zeros, and a line with one hip at zero.
+    let line = |zero: &dyn Fn(Joint) -> bool, n: u32| {
+        let mut l = n.to_string();
+        for j in Joint::ALL {
+            let p = if zero(j) {
+                [0.0; 3]
+            } else {
+                tracked.position(j).into()
+            };
+            l += &format!(" {} {} {}", p[0], p[1], p[2]);
+        }
+        l
+    };
+    let dump = [
+        line(&|_| false, 0),
+        line(&|_| true, 1),
+        line(&|j| j == Joint::HipRight, 2),
+    ]
+    .join("\n");
+    let (log, _) = parse_joints(&dump, "lost.txt").unwrap();
+    assert!(log.frames[0].skeleton.confidence.iter().all(|&c| c > 0.0));
+    assert!(log.frames[1].skeleton.confidence.iter().all(|&c| c == 0.0));
+    let s = &log.frames[2].skeleton;
+    assert_eq!(s.confidence[Joint::HipRight.index()], 0.0);
+    assert_eq!(
+        s.confidence.iter().filter(|&&c| c == 0.0).count(),
+        1,
+        "{s:?}"
+    );
 }
 
 #[test]

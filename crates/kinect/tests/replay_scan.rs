@@ -328,6 +328,38 @@ fn joints_of_another_frame_or_unit_are_refused_not_used_to_crop() {
 }
 
 #[test]
+fn untracked_joints_do_not_crop_and_a_lost_body_is_refused() {
+    let k = small_k();
+    let frame = render(&k);
+    let full = scan_mesh(
+        &frame,
+        &k,
+        Some(&subject_skeleton()),
+        &ScanOptions::default(),
+    )
+    .unwrap();
+    // A hand the tracker lost, reported as the SDK does: (0, 0, 0), confidence 0. Inside the box
+    // it would stretch it to the camera and let the wall and the blob in.
+    let mut s = subject_skeleton();
+    s.positions[Joint::HandLeft.index()] = Point3::origin();
+    s.confidence[Joint::HandLeft.index()] = 0.0;
+    let lost_hand = scan_mesh(&frame, &k, Some(&s), &ScanOptions::default()).unwrap();
+    assert_eq!(lost_hand.mesh.num_vertices(), full.mesh.num_vertices());
+    assert_eq!(
+        lost_hand.report.background_removed,
+        full.report.background_removed
+    );
+    // Every joint untracked: the tracker saw no body. Refused, naming the cause.
+    s.positions = [Point3::origin(); 20];
+    s.confidence = [0.0; 20];
+    let e = scan_mesh(&frame, &k, Some(&s), &ScanOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, KinectError::Scan(_)) && e.to_string().contains("tracks no joint"),
+        "{e}"
+    );
+}
+
+#[test]
 fn without_cleanup_the_grid_mesh_never_bridges_depth_jumps() {
     let k = small_k();
     let frame = render(&k);
