@@ -1305,6 +1305,53 @@ fn track_reads_a_nite_log_with_frames_that_lost_the_body() {
     );
 }
 
+/// A log stamped on another clock (from the epoch) has no frame near any depth frame: refused
+/// before anything is written, naming both time ranges; read with the offset between the two
+/// clocks, it tracks. Depth times in milliseconds are refused naming the unit.
+#[test]
+fn track_refuses_a_log_on_another_clock_or_times_in_milliseconds() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let mut log = read_json(&rec.join("joints.json"));
+    let epoch_s = 1_764_950_000.0;
+    for f in log["frames"].as_array_mut().unwrap() {
+        f["time_s"] = serde_json::json!(f["time_s"].as_f64().unwrap() + epoch_s);
+    }
+    let epoch = dir.path().join("epoch.json");
+    std::fs::write(&epoch, log.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let track = |rec: &Path, offset: &str| {
+        run(bin()
+            .args(["track", rec.to_str().unwrap(), "--frames", "20..22"])
+            .args(["--joint-offset", offset, "--joints"])
+            .arg(&epoch)
+            .arg("--out")
+            .arg(&out))
+    };
+    let msg = assert_one_line_error(&track(&rec, "0.04"));
+    assert!(msg.contains("different clocks"), "{msg}");
+    assert!(msg.contains("1764950000.0"), "{msg}");
+    assert!(!out.exists(), "nothing is written for a refused log");
+    let o = track(&rec, &(epoch_s + 0.04).to_string());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The recording's first 30 frames with their times in milliseconds.
+    let ms = dir.path().join("ms");
+    std::fs::create_dir_all(ms.join("depth")).unwrap();
+    std::fs::copy(rec.join("intrinsics.json"), ms.join("intrinsics.json")).unwrap();
+    let times = std::fs::read_to_string(rec.join("depth_times.txt")).unwrap();
+    let mut in_ms = String::new();
+    for (i, t) in times.lines().take(30).enumerate() {
+        let png = format!("depth/{i:06}.png");
+        std::fs::copy(rec.join(&png), ms.join(&png)).unwrap();
+        in_ms += &format!("{}\n", t.trim().parse::<f64>().unwrap() * 1000.0);
+    }
+    std::fs::write(ms.join("depth_times.txt"), in_ms).unwrap();
+    std::fs::remove_dir_all(&out).unwrap();
+    let msg = assert_one_line_error(&track(&ms, "0.04"));
+    assert!(msg.contains("milliseconds"), "{msg}");
+    assert!(!out.exists());
+}
+
 /// `--joint-offset auto` finds a log whose clock runs a second and 40 ms ahead (the fixture's
 /// log, restamped), records the estimate, and tracks with it; a fixed offset that is wrong by
 /// the second is refused by the log check; a value that is neither is a usage error.

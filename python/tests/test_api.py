@@ -242,6 +242,18 @@ def test_track_refuses_a_mirrored_joint_log(tmp_path):
     assert len(it) == 1
 
 
+def test_track_refuses_a_log_on_another_clock(tmp_path):
+    # Stamped from the epoch: no log frame near any depth frame's time.
+    log = json.loads((RECORDING / "joints.json").read_text())
+    for f in log["frames"]:
+        f["time_s"] += 1.7e9
+    epoch = tmp_path / "epoch.json"
+    epoch.write_text(json.dumps(log))
+    template = symcorr.Body(*body("s0_rest"))
+    with pytest.raises(ValueError, match="different clocks"):
+        symcorr.track(RECORDING, epoch, template, joint_offset=0.04)
+
+
 def test_track_estimates_the_joint_offset(tmp_path):
     # The log's clock a second later still: "auto" finds it, a fixed 0.04 is refused.
     log = json.loads((RECORDING / "joints.json").read_text())

@@ -76,12 +76,13 @@ fn frame_file_name(i: usize) -> String {
 impl Recording {
     /// Opens a recording folder and checks its layout: `intrinsics.json` is valid
     /// ([`Intrinsics::read`]); `depth/` holds `000000.png`, `000001.png`, … with no gap;
-    /// `depth_times.txt` has one time per frame, each finite and later than the one before.
-    /// No PNG is decoded.
+    /// `depth_times.txt` has one time per frame, each finite and later than the one before,
+    /// a median interval within [`FRAME_PERIODS_S`] apart. No PNG is decoded.
     ///
     /// Errors: [`KinectError::Io`] (a missing file or folder, named); [`KinectError::Json`] for
     /// the intrinsics; [`KinectError::Recording`] naming the folder or file (no frames, a missing
-    /// frame number, a mis-numbered frame file, as many times as frames); [`KinectError::Parse`]
+    /// frame number, a mis-numbered frame file, as many times as frames, times not in
+    /// seconds); [`KinectError::Parse`]
     /// naming `depth_times.txt` and the line (not a number, not finite, not increasing).
     ///
     /// ```
@@ -231,12 +232,61 @@ fn count_frames(depth_dir: &Path) -> Result<usize, KinectError> {
 }
 
 /// The times of `depth_times.txt` ([`parse_depth_times`] on the file's text, which must be
-/// UTF-8).
+/// UTF-8), frames a plausible period apart ([`FRAME_PERIODS_S`]).
 fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
     let (text, file) = crate::error::read_input_text(path, |file, message| {
         KinectError::Recording { file, message }
     })?;
-    parse_depth_times(&text, frames, &file)
+    let times = parse_depth_times(&text, frames, &file)?;
+    let gaps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    check_frame_period(median(gaps), "the depth frames")
+        .map_err(|message| KinectError::Recording { file, message })?;
+    Ok(times)
+}
+
+/// The median interval between frames that depth cameras and skeleton trackers run at (1 ms
+/// to 5 s: 1000 to 0.2 frames per second). A median outside it means times in another unit —
+/// milliseconds read as seconds put 30 Hz frames 33 s apart.
+pub const FRAME_PERIODS_S: std::ops::RangeInclusive<f64> = 0.001..=5.0;
+
+/// The median of `v` (the mean of the middle two for an even count); `None` when empty.
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
+    }
+}
+
+/// Refuses a median frame `period` (seconds; `None`: a single frame, nothing to judge) outside
+/// [`FRAME_PERIODS_S`], naming `what` and the unit the times seem to be in.
+fn check_frame_period(period: Option<f64>, what: &str) -> Result<(), String> {
+    let Some(p) = period.filter(|p| !FRAME_PERIODS_S.contains(p)) else {
+        return Ok(());
+    };
+    let unit = [
+        (1e-3, "milliseconds"),
+        (1e-6, "microseconds"),
+        (1e-9, "nanoseconds"),
+    ]
+    .into_iter()
+    .find(|(scale, _)| FRAME_PERIODS_S.contains(&(p * scale)))
+    .map_or(String::new(), |(_, unit)| {
+        format!(" (they look like {unit})")
+    });
+    let p = if p >= 1e-3 {
+        format!("{p:.3}")
+    } else {
+        format!("{p:.3e}")
+    };
+    Err(format!(
+        "{what} are a median {p} s apart, not {}–{} s as a camera's or a tracker's frames are: \
+         times must be in seconds{unit}",
+        FRAME_PERIODS_S.start(),
+        FRAME_PERIODS_S.end()
+    ))
 }
 
 /// Parses the text of a recording folder's `depth_times.txt` ([`DEPTH_TIMES_FILE`]) for a
@@ -394,8 +444,9 @@ impl JointTrack {
     /// depth frame at `t` is matched with the log at `t + offset_s`). The log frame period is
     /// the median of the log's frame intervals (1/30 s, [`KINECT_FPS`], for a one-frame log).
     ///
-    /// Errors: [`KinectError::Track`] for an empty log, a non-finite offset, or log times that are
-    /// not finite or do not increase strictly (naming the frame).
+    /// Errors: [`KinectError::Track`] for an empty log, a non-finite offset, log times that are
+    /// not finite or do not increase strictly (naming the frame), or a median frame interval
+    /// outside [`FRAME_PERIODS_S`] (times in another unit than seconds).
     ///
     /// ```
     /// use symcorr_kinect::{JointLog, JointTrack};
@@ -436,17 +487,9 @@ impl JointTrack {
             }
             gaps.push(b - a);
         }
-        let period_s = if gaps.is_empty() {
-            1.0 / KINECT_FPS
-        } else {
-            gaps.sort_by(f64::total_cmp);
-            let n = gaps.len();
-            if n % 2 == 1 {
-                gaps[n / 2]
-            } else {
-                0.5 * (gaps[n / 2 - 1] + gaps[n / 2])
-            }
-        };
+        let period_s = median(gaps);
+        check_frame_period(period_s, "the joint log's frames").map_err(KinectError::Track)?;
+        let period_s = period_s.unwrap_or(1.0 / KINECT_FPS);
         Ok(JointTrack {
             log,
             offset_s,

@@ -51,6 +51,49 @@ fn open_err(dir: &Path) -> KinectError {
     }
 }
 
+/// Times written in milliseconds or microseconds, in the depth times or in the joint log, are
+/// refused naming the unit they look like, not read as a 33-second or 9-hour frame interval.
+#[test]
+fn times_in_another_unit_than_seconds_are_refused_naming_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (i, (times, unit)) in [
+        ("0\n33.4\n66.7\n", Some("milliseconds")),
+        ("0\n33367\n66700\n", Some("microseconds")),
+        ("0\n3.3e-5\n6.7e-5\n", None),
+        ("0\n0.0334\n0.0667\n", None),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let dir = tmp.path().join(i.to_string());
+        std::fs::create_dir(&dir).unwrap();
+        write_recording(&dir, &[0, 1, 2], times);
+        let seconds = times.contains("0.0334");
+        match (Recording::open(&dir), seconds) {
+            (Ok(_), true) => {}
+            (Err(e @ KinectError::Recording { .. }), false) => {
+                let msg = e.to_string();
+                assert!(msg.contains("times must be in seconds"), "{msg}");
+                assert!(unit.is_none_or(|u| msg.contains(u)), "{msg}");
+                assert!(msg.contains("depth_times.txt"), "{msg}");
+            }
+            (r, _) => panic!("{times:?}: {r:?}"),
+        }
+    }
+    let skeleton = Skeleton::from_arrays([[0.0, 1.0, 2.0]; 20]);
+    for (fps, ok) in [(30.0, true), (0.03, false), (500.0, true), (3e4, false)] {
+        let log = JointLog::from_skeletons(vec![skeleton.clone(); 4], fps);
+        match JointTrack::new(log, 0.0) {
+            Ok(_) => assert!(ok, "{fps} frames per second"),
+            Err(KinectError::Track(msg)) => {
+                assert!(!ok && msg.contains("times must be in seconds"), "{msg}");
+                assert!(fps > 1.0 || msg.contains("milliseconds"), "{msg}");
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
+
 #[test]
 fn valid_recording_opens_and_reads_frames_on_demand() {
     let tmp = tempfile::tempdir().unwrap();

@@ -17,7 +17,7 @@ use super::TrackOptions;
 use super::Tracker;
 use crate::{Pipeline, PreparedMesh};
 use symcorr_attach::{FitCheckKind, FitQuality};
-use symcorr_kinect::{DepthSource, JointTrack};
+use symcorr_kinect::{DepthSource, JointTrack, SkipReason};
 
 /// Frames [`check_log`] looks at by default, spread over the run.
 pub const LOG_CHECK_FRAMES: usize = 8;
@@ -40,6 +40,9 @@ fn outside(fit: &FitQuality) -> Option<f64> {
 /// What the sampled frames of [`check_log`] showed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LogCheck {
+    /// When no frame of the run has a joint log frame near its time, the two clocks; the
+    /// frames are then not observed.
+    pub clocks: Option<ClockGap>,
     /// Per sampled frame, its index in the recording and how well the log's skeleton at its
     /// time sits in its scan — as logged or turned half a turn about its spine, whichever
     /// leaves fewer bone points outside — or why the frame has no skeleton fit (no log frame
@@ -49,20 +52,48 @@ pub struct LogCheck {
 
 /// A joint log refused by [`LogCheck::verdict`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LogMismatch {
+    /// The log's skeletons stick out of the bodies the frames show.
+    #[error(
+        "the joint log does not fit the depth frames: on {fits} frames spread over the run a \
+         median {median:.0} % of the points along its bones lie outside the body the camera \
+         sees (at most {max:.0} % accepted; logs recorded with their frames measured 0–11 %). \
+         The log may belong to another recording or clock (check the joint offset, or estimate \
+         it from the frames), or its axes may differ from the depth camera's (mirrored, another \
+         up axis)",
+        median = 100.0 * median_outside,
+        max = 100.0 * MAX_LOG_OUTSIDE
+    )]
+    Outside {
+        /// Frames with a skeleton fit.
+        fits: usize,
+        /// Their median share of bone points outside the visual hull.
+        median_outside: f64,
+    },
+    /// No frame of the run has a log frame near its time.
+    #[error("{0}")]
+    Clocks(ClockGap),
+}
+
+/// The times of a run's depth frames and of a joint log that has no frame near any of them
+/// (within [`MAX_GAP_PERIODS`](symcorr_kinect::recording::MAX_GAP_PERIODS) log periods): the
+/// two were stamped on different clocks — another origin (a log stamped from the epoch or the
+/// tracker's start), or another recording.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error(
-    "the joint log does not fit the depth frames: on {fits} frames spread over the run a \
-     median {median:.0} % of the points along its bones lie outside the body the camera sees \
-     (at most {max:.0} % accepted; logs recorded with their frames measured 0–11 %). The log \
-     may belong to another recording or clock (check the joint offset, or estimate it from the \
-     frames), or its axes may differ from the depth camera's (mirrored, another up axis)",
-    median = 100.0 * median_outside,
-    max = 100.0 * MAX_LOG_OUTSIDE
+    "no depth frame of the run has a joint log frame near its time: the frames run from \
+     {:.3} to {:.3} s, read in the log {offset_s} s later, and the log runs from {:.3} to \
+     {:.3} s; the two are stamped on different clocks (another origin or another recording). \
+     The joint offset shifts the log: its start is {:.3} s after the first frame's",
+    depth_s[0], depth_s[1], log_s[0], log_s[1], log_s[0] - depth_s[0]
 )]
-pub struct LogMismatch {
-    /// Frames with a skeleton fit.
-    pub fits: usize,
-    /// Their median share of bone points outside the visual hull.
-    pub median_outside: f64,
+pub struct ClockGap {
+    /// The first and last time of the run's depth frames, seconds.
+    pub depth_s: [f64; 2],
+    /// The first and last time of the joint log, seconds.
+    pub log_s: [f64; 2],
+    /// The joint offset the log was read with ([`TrackOptions::joint_offset_s`]).
+    pub offset_s: f64,
 }
 
 impl LogCheck {
@@ -91,14 +122,18 @@ impl LogCheck {
         })
     }
 
-    /// Refuses the log when at least [`MIN_LOG_CHECK_FITS`] frames have a skeleton fit and
-    /// their median share of bone points outside the body the camera sees is above
-    /// [`MAX_LOG_OUTSIDE`].
+    /// Refuses the log when no frame of the run has a log frame near its time
+    /// ([`LogMismatch::Clocks`]), or when at least [`MIN_LOG_CHECK_FITS`] frames have a skeleton
+    /// fit and their median share of bone points outside the body the camera sees is above
+    /// [`MAX_LOG_OUTSIDE`] ([`LogMismatch::Outside`]).
     pub fn verdict(&self) -> Result<(), LogMismatch> {
+        if let Some(gap) = self.clocks {
+            return Err(LogMismatch::Clocks(gap));
+        }
         let fits = self.outside().len();
         match self.median_outside() {
             Some(median) if fits >= MIN_LOG_CHECK_FITS && median > MAX_LOG_OUTSIDE => {
-                Err(LogMismatch {
+                Err(LogMismatch::Outside {
                     fits,
                     median_outside: median,
                 })
@@ -108,8 +143,9 @@ impl LogCheck {
     }
 }
 
-/// Observes `samples` frames of `frames` (indices into `source`, spread evenly over the list),
-/// each on its own — a [`Tracker`]'s observer reset before each frame, so no frame borrows
+/// Looks for a log frame near each of `frames`' times (indices into `source`); when there is
+/// none for any, records the two clocks ([`LogCheck::clocks`]) and stops. Otherwise observes
+/// `samples` frames of `frames` (spread evenly over the list), each on its own — a [`Tracker`]'s observer reset before each frame, so no frame borrows
 /// from another; its scan prepared, without the search index a match needs — and records how
 /// well the log's skeleton at its time sits in its scan. Nothing is matched or written.
 /// [`LogCheck::verdict`] judges the log.
@@ -122,6 +158,29 @@ pub fn check_log(
     frames: &[usize],
     samples: usize,
 ) -> LogCheck {
+    let times: Vec<f64> = frames.iter().filter_map(|&i| source.time(i)).collect();
+    let covered = times.iter().any(|t| {
+        !matches!(
+            joints.at(t + options.joint_offset_s),
+            Err(SkipReason::NoSkeleton { .. })
+        )
+    });
+    let log = &joints.log().frames;
+    if let (false, Some(first), Some(last)) = (covered, log.first(), log.last()) {
+        let (lo, hi) = times
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t), hi.max(t))
+            });
+        return LogCheck {
+            clocks: Some(ClockGap {
+                depth_s: [lo, hi],
+                log_s: [first.time_s, last.time_s],
+                offset_s: options.joint_offset_s,
+            }),
+            frames: Vec::new(),
+        };
+    }
     let k = samples.min(frames.len());
     // One tracker, forgotten before each frame: the template's tables are built once.
     let mut tracker = Tracker::new(
@@ -160,7 +219,10 @@ pub fn check_log(
             (index, fit)
         })
         .collect();
-    LogCheck { frames }
+    LogCheck {
+        clocks: None,
+        frames,
+    }
 }
 
 #[cfg(test)]
@@ -187,6 +249,7 @@ mod tests {
 
     fn check(frames: &[Option<f64>]) -> LogCheck {
         LogCheck {
+            clocks: None,
             frames: frames
                 .iter()
                 .enumerate()
@@ -204,8 +267,15 @@ mod tests {
         let refused = check(&[Some(0.3), Some(0.25), Some(0.0), Some(0.29)])
             .verdict()
             .unwrap_err();
-        assert_eq!(refused.fits, 4);
-        assert!((refused.median_outside - 0.27).abs() < 1e-12);
+        let LogMismatch::Outside {
+            fits,
+            median_outside,
+        } = refused
+        else {
+            panic!("{refused:?}")
+        };
+        assert_eq!(fits, 4);
+        assert!((median_outside - 0.27).abs() < 1e-12);
         assert!(refused.to_string().contains("a median 27 %"));
         // Two fits are too few; frames without the check (or skipped) do not count.
         assert!(check(&[Some(0.3), Some(0.3), None]).verdict().is_ok());
