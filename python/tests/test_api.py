@@ -242,13 +242,19 @@ def test_track_refuses_a_mirrored_joint_log(tmp_path):
     assert len(it) == 1
 
 
-def test_track_refuses_a_log_on_another_clock(tmp_path):
-    # Stamped from the epoch: no log frame near any depth frame's time.
+def restamped(tmp_path, seconds):
+    """The recording's joint log with every time `seconds` later, written in `tmp_path`."""
     log = json.loads((RECORDING / "joints.json").read_text())
     for f in log["frames"]:
-        f["time_s"] += 1.7e9
-    epoch = tmp_path / "epoch.json"
-    epoch.write_text(json.dumps(log))
+        f["time_s"] += seconds
+    path = tmp_path / f"log_{seconds}.json"
+    path.write_text(json.dumps(log))
+    return path
+
+
+def test_track_refuses_a_log_on_another_clock(tmp_path):
+    # Stamped from the epoch: no log frame near any depth frame's time.
+    epoch = restamped(tmp_path, 1.7e9)
     template = symcorr.Body(*body("s0_rest"))
     with pytest.raises(ValueError, match="different clocks"):
         symcorr.track(RECORDING, epoch, template, joint_offset=0.04)
@@ -256,11 +262,7 @@ def test_track_refuses_a_log_on_another_clock(tmp_path):
 
 def test_track_estimates_the_joint_offset(tmp_path):
     # The log's clock a second later still: "auto" finds it, a fixed 0.04 is refused.
-    log = json.loads((RECORDING / "joints.json").read_text())
-    for f in log["frames"]:
-        f["time_s"] += 1.0
-    late = tmp_path / "late.json"
-    late.write_text(json.dumps(log))
+    late = restamped(tmp_path, 1.0)
     template = symcorr.Body(*body("s0_rest"))
     frames = list(symcorr.track(RECORDING, late, template, frames=[40], joint_offset="auto"))
     assert frames[0].status == "ok"
