@@ -1352,6 +1352,36 @@ fn track_refuses_a_log_on_another_clock_or_times_in_milliseconds() {
     assert!(!out.exists());
 }
 
+/// A log in millimetres that says metres: its joints lie on no depth frame. Refused before
+/// anything is written, naming the ratio of the depths (not tracked with every frame skipped).
+#[test]
+fn track_refuses_joints_in_another_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let mut log = read_json(&rec.join("joints.json"));
+    assert_eq!(log["units"], "m");
+    for f in log["frames"].as_array_mut().unwrap() {
+        for p in f["joints"].as_object_mut().unwrap().values_mut() {
+            for c in p.as_array_mut().unwrap() {
+                *c = serde_json::json!(c.as_f64().unwrap() * 1000.0);
+            }
+        }
+    }
+    let mm = dir.path().join("mm.json");
+    std::fs::write(&mm, log.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let o = run(bin()
+        .args(["track", rec.to_str().unwrap(), "--joint-offset", "0.04"])
+        .arg("--joints")
+        .arg(&mm)
+        .arg("--out")
+        .arg(&out));
+    let msg = assert_one_line_error(&o);
+    assert!(msg.contains("does not lie on the depth frames"), "{msg}");
+    assert!(msg.contains("a median 0.001×"), "{msg}");
+    assert!(!out.exists(), "nothing is written for a refused log");
+}
+
 /// `--joint-offset auto` finds a log whose clock runs a second and 40 ms ahead (the fixture's
 /// log, restamped), records the estimate, and tracks with it; a fixed offset that is wrong by
 /// the second is refused by the log check; a value that is neither is a usage error.

@@ -1322,8 +1322,9 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 /// log is read (default 0), or ``"auto"``: estimated from the frames, as ``symcorr track
 /// --joint-offset auto`` does. Yields one ``symcorr.Frame`` per frame; frames are computed on a
 /// worker thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed
-/// and a joint log that does not belong to the frames (its bones stick out of the body the
-/// camera sees: another recording or clock, x mirrored) raises ``ValueError``;
+/// and a joint log that does not belong to the frames (no log frame near any depth frame's
+/// time: another clock; its joints on no depth frame: another unit; its bones sticking out of
+/// the body the camera sees: another recording or clock, x mirrored) raises ``ValueError``;
 /// ``check_log=False`` skips that check.
 ///
 /// Example::

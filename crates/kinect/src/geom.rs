@@ -12,3 +12,15 @@ pub(crate) fn normalize(v: Vector3<f64>) -> Option<Vector3<f64>> {
         None
     }
 }
+
+/// The median of `v` (the mean of the middle two for an even count; `v` is sorted in place),
+/// `None` when empty.
+pub(crate) fn median(v: &mut [f64]) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
+    }
+}

@@ -42,6 +42,7 @@
 use crate::camera::Intrinsics;
 use crate::depth::{read_depth_png16, DepthFrame};
 use crate::error::KinectError;
+use crate::geom::median;
 use crate::joints::{JointLog, KINECT_FPS};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
@@ -238,8 +239,8 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
         KinectError::Recording { file, message }
     })?;
     let times = parse_depth_times(&text, frames, &file)?;
-    let gaps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    check_frame_period(median(gaps), "the depth frames")
+    let mut gaps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    check_frame_period(median(&mut gaps), "the depth frames")
         .map_err(|message| KinectError::Recording { file, message })?;
     Ok(times)
 }
@@ -248,17 +249,6 @@ fn read_times(path: &Path, frames: usize) -> Result<Vec<f64>, KinectError> {
 /// to 5 s: 1000 to 0.2 frames per second). A median outside it means times in another unit —
 /// milliseconds read as seconds put 30 Hz frames 33 s apart.
 pub const FRAME_PERIODS_S: std::ops::RangeInclusive<f64> = 0.001..=5.0;
-
-/// The median of `v` (the mean of the middle two for an even count); `None` when empty.
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    match n {
-        0 => None,
-        _ if n % 2 == 1 => Some(v[n / 2]),
-        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
-    }
-}
 
 /// Refuses a median frame `period` (seconds; `None`: a single frame, nothing to judge) outside
 /// [`FRAME_PERIODS_S`], naming `what` and the unit the times seem to be in.
@@ -487,7 +477,7 @@ impl JointTrack {
             }
             gaps.push(b - a);
         }
-        let period_s = median(gaps);
+        let period_s = median(&mut gaps);
         check_frame_period(period_s, "the joint log's frames").map_err(KinectError::Track)?;
         let period_s = period_s.unwrap_or(1.0 / KINECT_FPS);
         Ok(JointTrack {

@@ -94,14 +94,10 @@ impl std::fmt::Display for BoneLengthReport {
     }
 }
 
+/// The median of a window's values; a window is never empty (`select` refuses one), so the
+/// fallback is never taken.
 fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+    crate::geom::median(v).unwrap_or(0.0)
 }
 
 /// Weighted median: the smallest value whose cumulative weight reaches half the total.

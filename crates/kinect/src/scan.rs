@@ -27,7 +27,7 @@
 use crate::camera::Intrinsics;
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
-use crate::geom::normalize;
+use crate::geom::{median, normalize};
 use nalgebra::{Point3, Vector3};
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Skeleton};
@@ -451,20 +451,67 @@ fn usable_joints(s: &Skeleton) -> impl Iterator<Item = Point3<f64>> + '_ {
         .filter(|p| p.coords.iter().all(|x| x.is_finite()))
 }
 
-/// Refuses a skeleton whose joints do not lie on the body this depth frame shows (joints of
-/// another frame, camera or unit): fewer than half of the usable joints project into the image
-/// onto a surface within [`JOINT_DEPTH_TOLERANCE_M`] of their depth (a 7×7 pixel window, so a
-/// joint just beside a silhouette still finds it). Without the check the background box built
-/// from such joints silently cuts the body.
-fn check_joints_on_depth(
-    frame: &DepthFrame,
-    k: &Intrinsics,
-    points: &[Option<Point3<f64>>],
-    s: &Skeleton,
-) -> Result<(), KinectError> {
-    let (w, h) = (frame.width as i64, frame.height as i64);
-    let mut usable = 0;
-    let mut on_body = 0;
+/// How a skeleton's joints lie on a depth frame ([`joints_on_depth`]): joints of another frame,
+/// camera or unit do not.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointsOnDepth {
+    /// The joints the skeleton tracks (confidence > 0 or interpolated) at finite positions.
+    pub usable: usize,
+    /// Of those, the joints that project into the image onto a reading within
+    /// [`JOINT_DEPTH_TOLERANCE_M`] of their depth (in a 7×7 pixel window, so a joint just beside
+    /// a silhouette still finds it).
+    pub on_body: usize,
+    /// Over the usable joints in front of the camera with readings in their window: the median
+    /// of (the window's median reading / the joint's depth); `None` without any. Far from 1 when
+    /// the depth and the joints are in different units (a depth image in tenths of millimetres:
+    /// 10; joints in millimetres read as metres: 0.001).
+    pub depth_ratio: Option<f64>,
+}
+
+impl JointsOnDepth {
+    /// At least half of the usable joints lie on the body (true without usable joints: nothing
+    /// to judge).
+    pub fn lie_on_body(&self) -> bool {
+        2 * self.on_body >= self.usable
+    }
+
+    /// [`depth_unit_hint`] of [`JointsOnDepth::depth_ratio`].
+    pub fn unit_hint(&self) -> String {
+        depth_unit_hint(self.depth_ratio)
+    }
+}
+
+/// The unit mismatch a [`JointsOnDepth::depth_ratio`] suggests, as a clause for a message: ""
+/// when the depths agree within a factor of 3 (joints beside the body find the background,
+/// rarely three times as far) or there is no ratio.
+pub fn depth_unit_hint(depth_ratio: Option<f64>) -> String {
+    match depth_ratio {
+        Some(r) if !(1.0 / 3.0..=3.0).contains(&r) => format!(
+            "; the depth readings at the joints' pixels are a median {r:.3}× the joints' depth \
+             (depth images hold millimetres, joints metres)"
+        ),
+        _ => String::new(),
+    }
+}
+
+/// How `s`'s tracked joints lie on `frame` seen through `k` ([`JointsOnDepth`]). Pixels
+/// outside the frame (intrinsics of another size) have no reading.
+///
+/// ```
+/// use symcorr_kinect::{scan::joints_on_depth, DepthFrame, Intrinsics};
+/// use symcorr_skeleton::Skeleton;
+/// let k = Intrinsics { width: 8, height: 6, fx: 7.0, fy: 7.0, cx: 3.5, cy: 2.5 };
+/// // A wall 2 m away (2000 mm); joints 2 m away lie on it, joints "2000 m" away do not.
+/// let frame = DepthFrame::new(8, 6, vec![2000; 48]).unwrap();
+/// let on = joints_on_depth(&frame, &k, &Skeleton::from_arrays([[0.0, 0.0, 2.0]; 20]));
+/// assert!(on.lie_on_body() && on.unit_hint().is_empty());
+/// let mm = joints_on_depth(&frame, &k, &Skeleton::from_arrays([[0.0, 0.0, 2000.0]; 20]));
+/// assert!(!mm.lie_on_body());
+/// assert!(mm.unit_hint().contains("0.001×"));
+/// ```
+pub fn joints_on_depth(frame: &DepthFrame, k: &Intrinsics, s: &Skeleton) -> JointsOnDepth {
+    let (w, h) = (i64::from(frame.width), i64::from(frame.height));
+    let (mut usable, mut on_body, mut ratios) = (0, 0, Vec::new());
     for p in usable_joints(s) {
         usable += 1;
         if p.z <= 0.0 {
@@ -472,24 +519,48 @@ fn check_joints_on_depth(
         }
         let [u, v] = k.project(&p);
         let (u, v) = (u.round() as i64, v.round() as i64);
-        let near = (-3..=3).any(|dv| {
-            (-3..=3).any(|du| {
-                let (x, y) = (u + du, v + dv);
-                (0..w).contains(&x)
-                    && (0..h).contains(&y)
-                    && points[(y * w + x) as usize]
-                        .is_some_and(|q| (q.z - p.z).abs() <= JOINT_DEPTH_TOLERANCE_M)
-            })
-        });
-        if near {
+        let mut window: Vec<f64> = (-3..=3)
+            .flat_map(|dv| (-3..=3).map(move |du| (u + du, v + dv)))
+            .filter(|(x, y)| (0..w).contains(x) && (0..h).contains(y))
+            .filter_map(|(x, y)| frame.data_mm.get((y * w + x) as usize))
+            .filter(|&&d| d > 0)
+            .map(|&d| f64::from(d) / 1000.0)
+            .collect();
+        if window
+            .iter()
+            .any(|z| (z - p.z).abs() <= JOINT_DEPTH_TOLERANCE_M)
+        {
             on_body += 1;
         }
+        if let Some(m) = median(&mut window) {
+            ratios.push(m / p.z);
+        }
     }
-    if usable > 0 && 2 * on_body < usable {
+    JointsOnDepth {
+        usable,
+        on_body,
+        depth_ratio: median(&mut ratios),
+    }
+}
+
+/// Refuses a skeleton whose joints do not lie on the body this depth frame shows (joints of
+/// another frame, camera or unit): fewer than half of the usable joints project onto a surface
+/// within [`JOINT_DEPTH_TOLERANCE_M`] of their depth ([`joints_on_depth`]). Without the check
+/// the background box built from such joints silently cuts the body.
+fn check_joints_on_depth(
+    frame: &DepthFrame,
+    k: &Intrinsics,
+    s: &Skeleton,
+) -> Result<(), KinectError> {
+    let on = joints_on_depth(frame, k, s);
+    if !on.lie_on_body() {
         return Err(KinectError::Scan(format!(
-            "the joints do not lie on the body in this depth frame: only {on_body} of {usable} \
-             project onto a surface within {JOINT_DEPTH_TOLERANCE_M} m of their depth; are they \
-             from another frame, another camera or in another unit (metres expected)?"
+            "the joints do not lie on the body in this depth frame: only {} of {} project onto \
+             a surface within {JOINT_DEPTH_TOLERANCE_M} m of their depth; are they from another \
+             frame, another camera or in another unit (metres expected)?{}",
+            on.on_body,
+            on.usable,
+            on.unit_hint()
         )));
     }
     Ok(())
@@ -524,7 +595,7 @@ pub fn scan_mesh(
                     .into(),
             ));
         }
-        check_joints_on_depth(frame, k, &points, s)?;
+        check_joints_on_depth(frame, k, s)?;
         let margin = Vector3::repeat(opts.background_margin_m);
         let mut lo = Point3::from([f64::INFINITY; 3]);
         let mut hi = Point3::from([f64::NEG_INFINITY; 3]);

@@ -310,10 +310,11 @@ fn joints_of_another_frame_or_unit_are_refused_not_used_to_crop() {
         }
         Skeleton::from_arrays(p)
     };
-    // The person a metre to the side (joints of another frame), and joints in millimetres.
-    for s in [
-        moved(&|[x, y, z]| [x + 1.0, y, z]),
-        moved(&|q| q.map(|c| c * 1000.0)),
+    // The person a metre to the side (joints of another frame), and joints in millimetres:
+    // only the second is said to be in another unit.
+    for (s, unit) in [
+        (moved(&|[x, y, z]| [x + 1.0, y, z]), None),
+        (moved(&|q| q.map(|c| c * 1000.0)), Some("0.001×")),
     ] {
         let e = scan_mesh(&frame, &k, Some(&s), &ScanOptions::default()).unwrap_err();
         let msg = e.to_string();
@@ -321,6 +322,12 @@ fn joints_of_another_frame_or_unit_are_refused_not_used_to_crop() {
             msg.contains("do not lie on the body") && !msg.contains('\n'),
             "{msg}"
         );
+        assert_eq!(
+            msg.contains("the depth readings at the joints"),
+            unit.is_some(),
+            "{msg}"
+        );
+        assert!(unit.is_none_or(|u| msg.contains(u)), "{msg}");
     }
     // A few centimetres of tracker offset is not another frame.
     let s = moved(&|[x, y, z]| [x + 0.03, y - 0.02, z + 0.05]);

@@ -12,11 +12,17 @@
 //! ([`FitCheckKind::Outside`]: each joint and three points per bone) lie inside the body the
 //! camera sees (its visual hull) when the log was recorded with the frames, and a fifth to a
 //! third of them outside it when not (docs/decisions/2026-12-05-joint-log-check.md).
+//!
+//! Two plainer mismatches are named before that: a log with no frame near any depth frame's
+//! time (stamped on another clock: every frame would be skipped, [`LogMismatch::Clocks`]), and
+//! a log whose joints lie on no depth frame (another unit or camera: every frame's scan would
+//! refuse them, [`LogMismatch::OffBody`]).
 
 use super::TrackOptions;
 use super::Tracker;
 use crate::{Pipeline, PreparedMesh};
 use symcorr_attach::{FitCheckKind, FitQuality};
+use symcorr_kinect::scan::{depth_unit_hint, joints_on_depth, JointsOnDepth};
 use symcorr_kinect::{DepthSource, JointTrack, SkipReason};
 
 /// Frames [`check_log`] looks at by default, spread over the run.
@@ -43,6 +49,9 @@ pub struct LogCheck {
     /// When no frame of the run has a joint log frame near its time, the two clocks; the
     /// frames are then not observed.
     pub clocks: Option<ClockGap>,
+    /// Per sampled frame with a skeleton in the log, how its joints lie on the depth frame
+    /// ([`joints_on_depth`]).
+    pub on_depth: Vec<JointsOnDepth>,
     /// Per sampled frame, its index in the recording and how well the log's skeleton at its
     /// time sits in its scan — as logged or turned half a turn about its spine, whichever
     /// leaves fewer bone points outside — or why the frame has no skeleton fit (no log frame
@@ -59,8 +68,8 @@ pub enum LogMismatch {
          median {median:.0} % of the points along its bones lie outside the body the camera \
          sees (at most {max:.0} % accepted; logs recorded with their frames measured 0–11 %). \
          The log may belong to another recording or clock (check the joint offset, or estimate \
-         it from the frames), or its axes may differ from the depth camera's (mirrored, another \
-         up axis)",
+         it from the frames), its axes may differ from the depth camera's (mirrored, another up \
+         axis), or the intrinsics may be another camera's",
         median = 100.0 * median_outside,
         max = 100.0 * MAX_LOG_OUTSIDE
     )]
@@ -73,6 +82,23 @@ pub enum LogMismatch {
     /// No frame of the run has a log frame near its time.
     #[error("{0}")]
     Clocks(ClockGap),
+    /// In most sampled frames the log's joints do not lie on the body the depth shows.
+    #[error(
+        "the joint log does not lie on the depth frames: in {off} of {frames} frames spread over \
+         the run fewer than half of the joints project onto a surface within {tolerance} m of \
+         their depth{hint}. The log may belong to another recording or camera, or be in another \
+         unit",
+        tolerance = symcorr_kinect::scan::JOINT_DEPTH_TOLERANCE_M
+    )]
+    OffBody {
+        /// Sampled frames with a skeleton.
+        frames: usize,
+        /// Of those, the frames whose joints do not lie on the body.
+        off: usize,
+        /// The unit mismatch the median depth ratio of those frames suggests
+        /// ([`depth_unit_hint`]), or "".
+        hint: String,
+    },
 }
 
 /// The times of a run's depth frames and of a joint log that has no frame near any of them
@@ -123,12 +149,30 @@ impl LogCheck {
     }
 
     /// Refuses the log when no frame of the run has a log frame near its time
-    /// ([`LogMismatch::Clocks`]), or when at least [`MIN_LOG_CHECK_FITS`] frames have a skeleton
-    /// fit and their median share of bone points outside the body the camera sees is above
+    /// ([`LogMismatch::Clocks`]); when at least [`MIN_LOG_CHECK_FITS`] sampled frames have a
+    /// skeleton and in more than half of them the joints do not lie on the body
+    /// ([`LogMismatch::OffBody`]: another camera, another unit); or when at least
+    /// [`MIN_LOG_CHECK_FITS`] frames have a skeleton fit and their median share of bone points
+    /// outside the body the camera sees is above
     /// [`MAX_LOG_OUTSIDE`] ([`LogMismatch::Outside`]).
     pub fn verdict(&self) -> Result<(), LogMismatch> {
         if let Some(gap) = self.clocks {
             return Err(LogMismatch::Clocks(gap));
+        }
+        let frames = self.on_depth.len();
+        let off = self.on_depth.iter().filter(|o| !o.lie_on_body()).count();
+        if frames >= MIN_LOG_CHECK_FITS && 2 * off > frames {
+            // The depths of the frames whose joints are off: those say why.
+            let mut ratios: Vec<f64> = (self.on_depth.iter())
+                .filter(|o| !o.lie_on_body())
+                .filter_map(|o| o.depth_ratio)
+                .collect();
+            ratios.sort_by(f64::total_cmp);
+            return Err(LogMismatch::OffBody {
+                frames,
+                off,
+                hint: depth_unit_hint(ratios.get(ratios.len() / 2).copied()),
+            });
         }
         let fits = self.outside().len();
         match self.median_outside() {
@@ -144,11 +188,12 @@ impl LogCheck {
 }
 
 /// Looks for a log frame near each of `frames`' times (indices into `source`); when there is
-/// none for any, records the two clocks ([`LogCheck::clocks`]) and stops. Otherwise observes
-/// `samples` frames of `frames` (spread evenly over the list), each on its own — a [`Tracker`]'s observer reset before each frame, so no frame borrows
-/// from another; its scan prepared, without the search index a match needs — and records how
-/// well the log's skeleton at its time sits in its scan. Nothing is matched or written.
-/// [`LogCheck::verdict`] judges the log.
+/// none for any, records the two clocks ([`LogCheck::clocks`]) and stops. Otherwise takes
+/// `samples` frames of `frames` (spread evenly over the list) and records for each how the
+/// log's joints at its time lie on its depth ([`LogCheck::on_depth`]) and, observed on its own
+/// — a [`Tracker`]'s observer reset before each frame, so no frame borrows from another; its
+/// scan prepared, without the search index a match needs — how well the log's skeleton sits
+/// in its scan. Nothing is matched or written. [`LogCheck::verdict`] judges the log.
 pub fn check_log(
     pipeline: &Pipeline,
     template: &PreparedMesh,
@@ -178,6 +223,7 @@ pub fn check_log(
                 log_s: [first.time_s, last.time_s],
                 offset_s: options.joint_offset_s,
             }),
+            on_depth: Vec::new(),
             frames: Vec::new(),
         };
     }
@@ -190,6 +236,8 @@ pub fn check_log(
         joints.clone(),
         options.clone(),
     );
+    let intrinsics = *source.intrinsics();
+    let mut on_depth = Vec::new();
     let frames = (0..k)
         .map(|i| frames[(2 * i + 1) * frames.len() / (2 * k)])
         .map(|index| {
@@ -198,6 +246,9 @@ pub fn check_log(
                 .frame(index)
                 .map_err(|e| e.to_string())
                 .and_then(|depth| {
+                    if let Ok(at) = joints.at(time_s + options.joint_offset_s) {
+                        on_depth.push(joints_on_depth(&depth, &intrinsics, &at.skeleton));
+                    }
                     tracker.reset();
                     let (observer, _) = tracker.parts();
                     let target = observer.prepared(time_s, &depth)?;
@@ -221,6 +272,7 @@ pub fn check_log(
         .collect();
     LogCheck {
         clocks: None,
+        on_depth,
         frames,
     }
 }
@@ -250,6 +302,7 @@ mod tests {
     fn check(frames: &[Option<f64>]) -> LogCheck {
         LogCheck {
             clocks: None,
+            on_depth: Vec::new(),
             frames: frames
                 .iter()
                 .enumerate()
@@ -283,5 +336,43 @@ mod tests {
         skipped.frames.push((2, Err("no body".into())));
         assert!(skipped.verdict().is_ok());
         assert_eq!(check(&[]).median_outside(), None);
+    }
+
+    #[test]
+    fn joints_off_the_body_in_most_frames_refuse_the_log_naming_the_unit() {
+        let on = |on_body: usize, depth_ratio: f64| JointsOnDepth {
+            usable: 20,
+            on_body,
+            depth_ratio: Some(depth_ratio),
+        };
+        // Three of four frames off the body, their depth readings about 10× the joints' depth:
+        // a depth image in tenths of millimetres. Refused before the bone points are judged.
+        let mut c = check(&[Some(0.0), Some(0.0), Some(0.0)]);
+        c.on_depth = vec![on(0, 9.8), on(20, 1.0), on(1, 10.1), on(0, 10.0)];
+        let e = c.verdict().unwrap_err();
+        assert!(
+            matches!(
+                e,
+                LogMismatch::OffBody {
+                    frames: 4,
+                    off: 3,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("a median 10.000×"), "{e}");
+        // Half of them off is not most; two frames are too few to judge.
+        c.on_depth = vec![on(0, 9.8), on(20, 1.0), on(20, 1.0), on(0, 10.0)];
+        assert!(c.verdict().is_ok());
+        c.on_depth = vec![on(0, 9.8), on(0, 10.0)];
+        assert!(c.verdict().is_ok());
+        // Off the body at the right depth (another recording) names no unit.
+        c.on_depth = vec![on(0, 1.1); 3];
+        let e = c.verdict().unwrap_err().to_string();
+        assert!(
+            !e.contains("median") && e.contains("another recording"),
+            "{e}"
+        );
     }
 }
