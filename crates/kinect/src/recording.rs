@@ -43,7 +43,7 @@ use crate::camera::Intrinsics;
 use crate::depth::{read_depth_png16, DepthFrame};
 use crate::error::KinectError;
 use crate::geom::median;
-use crate::joints::{JointLog, KINECT_FPS};
+use crate::joints::{JointFrame, JointLog, KINECT_FPS};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 use symcorr_skeleton::{Joint, Skeleton};
@@ -431,11 +431,13 @@ pub enum SkipReason {
 
 impl JointTrack {
     /// A track over `log`, whose clock reads `offset_s` more than the depth frames' clock (a
-    /// depth frame at `t` is matched with the log at `t + offset_s`). The log frame period is
-    /// the median of the log's frame intervals (1/30 s, [`KINECT_FPS`], for a one-frame log).
+    /// depth frame at `t` is matched with the log at `t + offset_s`). A frame that repeats the
+    /// one before it exactly (time, joints, confidence) is dropped. The log frame period is the
+    /// median of the log's frame intervals (1/30 s, [`KINECT_FPS`], for a one-frame log).
     ///
     /// Errors: [`KinectError::Track`] for an empty log, a non-finite offset, log times that are
-    /// not finite or do not increase strictly (naming the frame), or a median frame interval
+    /// not finite or do not increase strictly (naming the frame; two different skeletons at one
+    /// time are ambiguous), or a median frame interval
     /// outside [`FRAME_PERIODS_S`] (times in another unit than seconds).
     ///
     /// ```
@@ -445,7 +447,7 @@ impl JointTrack {
     /// let track = JointTrack::new(log, 0.0).unwrap();
     /// assert!((track.period_s() - 1.0 / 15.0).abs() < 1e-12);
     /// ```
-    pub fn new(log: JointLog, offset_s: f64) -> Result<JointTrack, KinectError> {
+    pub fn new(mut log: JointLog, offset_s: f64) -> Result<JointTrack, KinectError> {
         if log.frames.is_empty() {
             return Err(KinectError::Track("the joint log has no frames".into()));
         }
@@ -466,17 +468,29 @@ impl JointTrack {
             )));
         }
         let mut gaps = Vec::with_capacity(log.frames.len().saturating_sub(1));
-        for (i, w) in log.frames.windows(2).enumerate() {
-            let (a, b) = (w[0].time_s, w[1].time_s);
-            if b <= a {
-                return Err(KinectError::Track(format!(
-                    "joint log frame {} at {b} s is not after frame {i} at {a} s \
-                     (a track needs strictly increasing times)",
-                    i + 1
-                )));
+        let mut kept: Vec<JointFrame> = Vec::with_capacity(log.frames.len());
+        // The file's index of the last kept frame, for messages.
+        let mut last = 0;
+        for (i, f) in std::mem::take(&mut log.frames).into_iter().enumerate() {
+            if let Some(prev) = kept.last() {
+                // A logger that writes the latest skeleton at every depth frame repeats a
+                // skeleton frame the tracker has not yet replaced: it carries nothing.
+                if f == *prev {
+                    continue;
+                }
+                let (a, b) = (prev.time_s, f.time_s);
+                if b <= a {
+                    return Err(KinectError::Track(format!(
+                        "joint log frame {i} at {b} s is not after frame {last} at {a} s \
+                         (a track needs strictly increasing times)"
+                    )));
+                }
+                gaps.push(b - a);
             }
-            gaps.push(b - a);
+            kept.push(f);
+            last = i;
         }
+        log.frames = kept;
         let period_s = median(&mut gaps);
         check_frame_period(period_s, "the joint log's frames").map_err(KinectError::Track)?;
         let period_s = period_s.unwrap_or(1.0 / KINECT_FPS);

@@ -481,11 +481,20 @@ fn no_body_when_no_joint_is_tracked() {
 fn track_refuses_unusable_logs() {
     let e = JointTrack::new(log_at(&[], vec![]), 0.0).unwrap_err();
     assert_eq!(e.to_string(), "joint track: the joint log has no frames");
-    let log = log_at(&[0.0, 0.1, 0.1], vec![line_skeleton(0.0); 3]);
+    // A frame repeated exactly (a logger writing the latest skeleton at every depth frame) is
+    // dropped; two different skeletons at one time, or a time going back, are refused, naming
+    // the frames by their index in the file.
+    let log = log_at(&[0.0, 0.1, 0.1, 0.2], vec![line_skeleton(0.0); 4]);
+    assert_eq!(JointTrack::new(log, 0.0).unwrap().log().frames.len(), 3);
+    let at = line_skeleton;
+    let log = log_at(
+        &[0.0, 0.0, 0.1, 0.1],
+        vec![at(0.0), at(0.0), at(0.0), at(0.5)],
+    );
     let e = JointTrack::new(log, 0.0).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "joint track: joint log frame 2 at 0.1 s is not after frame 1 at 0.1 s \
+        "joint track: joint log frame 3 at 0.1 s is not after frame 2 at 0.1 s \
          (a track needs strictly increasing times)"
     );
     let log = log_at(&[0.0, f64::NAN], vec![line_skeleton(0.0); 2]);
