@@ -152,7 +152,8 @@ impl JointLog {
             .ok_or_else(|| KinectError::Replay("the joint log has no frames".into()))
     }
 
-    /// Robust average of the frames with `start_s ≤ time_s ≤ end_s`:
+    /// Robust average of the frames with `start_s ≤ time_s ≤ end_s` that track a joint (a
+    /// frame in which the tracker lost the body, every joint untracked, says nothing):
     ///
     /// 1. per joint, the coordinate-wise median over the window;
     /// 2. a frame's deviation is the median over joints of its distance to that median; frames
@@ -167,10 +168,12 @@ impl JointLog {
             .iter()
             .filter(|f| f.time_s >= start_s && f.time_s <= end_s)
             .map(|f| &f.skeleton)
+            .filter(|s| (0..Joint::COUNT).any(|j| s.confidence[j] > 0.0 || s.interpolated[j]))
             .collect();
         if window.is_empty() {
             return Err(KinectError::Replay(format!(
-                "no frame between {start_s} s and {end_s} s (the log spans {} s to {} s)",
+                "no frame between {start_s} s and {end_s} s that tracks a joint (the log spans {} \
+                 s to {} s)",
                 self.frames.first().map_or(0.0, |f| f.time_s),
                 self.frames.last().map_or(0.0, |f| f.time_s)
             )));

@@ -101,6 +101,30 @@ fn robust_average_drops_outlier_frames_and_weights_by_confidence() {
 }
 
 #[test]
+fn robust_average_leaves_out_frames_that_lost_the_body() {
+    let base = standing();
+    let mut lost = base.clone();
+    lost.positions = [Point3::origin(); 20];
+    lost.confidence = [0.0; 20];
+    // Five frames without a body around three with it: a coordinate median over all eight
+    // would be the origin.
+    let mut frames = vec![lost.clone(); 5];
+    frames.splice(1..1, [-0.002, 0.0, 0.002].map(|e| shifted(&base, [e, 0.0, 0.0])));
+    let log = JointLog::from_skeletons(frames, FPS);
+    let all = FrameSelect::Window {
+        start_s: 0.0,
+        end_s: 10.0,
+    };
+    let avg = log.select(all).unwrap();
+    for j in Joint::ALL {
+        assert!(distance(&avg.position(j), &base.position(j)) < 0.005, "{j:?}");
+    }
+    let log = JointLog::from_skeletons(vec![lost; 3], FPS);
+    let e = log.select(all).unwrap_err();
+    assert!(e.to_string().contains("tracks a joint"), "{e}");
+}
+
+#[test]
 fn bone_length_report_finds_the_stretching_bone() {
     let base = standing();
     let rigid = JointLog::from_skeletons(
