@@ -109,7 +109,10 @@ fn robust_average_leaves_out_frames_that_lost_the_body() {
     // Five frames without a body around three with it: a coordinate median over all eight
     // would be the origin.
     let mut frames = vec![lost.clone(); 5];
-    frames.splice(1..1, [-0.002, 0.0, 0.002].map(|e| shifted(&base, [e, 0.0, 0.0])));
+    frames.splice(
+        1..1,
+        [-0.002, 0.0, 0.002].map(|e| shifted(&base, [e, 0.0, 0.0])),
+    );
     let log = JointLog::from_skeletons(frames, FPS);
     let all = FrameSelect::Window {
         start_s: 0.0,
@@ -117,7 +120,10 @@ fn robust_average_leaves_out_frames_that_lost_the_body() {
     };
     let avg = log.select(all).unwrap();
     for j in Joint::ALL {
-        assert!(distance(&avg.position(j), &base.position(j)) < 0.005, "{j:?}");
+        assert!(
+            distance(&avg.position(j), &base.position(j)) < 0.005,
+            "{j:?}"
+        );
     }
     let log = JointLog::from_skeletons(vec![lost; 3], FPS);
     let e = log.select(all).unwrap_err();
