@@ -258,6 +258,8 @@ def test_track_refuses_a_log_on_another_clock(tmp_path):
     template = symcorr.Body(*body("s0_rest"))
     with pytest.raises(ValueError, match="different clocks"):
         symcorr.track(RECORDING, epoch, template, joint_offset=0.04)
+    # No frames: nothing to compare, nothing to track.
+    assert len(symcorr.track(RECORDING, epoch, template, frames=[], joint_offset=0.04)) == 0
 
 
 def test_track_estimates_the_joint_offset(tmp_path):

@@ -231,9 +231,7 @@ pub fn parse_joints_as(
         JointFormat::KinectText => crate::sdk_text::parse_kinect_text(text, file),
         JointFormat::NtuSkeleton => crate::ntu::parse_ntu(text, file, body),
     }?;
-    let tracks =
-        |s: &Skeleton| (0..Joint::COUNT).any(|j| s.confidence[j] > 0.0 || s.interpolated[j]);
-    if !log.frames.iter().any(|f| tracks(&f.skeleton)) {
+    if !log.frames.iter().any(|f| f.skeleton.tracks_any()) {
         return Err(KinectError::NoBody {
             file: file.to_string(),
             message: format!(

@@ -43,7 +43,8 @@
 //! sensor faces −z).
 //!
 //! A joint that no tracked neighbour can estimate is left **untracked**: at (0, 0, 0) with
-//! confidence 0 and not flagged, as the Kinect SDK reports a joint it does not track. A frame in
+//! confidence 0 and not flagged, as the Kinect SDK reports a joint it does not track (a joint
+//! the source gives with confidence 0 keeps the position it was given, untracked as well). A frame in
 //! which the tracker lost the body (every joint untracked) is therefore kept as such — `track`
 //! skips it with that reason, a single-frame command refuses it — and one untracked hip does not
 //! make a whole log unreadable.

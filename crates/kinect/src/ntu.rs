@@ -214,11 +214,12 @@ pub fn parse_ntu(text: &str, file: &str, select: BodySelect) -> Result<JointLog,
                 partial.set(j, *p, f64::from(*state) / 2.0);
             }
         }
-        // Every canonical joint has a Kinect v2 source, so completion never interpolates.
+        // Every canonical joint has a Kinect v2 source, so completion never interpolates and
+        // every position is a parsed finite number: it cannot fail.
         let skeleton = partial.complete().map_err(|j| KinectError::Frame {
             file: file.to_string(),
             frame: fi,
-            message: format!("joint {:?} missing", j.name()),
+            message: format!("joint {:?} is not a finite position", j.name()),
         })?;
         out.push(JointFrame {
             time_s: fi as f64 / KINECT_FPS,

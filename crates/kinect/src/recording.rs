@@ -78,7 +78,7 @@ impl Recording {
     /// Opens a recording folder and checks its layout: `intrinsics.json` is valid
     /// ([`Intrinsics::read`]); `depth/` holds `000000.png`, `000001.png`, … with no gap;
     /// `depth_times.txt` has one time per frame, each finite and later than the one before,
-    /// a median interval within [`FRAME_PERIODS_S`] apart. No PNG is decoded.
+    /// the median interval between them within [`FRAME_PERIODS_S`]. No PNG is decoded.
     ///
     /// Errors: [`KinectError::Io`] (a missing file or folder, named); [`KinectError::Json`] for
     /// the intrinsics; [`KinectError::Recording`] naming the folder or file (no frames, a missing
@@ -256,16 +256,19 @@ fn check_frame_period(period: Option<f64>, what: &str) -> Result<(), String> {
     let Some(p) = period.filter(|p| !FRAME_PERIODS_S.contains(p)) else {
         return Ok(());
     };
-    let unit = [
+    let units: Vec<&str> = [
         (1e-3, "milliseconds"),
         (1e-6, "microseconds"),
         (1e-9, "nanoseconds"),
     ]
     .into_iter()
-    .find(|(scale, _)| FRAME_PERIODS_S.contains(&(p * scale)))
-    .map_or(String::new(), |(_, unit)| {
-        format!(" (they look like {unit})")
-    });
+    .filter(|(scale, _)| FRAME_PERIODS_S.contains(&(p * scale)))
+    .map(|(_, unit)| unit)
+    .collect();
+    let unit = match units[..] {
+        [] => String::new(),
+        _ => format!(" (they look like {})", units.join(" or ")),
+    };
     let p = if p >= 1e-3 {
         format!("{p:.3}")
     } else {
@@ -524,10 +527,10 @@ impl JointTrack {
     /// * two frames → per joint, linear interpolation of the positions with confidence the
     ///   smaller of the two; a joint tracked (confidence > 0) in only one of them keeps that
     ///   frame's position and confidence if that frame is within half a period of the time, and
-    ///   is otherwise untracked (confidence 0, position interpolated). A limb pair exchanged
+    ///   is otherwise untracked (confidence 0, position interpolated, not flagged). A limb pair exchanged
     ///   between the two frames (a tracker's left/right swap: [`limb_swap_evidence`] above
     ///   [`SWAP_EVIDENCE_THRESHOLD`]) is not interpolated: its joints are the nearer frame's.
-    ///   The `interpolated` flag of a joint is that of the frame(s) it came from;
+    ///   The `interpolated` flag of a tracked joint is that of the frame(s) it came from;
     /// * a result with every confidence 0 → [`SkipReason::NoBody`].
     ///
     /// ```
@@ -613,7 +616,8 @@ impl JointTrack {
                 (true, true) => (lerp, ca.min(cb), a.interpolated[j] || b.interpolated[j]),
                 (true, false) if gap_a <= half => (a.positions[j], ca, a.interpolated[j]),
                 (false, true) if gap_b <= half => (b.positions[j], cb, b.interpolated[j]),
-                _ => (lerp, 0.0, a.interpolated[j] || b.interpolated[j]),
+                // Untracked here: not flagged, so that nothing takes its position for one.
+                _ => (lerp, 0.0, false),
             };
             out.positions[j] = p;
             out.confidence[j] = c;

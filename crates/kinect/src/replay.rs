@@ -94,8 +94,8 @@ impl std::fmt::Display for BoneLengthReport {
     }
 }
 
-/// The median of a window's values; a window is never empty (`select` refuses one), so the
-/// fallback is never taken.
+/// The median of a window's values; a window is never empty (`robust_average` refuses one),
+/// so the fallback is never taken.
 fn median(v: &mut [f64]) -> f64 {
     crate::geom::median(v).unwrap_or(0.0)
 }
@@ -168,7 +168,7 @@ impl JointLog {
             .iter()
             .filter(|f| f.time_s >= start_s && f.time_s <= end_s)
             .map(|f| &f.skeleton)
-            .filter(|s| (0..Joint::COUNT).any(|j| s.confidence[j] > 0.0 || s.interpolated[j]))
+            .filter(|s| s.tracks_any())
             .collect();
         if window.is_empty() {
             return Err(KinectError::Replay(format!(

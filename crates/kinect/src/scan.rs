@@ -444,11 +444,12 @@ pub const JOINT_DEPTH_TOLERANCE_M: f64 = 0.35;
 /// The joints a skeleton tracks (confidence > 0, or interpolated by the joint reader) at finite
 /// positions; an untracked joint's position — the SDK's (0, 0, 0) — says nothing.
 fn usable_joints(s: &Skeleton) -> impl Iterator<Item = Point3<f64>> + '_ {
-    Joint::ALL
-        .into_iter()
-        .filter(|j| s.confidence[j.index()] > 0.0 || s.interpolated[j.index()])
-        .map(|j| s.position(j))
-        .filter(|p| p.coords.iter().all(|x| x.is_finite()))
+    Joint::ALL.into_iter().filter_map(|j| tracked(s, j))
+}
+
+/// Joint `j`'s position when the skeleton [tracks](Skeleton::tracks) it at a finite position.
+fn tracked(s: &Skeleton, j: Joint) -> Option<Point3<f64>> {
+    Some(s.position(j)).filter(|p| s.tracks(j) && p.coords.iter().all(|x| x.is_finite()))
 }
 
 /// How a skeleton's joints lie on a depth frame ([`joints_on_depth`]): joints of another frame,
@@ -459,7 +460,7 @@ pub struct JointsOnDepth {
     pub usable: usize,
     /// Of those, the joints that project into the image onto a reading within
     /// [`JOINT_DEPTH_TOLERANCE_M`] of their depth (in a 7×7 pixel window, so a joint just beside
-    /// a silhouette still finds it).
+    /// a silhouette still finds it; any reading, also one outside the scan's depth range).
     pub on_body: usize,
     /// Over the usable joints in front of the camera with readings in their window: the median
     /// of (the window's median reading / the joint's depth); `None` without any. Far from 1 when
@@ -518,7 +519,9 @@ pub fn joints_on_depth(frame: &DepthFrame, k: &Intrinsics, s: &Skeleton) -> Join
             continue;
         }
         let [u, v] = k.project(&p);
-        let (u, v) = (u.round() as i64, v.round() as i64);
+        // Far outside the image (a joint at the camera's plane projects to infinity) is outside.
+        let clamp = |x: f64, side: i64| x.round().clamp(-8.0, (side + 8) as f64) as i64;
+        let (u, v) = (clamp(u, w), clamp(v, h));
         let mut window: Vec<f64> = (-3..=3)
             .flat_map(|dv| (-3..=3).map(move |du| (u + du, v + dv)))
             .filter(|(x, y)| (0..w).contains(x) && (0..h).contains(y))
@@ -572,9 +575,10 @@ fn check_joints_on_depth(
 /// Errors: [`KinectError::ScanOption`] for an invalid option ([`ScanOptions::validate`]),
 /// [`KinectError::Intrinsics`] for implausible intrinsics ([`Intrinsics::validate`]),
 /// [`KinectError::DepthSize`] if the frame does not match the intrinsics,
-/// [`KinectError::Scan`] if nothing is left to triangulate or the skeleton's joints do not lie on
-/// the body the frame shows (fewer than half within [`JOINT_DEPTH_TOLERANCE_M`] of the surface at
-/// their pixel: joints of another frame, camera or unit).
+/// [`KinectError::Scan`] if nothing is left to triangulate, the skeleton tracks no joint, or its
+/// joints do not lie on the body the frame shows (fewer than half within
+/// [`JOINT_DEPTH_TOLERANCE_M`] of the surface at their pixel: joints of another frame, camera or
+/// unit).
 pub fn scan_mesh(
     frame: &DepthFrame,
     k: &Intrinsics,
@@ -615,12 +619,16 @@ pub fn scan_mesh(
         }
     }
     if opts.remove_floor {
+        // The body's up and its lowest trunk joint, from tracked joints only (an untracked
+        // hip centre sits at the camera's origin).
+        let low = skeleton
+            .and_then(|s| tracked(s, Joint::HipCenter).or_else(|| tracked(s, Joint::Spine)));
         let up = skeleton
-            .and_then(|s| {
-                normalize(s.position(Joint::ShoulderCenter) - s.position(Joint::HipCenter))
-            })
+            .and_then(|s| tracked(s, Joint::ShoulderCenter))
+            .zip(low)
+            .and_then(|(top, low)| normalize(top - low))
             .unwrap_or_else(Vector3::y);
-        let hip = skeleton.map(|s| s.position(Joint::HipCenter));
+        let hip = low;
         let candidates: Vec<Point3<f64>> = points.iter().flatten().copied().collect();
         if let Some((plane, count)) = ransac_floor(&candidates, up, hip, opts) {
             // A handful of coplanar points is not a floor.

@@ -50,6 +50,27 @@ impl Skeleton {
         self.positions[j.index()]
     }
 
+    /// Whether joint `j` says where it is: tracked (confidence > 0) or interpolated along its
+    /// bone chain by an importer. An untracked joint's position — (0, 0, 0) as the Kinect SDK
+    /// writes it, or a stale one — says nothing.
+    ///
+    /// ```
+    /// use symcorr_skeleton::{Joint, Skeleton};
+    /// let mut s = Skeleton::from_arrays([[0.0, 1.0, 2.0]; Joint::COUNT]);
+    /// s.confidence[Joint::Head.index()] = 0.0;
+    /// assert!(!s.tracks(Joint::Head) && s.tracks(Joint::Spine) && s.tracks_any());
+    /// s.confidence = [0.0; Joint::COUNT];
+    /// assert!(!s.tracks_any()); // the tracker lost the body
+    /// ```
+    pub fn tracks(&self, j: Joint) -> bool {
+        self.confidence[j.index()] > 0.0 || self.interpolated[j.index()]
+    }
+
+    /// Whether any joint [`Skeleton::tracks`].
+    pub fn tracks_any(&self) -> bool {
+        Joint::ALL.into_iter().any(|j| self.tracks(j))
+    }
+
     /// The vector from a bone's parent joint to its child joint.
     pub fn bone_vector(&self, bone: Bone) -> Vector3<f64> {
         self.position(bone.child) - self.position(bone.parent)

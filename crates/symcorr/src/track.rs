@@ -46,7 +46,8 @@
 //! joint log that does not belong to the depth frames (another recording or clock, mirrored
 //! axes): such a log's skeletons stick out of the body the camera sees, while every frame
 //! alone can pass the guards above; a log with no frame near any depth frame's time is
-//! refused naming both clocks' time ranges.
+//! refused naming both clocks' time ranges, and one whose joints lie off the body in most
+//! sampled frames naming the ratio of the depths when it is another unit.
 //!
 //! Steps 1–4 ([`Observer`]) follow the joint log and the depth frames only, never a match;
 //! step 5 ([`Fitter`]) follows the previous fit. The two can run on two threads, frame k + 1

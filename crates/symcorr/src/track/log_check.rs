@@ -15,8 +15,8 @@
 //!
 //! Two plainer mismatches are named before that: a log with no frame near any depth frame's
 //! time (stamped on another clock: every frame would be skipped, [`LogMismatch::Clocks`]), and
-//! a log whose joints lie on no depth frame (another unit or camera: every frame's scan would
-//! refuse them, [`LogMismatch::OffBody`]).
+//! a log whose joints lie off the body in most sampled frames (another unit or camera: those
+//! frames' scans would refuse them, [`LogMismatch::OffBody`]).
 
 use super::TrackOptions;
 use super::Tracker;
@@ -37,6 +37,17 @@ pub const MAX_LOG_OUTSIDE: f64 = 0.15;
 
 /// Fewer frames with a skeleton fit than this give no verdict: each frame's own guards decide.
 pub const MIN_LOG_CHECK_FITS: usize = 3;
+
+/// The median of `v` (the mean of the middle two for an even count), `None` when empty.
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    match v.len() {
+        0 => None,
+        n if n % 2 == 1 => Some(v[m]),
+        _ => Some(0.5 * (v[m - 1] + v[m])),
+    }
+}
 
 /// The share of the bone points outside the body the camera sees, when the fit measured it.
 fn outside(fit: &FitQuality) -> Option<f64> {
@@ -86,8 +97,9 @@ pub enum LogMismatch {
     #[error(
         "the joint log does not lie on the depth frames: in {off} of {frames} frames spread over \
          the run fewer than half of the joints project onto a surface within {tolerance} m of \
-         their depth{hint}. The log may belong to another recording or camera, or be in another \
-         unit",
+         their depth{hint}. The log may be in another unit, belong to another recording or \
+         clock (check the joint offset), its axes may differ from the depth camera's \
+         (mirrored, another up axis), or the intrinsics may be another camera's",
         tolerance = symcorr_kinect::scan::JOINT_DEPTH_TOLERANCE_M
     )]
     OffBody {
@@ -104,15 +116,9 @@ pub enum LogMismatch {
 /// The times of a run's depth frames and of a joint log that has no frame near any of them
 /// (within [`MAX_GAP_PERIODS`](symcorr_kinect::recording::MAX_GAP_PERIODS) log periods): the
 /// two were stamped on different clocks — another origin (a log stamped from the epoch or the
-/// tracker's start), or another recording.
+/// tracker's start), or another recording — or, when the two spans overlap, the log has a gap
+/// over the run's frames.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error(
-    "no depth frame of the run has a joint log frame near its time: the frames run from \
-     {:.3} to {:.3} s, read in the log {offset_s} s later, and the log runs from {:.3} to \
-     {:.3} s; the two are stamped on different clocks (another origin or another recording). \
-     The joint offset shifts the log: its start is {:.3} s after the first frame's",
-    depth_s[0], depth_s[1], log_s[0], log_s[1], log_s[0] - depth_s[0]
-)]
 pub struct ClockGap {
     /// The first and last time of the run's depth frames, seconds.
     pub depth_s: [f64; 2],
@@ -120,6 +126,33 @@ pub struct ClockGap {
     pub log_s: [f64; 2],
     /// The joint offset the log was read with ([`TrackOptions::joint_offset_s`]).
     pub offset_s: f64,
+}
+
+impl std::fmt::Display for ClockGap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ([d0, d1], [l0, l1], o) = (self.depth_s, self.log_s, self.offset_s);
+        write!(
+            f,
+            "no depth frame of the run has a joint log frame near its time: the frames run from \
+             {d0:.3} to {d1:.3} s, read in the log at {:.3} to {:.3} s (joint offset {o} s), \
+             and the log runs from {l0:.3} to {l1:.3} s",
+            d0 + o,
+            d1 + o
+        )?;
+        if (d0 + o).max(l0) <= (d1 + o).min(l1) {
+            write!(
+                f,
+                "; the log has no frames over the run's (a gap in the log)"
+            )
+        } else {
+            write!(
+                f,
+                "; the two are stamped on different clocks (another origin or another \
+                 recording): a joint offset of {:.3} s would align their starts",
+                l0 - d0
+            )
+        }
+    }
 }
 
 impl LogCheck {
@@ -135,17 +168,7 @@ impl LogCheck {
     /// The median of [`LogCheck::outside`] (the mean of the middle two for an even count);
     /// `None` without a skeleton fit.
     pub fn median_outside(&self) -> Option<f64> {
-        let mut v = self.outside();
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        let m = v.len() / 2;
-        Some(if v.len() % 2 == 1 {
-            v[m]
-        } else {
-            0.5 * (v[m - 1] + v[m])
-        })
+        median(self.outside())
     }
 
     /// Refuses the log when no frame of the run has a log frame near its time
@@ -163,15 +186,14 @@ impl LogCheck {
         let off = self.on_depth.iter().filter(|o| !o.lie_on_body()).count();
         if frames >= MIN_LOG_CHECK_FITS && 2 * off > frames {
             // The depths of the frames whose joints are off: those say why.
-            let mut ratios: Vec<f64> = (self.on_depth.iter())
+            let ratios: Vec<f64> = (self.on_depth.iter())
                 .filter(|o| !o.lie_on_body())
                 .filter_map(|o| o.depth_ratio)
                 .collect();
-            ratios.sort_by(f64::total_cmp);
             return Err(LogMismatch::OffBody {
                 frames,
                 off,
-                hint: depth_unit_hint(ratios.get(ratios.len() / 2).copied()),
+                hint: depth_unit_hint(median(ratios)),
             });
         }
         let fits = self.outside().len();
@@ -204,12 +226,14 @@ pub fn check_log(
     samples: usize,
 ) -> LogCheck {
     let times: Vec<f64> = frames.iter().filter_map(|&i| source.time(i)).collect();
-    let covered = times.iter().any(|t| {
-        !matches!(
-            joints.at(t + options.joint_offset_s),
-            Err(SkipReason::NoSkeleton { .. })
-        )
-    });
+    // No frames, no clocks to compare.
+    let covered = times.is_empty()
+        || times.iter().any(|t| {
+            !matches!(
+                joints.at(t + options.joint_offset_s),
+                Err(SkipReason::NoSkeleton { .. })
+            )
+        });
     let log = &joints.log().frames;
     if let (false, Some(first), Some(last)) = (covered, log.first(), log.last()) {
         let (lo, hi) = times
@@ -339,6 +363,29 @@ mod tests {
     }
 
     #[test]
+    fn a_clock_gap_names_both_spans_and_the_offset_that_aligns_them() {
+        let epoch = ClockGap {
+            depth_s: [0.5, 2.5],
+            log_s: [1.7e9, 1.7e9 + 2.0],
+            offset_s: -0.04,
+        };
+        let msg = epoch.to_string();
+        assert!(msg.contains("read in the log at 0.460 to 2.460 s (joint offset -0.04 s)"));
+        assert!(msg.contains("different clocks"), "{msg}");
+        assert!(msg.contains("a joint offset of 1699999999.500 s"), "{msg}");
+        // Spans that overlap: a gap in the log over the run's frames, not another clock.
+        let gap = ClockGap {
+            log_s: [-1.0, 10.0],
+            ..epoch
+        };
+        let msg = gap.to_string();
+        assert!(
+            msg.contains("a gap in the log") && !msg.contains("clocks"),
+            "{msg}"
+        );
+    }
+
+    #[test]
     fn joints_off_the_body_in_most_frames_refuse_the_log_naming_the_unit() {
         let on = |on_body: usize, depth_ratio: f64| JointsOnDepth {
             usable: 20,
@@ -347,7 +394,7 @@ mod tests {
         };
         // Three of four frames off the body, their depth readings about 10× the joints' depth:
         // a depth image in tenths of millimetres. Refused before the bone points are judged.
-        let mut c = check(&[Some(0.0), Some(0.0), Some(0.0)]);
+        let mut c = check(&[Some(0.3), Some(0.3), Some(0.3)]);
         c.on_depth = vec![on(0, 9.8), on(20, 1.0), on(1, 10.1), on(0, 10.0)];
         let e = c.verdict().unwrap_err();
         assert!(
@@ -362,11 +409,15 @@ mod tests {
             "{e:?}"
         );
         assert!(e.to_string().contains("a median 10.000×"), "{e}");
-        // Half of them off is not most; two frames are too few to judge.
-        c.on_depth = vec![on(0, 9.8), on(20, 1.0), on(20, 1.0), on(0, 10.0)];
-        assert!(c.verdict().is_ok());
-        c.on_depth = vec![on(0, 9.8), on(0, 10.0)];
-        assert!(c.verdict().is_ok());
+        // Half of them off is not most, two frames are too few to judge: the bone points
+        // decide (here 30 % outside: refused as such).
+        for on_depth in [
+            vec![on(0, 9.8), on(20, 1.0), on(20, 1.0), on(0, 10.0)],
+            vec![on(0, 9.8), on(0, 10.0)],
+        ] {
+            c.on_depth = on_depth;
+            assert!(matches!(c.verdict(), Err(LogMismatch::Outside { .. })));
+        }
         // Off the body at the right depth (another recording) names no unit.
         c.on_depth = vec![on(0, 1.1); 3];
         let e = c.verdict().unwrap_err().to_string();
