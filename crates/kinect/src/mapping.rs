@@ -14,7 +14,7 @@
 //! | foot_* | ankle_* | NiTE's foot joint sits at the ankle |
 //! | — | hip_center | interpolated: midpoint of the hips |
 //! | — | wrist_* | interpolated: 80 % of the way elbow → hand |
-//! | — | foot_* | extrapolated: ankle + 0.3·shin length along the facing direction |
+//! | — | foot_* | extrapolated in front of and below the ankle (rules below) |
 //!
 //! ## Kinect v2 (25 joints) → Kinect v1
 //!
@@ -36,11 +36,16 @@
 //! hip_center = mid(hips); shoulder_center = mid(shoulders); spine = 30 % hip_center → shoulder_center;
 //! head = shoulder_center + 0.5·(shoulder_center − spine); wrist = 80 % elbow → hand;
 //! hand = wrist + 0.25·(wrist − elbow); elbow = mid(shoulder, wrist or hand); knee = mid(hip, ankle);
-//! ankle = knee + (knee − hip) (shin ≈ thigh); foot = ankle + 0.3·|knee − ankle| · facing, where
-//! facing = (left − right) × up from the hips (or, where the hips give no direction, the
-//! shoulders) and up = shoulder_center − hip_center (or − spine without a hip centre)
-//! (DESIGN.md: left/right are the subject's sides; in Kinect camera space a subject facing the
-//! sensor faces −z).
+//! ankle = knee + (knee − hip) (shin ≈ thigh); foot = ankle + |knee − ankle| · (0.3·facing −
+//! 0.18·up), where up is the unit vector shoulder_center − hip_center (− spine without a hip
+//! centre) and facing = (left − right) × up from the shoulders (from the hips where the
+//! shoulders give no direction) (DESIGN.md: left/right are the subject's sides; in Kinect camera
+//! space a subject facing the sensor faces −z). The foot's offset is the canonical rig's at
+//! rest (the bundled body: 0.32 shin lengths in front of the ankle, 0.18 below); the
+//! shoulders, because a tracker's most common swap is the legs', which would turn feet
+//! estimated from the hips backwards. Measured on NiTE logs of nine recordings against the
+//! offset 0.3·facing from the hips alone:
+//! docs/decisions/2026-12-05-joint-log-units-clocks-and-lost-bodies.md.
 //!
 //! A joint that no tracked neighbour can estimate is left **untracked**: at (0, 0, 0) with
 //! confidence 0 and not flagged, as the Kinect SDK reports a joint it does not track (a joint
@@ -319,18 +324,19 @@ impl Partial {
     }
 
     /// Facing direction of the subject: (left − right) × up.
-    fn facing(&self) -> Option<Vector3<f64>> {
+    fn facing(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let (low, _) = self
             .get(Joint::HipCenter)
             .or_else(|| self.get(Joint::Spine))?;
         let (sc, _) = self.get(Joint::ShoulderCenter)?;
-        let up = sc - low;
+        let up = normalize(sc - low)?;
         let across = |l: Joint, r: Joint| {
             let ((pl, _), (pr, _)) = self.get(l).zip(self.get(r))?;
             normalize((pl - pr).cross(&up))
         };
-        across(Joint::HipLeft, Joint::HipRight)
-            .or_else(|| across(Joint::ShoulderLeft, Joint::ShoulderRight))
+        let facing = across(Joint::ShoulderLeft, Joint::ShoulderRight)
+            .or_else(|| across(Joint::HipLeft, Joint::HipRight))?;
+        Some((facing, up))
     }
 
     fn estimate(&self, j: Joint) -> Option<(Point3<f64>, f64)> {
@@ -374,9 +380,9 @@ impl Partial {
             J::FootLeft | J::FootRight => {
                 let (k, c1) = self.get(side(J::KneeLeft, J::KneeRight))?;
                 let (a, c2) = self.get(side(J::AnkleLeft, J::AnkleRight))?;
-                let f = self.facing()?;
+                let (f, up) = self.facing()?;
                 let shin = distance(&k, &a);
-                Some((a + f * (0.3 * shin), c1.min(c2)))
+                Some((a + (f * 0.3 - up * 0.18) * shin, c1.min(c2)))
             }
         }
     }

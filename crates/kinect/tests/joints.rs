@@ -83,14 +83,23 @@ fn nite_json_maps_fifteen_joints_and_flags_interpolated_ones() {
         s.position(Joint::HipCenter),
         nalgebra::center(&v1.position(Joint::HipLeft), &v1.position(Joint::HipRight))
     ));
-    // Feet are extrapolated toward the facing direction: the subject faces the sensor (−z).
-    for (a, f) in [
-        (Joint::AnkleLeft, Joint::FootLeft),
-        (Joint::AnkleRight, Joint::FootRight),
+    // Feet are extrapolated in front of (the subject faces the sensor: −z) and below the ankle,
+    // 0.3 and 0.18 shin lengths; the standing fixture's up is +y.
+    for (k, a, f) in [
+        (Joint::KneeLeft, Joint::AnkleLeft, Joint::FootLeft),
+        (Joint::KneeRight, Joint::AnkleRight, Joint::FootRight),
     ] {
-        let d = [0, 1, 2].map(|k| s.position(f)[k] - s.position(a)[k]);
-        assert!(d[2] < -0.05, "foot not in front of ankle: {d:?}");
-        assert!(d[0].abs() < 0.02 && d[1].abs() < 0.02, "{d:?}");
+        let shin = nalgebra::distance(&s.position(k), &s.position(a));
+        let d = [0, 1, 2].map(|c| (s.position(f)[c] - s.position(a)[c]) / shin);
+        assert!(
+            (d[2] + 0.3).abs() < 0.03,
+            "foot not in front of ankle: {d:?}"
+        );
+        assert!(
+            (d[1] + 0.18).abs() < 0.03,
+            "foot not below the ankle: {d:?}"
+        );
+        assert!(d[0].abs() < 0.05, "{d:?}");
         assert!(s.confidence[f.index()] <= 0.5);
     }
     // Wrist at 80 % elbow → hand.
@@ -597,6 +606,36 @@ fn a_lost_body_or_an_untracked_hip_leaves_joints_untracked_not_the_log_unreadabl
         1,
         "{s:?}"
     );
+}
+
+/// A tracker that swapped the legs (a subject turned sideways) gives hips whose left is on the
+/// right: feet estimated from them would point backwards. They come from the shoulders.
+#[test]
+fn estimated_feet_point_forward_when_the_tracker_swapped_the_legs() {
+    let swapped = [
+        ("hip_left", [0.1, -0.2, 2.0], 1.0),
+        ("hip_right", [-0.1, -0.2, 2.0], 1.0),
+        ("knee_left", [0.1, -0.6, 2.0], 1.0),
+        ("knee_right", [-0.1, -0.6, 2.0], 1.0),
+        ("foot_left", [0.1, -1.0, 2.0], 1.0),
+        ("foot_right", [-0.1, -1.0, 2.0], 1.0),
+    ];
+    let text = format!(
+        r#"{{"format":"symcorr.joints/1","skeleton":"nite","frames":[{}]}}"#,
+        nite_frame(0.0, &swapped)
+    );
+    let (log, _) = parse_joints(&text, "swapped.json").unwrap();
+    let s = &log.frames[0].skeleton;
+    for (a, f) in [
+        (Joint::AnkleLeft, Joint::FootLeft),
+        (Joint::AnkleRight, Joint::FootRight),
+    ] {
+        // The subject faces the sensor: forward is −z.
+        assert!(
+            s.position(f).z < s.position(a).z - 0.05,
+            "{f:?} points backwards"
+        );
+    }
 }
 
 #[test]
