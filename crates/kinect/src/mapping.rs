@@ -40,8 +40,8 @@
 //! 0.18·up), where up is the unit vector shoulder_center − hip_center (− spine without a hip
 //! centre) and facing = (left − right) × up from the shoulders (from the hips where the
 //! shoulders give no direction) (DESIGN.md: left/right are the subject's sides; in Kinect camera
-//! space a subject facing the sensor faces −z). The foot's offset is the canonical rig's at
-//! rest (the bundled body: 0.32 shin lengths in front of the ankle, 0.18 below); the
+//! space a subject facing the sensor faces −z). The foot's offset is close to the canonical
+//! rig's at rest (the bundled body: 0.32 shin lengths in front of the ankle, 0.18 below); the
 //! shoulders, because a tracker's most common swap is the legs', which would turn feet
 //! estimated from the hips backwards. Measured on NiTE logs of nine recordings against the
 //! offset 0.3·facing from the hips alone:
@@ -49,10 +49,10 @@
 //!
 //! A joint that no tracked neighbour can estimate is left **untracked**: at (0, 0, 0) with
 //! confidence 0 and not flagged, as the Kinect SDK reports a joint it does not track (a joint
-//! the source gives with confidence 0 keeps the position it was given, untracked as well). A frame in
-//! which the tracker lost the body (every joint untracked) is therefore kept as such — `track`
-//! skips it with that reason, a single-frame command refuses it — and one untracked hip does not
-//! make a whole log unreadable.
+//! the source gives with confidence 0 keeps the position it was given, untracked as well). A
+//! frame in which the tracker lost the body (every joint untracked) is therefore kept as such —
+//! `track` skips it with that reason, a single-frame command refuses it — and one untracked hip
+//! does not make a whole log unreadable.
 
 use crate::geom::normalize;
 use nalgebra::{distance, Point3, Vector3};
@@ -323,7 +323,9 @@ impl Partial {
         Some((pa + (pb - pa) * t, ca.min(cb)))
     }
 
-    /// Facing direction of the subject: (left − right) × up.
+    /// The subject's facing direction and up, unit vectors: up from the hip centre (the spine
+    /// without one) to the shoulder centre, facing = (left − right) × up from the shoulders
+    /// (the hips where the shoulders give no direction: a leg swap exchanges the hips).
     fn facing(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let (low, _) = self
             .get(Joint::HipCenter)

@@ -527,9 +527,10 @@ impl JointTrack {
     /// * two frames → per joint, linear interpolation of the positions with confidence the
     ///   smaller of the two; a joint tracked (confidence > 0) in only one of them keeps that
     ///   frame's position and confidence if that frame is within half a period of the time, and
-    ///   is otherwise untracked (confidence 0, position interpolated, not flagged). A limb pair exchanged
-    ///   between the two frames (a tracker's left/right swap: [`limb_swap_evidence`] above
-    ///   [`SWAP_EVIDENCE_THRESHOLD`]) is not interpolated: its joints are the nearer frame's.
+    ///   is otherwise untracked (confidence 0, position interpolated, not flagged). A limb pair
+    ///   exchanged between the two frames (a tracker's left/right swap: [`limb_swap_evidence`]
+    ///   above [`SWAP_EVIDENCE_THRESHOLD`]) is not interpolated: its joints are the nearer
+    ///   frame's.
     ///   The `interpolated` flag of a tracked joint is that of the frame(s) it came from;
     /// * a result with every confidence 0 → [`SkipReason::NoBody`].
     ///

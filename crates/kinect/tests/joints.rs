@@ -632,6 +632,10 @@ fn estimated_feet_point_forward_when_the_tracker_swapped_the_legs() {
     ] {
         // The subject faces the sensor: forward is −z.
         assert!(
+            s.tracks(f) && s.interpolated[f.index()],
+            "{f:?} not estimated"
+        );
+        assert!(
             s.position(f).z < s.position(a).z - 0.05,
             "{f:?} points backwards"
         );

@@ -370,7 +370,8 @@ mod tests {
             offset_s: -0.04,
         };
         let msg = epoch.to_string();
-        assert!(msg.contains("read in the log at 0.460 to 2.460 s (joint offset -0.04 s)"));
+        let read = "read in the log at 0.460 to 2.460 s (joint offset -0.04 s)";
+        assert!(msg.contains(read), "{msg}");
         assert!(msg.contains("different clocks"), "{msg}");
         assert!(msg.contains("a joint offset of 1699999999.500 s"), "{msg}");
         // Spans that overlap: a gap in the log over the run's frames, not another clock.
