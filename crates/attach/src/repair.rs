@@ -40,10 +40,9 @@ const RULES: [(Joint, Joint, Joint, f64); 17] = {
 pub(crate) fn repair(sk: &Skeleton) -> Result<Repaired, AttachError> {
     let mut positions = sk.positions;
     let mut usable = [false; 20];
-    for j in 0..20 {
-        let finite = positions[j].iter().all(|c| c.is_finite());
-        let tracked = sk.confidence[j] > 0.0 || sk.interpolated[j];
-        usable[j] = finite && tracked;
+    for j in Joint::ALL {
+        let finite = positions[j.index()].iter().all(|c| c.is_finite());
+        usable[j.index()] = finite && sk.tracks(j);
     }
     let mut repaired = Vec::new();
     loop {

@@ -163,7 +163,7 @@ pub fn labels_file(
     let al = &d.alignment;
     let joints: BTreeMap<String, [f64; 3]> = Joint::ALL
         .iter()
-        .filter(|j| att.joints.confidence[j.index()] > 0.0 || att.joints.interpolated[j.index()])
+        .filter(|&&j| att.joints.tracks(j))
         .map(|&j| {
             (
                 j.name().to_string(),
