@@ -28,6 +28,7 @@ use std::time::Instant;
 use symcorr::track::{FrameOutcome, TrackOptions, TrackedFrame, Tracker};
 use symcorr::{Method, Mode, Pipeline, PipelineError, PipelineOptions, PreparedMesh};
 use symcorr_attach::{BoundaryConvention, PoorFitPolicy, Segment};
+use symcorr_kinect::clock::JointOffset;
 use symcorr_kinect::{DepthFrame, DepthSource, Intrinsics, JointTrack, KinectError, ScanOptions};
 use symcorr_mesh::{MeshError, TriMesh};
 use symcorr_skeleton::{Joint, Skeleton};
@@ -1343,12 +1344,12 @@ fn track(
     joint_offset: Option<&Bound<'_, PyAny>>,
     check_log: bool,
 ) -> PyResult<FrameIterator> {
-    // Seconds (None: 0), or "auto" (`None` here: estimated once the log is read).
-    let given_offset: Option<f64> = match joint_offset {
-        None => Some(0.0),
-        Some(o) if o.extract::<String>().is_ok_and(|s| s == "auto") => None,
+    // Seconds (None: 0), or "auto": estimated once the log is read.
+    let joint_offset = match joint_offset {
+        None => JointOffset::Seconds(0.0),
+        Some(o) if o.extract::<String>().is_ok_and(|s| s == "auto") => JointOffset::Auto,
         Some(o) => match o.extract::<f64>() {
-            Ok(x) if x.is_finite() => Some(x),
+            Ok(x) if x.is_finite() => JointOffset::Seconds(x),
             _ => {
                 return Err(value_err(format!(
                     "joint_offset {o}: expected a finite number of seconds or \"auto\""
@@ -1401,23 +1402,9 @@ fn track(
             .map_err(|e| py_err(e, Some("template")))?;
         (pipeline, Arc::new(prepared))
     };
-    let joint_offset = match given_offset {
-        Some(x) => x,
-        None => py
-            .detach(|| {
-                use symcorr_kinect::clock::{
-                    estimate_recording_offset, OffsetSearch, OFFSET_FRAMES,
-                };
-                estimate_recording_offset(
-                    &mut source,
-                    &track,
-                    OFFSET_FRAMES,
-                    &OffsetSearch::default(),
-                )
-            })
-            .map(|e| e.offset_s)
-            .map_err(|e| value_err(format!("joint_offset \"auto\": {e}")))?,
-    };
+    let joint_offset = py
+        .detach(|| joint_offset.resolve(&mut source, &track))
+        .map_err(|e| value_err(format!("joint_offset \"auto\": {e}")))?;
     let options = TrackOptions {
         joint_offset_s: joint_offset,
         ..TrackOptions::default()

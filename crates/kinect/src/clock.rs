@@ -194,6 +194,33 @@ pub fn estimate_recording_offset(
     })
 }
 
+/// A joint offset as a user gives it: seconds, or estimated from the recording
+/// ([`JointOffset::resolve`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointOffset {
+    /// This many seconds: the log is read at `depth time + seconds`.
+    Seconds(f64),
+    /// Estimated by [`estimate_recording_offset`] on [`OFFSET_FRAMES`] frames with the default
+    /// [`OffsetSearch`].
+    Auto,
+}
+
+impl JointOffset {
+    /// The offset in seconds: as given, or estimated on frames spread over the whole of
+    /// `source` (the same estimate for every slice of a recording, so that slices merge).
+    ///
+    /// Errors: those of [`estimate_recording_offset`].
+    pub fn resolve(self, source: &mut DepthSource, track: &JointTrack) -> Result<f64, KinectError> {
+        match self {
+            JointOffset::Seconds(s) => Ok(s),
+            JointOffset::Auto => {
+                estimate_recording_offset(source, track, OFFSET_FRAMES, &OffsetSearch::default())
+                    .map(|e| e.offset_s)
+            }
+        }
+    }
+}
+
 /// `t` rounded to the nanosecond.
 fn nanoseconds(t: f64) -> f64 {
     (t * 1e9).round() / 1e9

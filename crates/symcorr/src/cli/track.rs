@@ -35,6 +35,7 @@ use symcorr::npy::{NpyType, NpyWriter};
 use symcorr::track::log_check::{check_log, LOG_CHECK_FRAMES};
 use symcorr::track::{FrameOutcome, TrackOptions, TrackedFrame, Tracker};
 use symcorr::{Pipeline, PipelineOptions};
+use symcorr_kinect::clock::JointOffset;
 use symcorr_kinect::{DepthSource, JointTrack};
 
 const EXAMPLES: &str = "Examples:
@@ -118,15 +119,7 @@ pub struct TrackArgs {
     pub no_log_check: bool,
 }
 
-/// `--joint-offset`: seconds, or estimated from the frames.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum JointOffset {
-    /// This many seconds.
-    Seconds(f64),
-    /// Estimated ([`symcorr_kinect::clock::estimate_joint_offset`]).
-    Auto,
-}
-
+/// `--joint-offset`: seconds, or `auto` (estimated from the frames).
 fn parse_joint_offset(s: &str) -> Result<JointOffset, String> {
     if s == "auto" {
         return Ok(JointOffset::Auto);
@@ -134,25 +127,6 @@ fn parse_joint_offset(s: &str) -> Result<JointOffset, String> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() => Ok(JointOffset::Seconds(x)),
         _ => Err(format!("{s:?}: expected seconds (e.g. 0.04) or auto")),
-    }
-}
-
-/// The joint offset of the run: `--joint-offset` as given, or estimated on frames spread over
-/// the whole recording ([`symcorr_kinect::clock::estimate_recording_offset`]: the same
-/// estimate for every slice, so that slices of one run merge).
-fn resolve_joint_offset(
-    arg: JointOffset,
-    recording: &mut DepthSource,
-    joints: &JointTrack,
-) -> Result<f64, CliError> {
-    use symcorr_kinect::clock::{estimate_recording_offset, OffsetSearch, OFFSET_FRAMES};
-    match arg {
-        JointOffset::Seconds(s) => Ok(s),
-        JointOffset::Auto => {
-            estimate_recording_offset(recording, joints, OFFSET_FRAMES, &OffsetSearch::default())
-                .map(|e| e.offset_s)
-                .map_err(|e| CliError(format!("--joint-offset auto: {e}")))
-        }
     }
 }
 
@@ -356,7 +330,10 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         (args.head_twist_prior > 0.0).then_some(args.head_twist_prior);
     options.articulated.head_warm_twist =
         (args.head_warm_twist > 0.0).then_some(args.head_warm_twist);
-    let joint_offset_s = resolve_joint_offset(args.joint_offset, &mut recording, &joints)?;
+    // Estimated on frames spread over the whole recording, so that slices of one run merge.
+    let joint_offset_s = (args.joint_offset)
+        .resolve(&mut recording, &joints)
+        .map_err(|e| CliError(format!("--joint-offset auto: {e}")))?;
     let track_options = TrackOptions {
         joint_offset_s,
         ..TrackOptions::default()
