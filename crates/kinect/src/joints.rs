@@ -1,5 +1,6 @@
-//! Joint dumps and logs: `symcorr.joints/1` JSON (read and write), Kinect SDK v1 text dumps and
-//! NTU RGB+D `.skeleton` files, all turned into a [`JointLog`] of canonical [`Skeleton`]s.
+//! Joint dumps and logs: `symcorr.joints/1` JSON (read and write), Kinect SDK v1 text dumps,
+//! NTU RGB+D `.skeleton` files and Azure Kinect body tracking JSON, all turned into a
+//! [`JointLog`] of canonical [`Skeleton`]s.
 //!
 //! ```
 //! use symcorr_kinect::joints::{parse_joints, JointFormat, JointLog, JointFrame, to_json_string};
@@ -74,22 +75,28 @@ pub enum JointFormat {
     KinectText,
     /// NTU RGB+D `.skeleton` (Kinect v2, 25 joints, several bodies per frame).
     NtuSkeleton,
+    /// Azure Kinect Body Tracking JSON (`k4abt`, 32 joints, several bodies per frame;
+    /// [`crate::k4abt`]).
+    AzureKinect,
 }
 
 impl JointFormat {
     /// Parses a `--joints-format` value: `json`, `kinect-text` (or `kinect_text`, `text`),
-    /// `ntu` (or `skeleton`).
+    /// `ntu` (or `skeleton`), `k4abt` (or `azure-kinect`).
     pub fn from_name(name: &str) -> Option<JointFormat> {
         match name.to_ascii_lowercase().replace('_', "-").as_str() {
             "json" | "symcorr" | "symcorr.joints/1" => Some(JointFormat::Json),
             "kinect-text" | "text" | "kinect-v1-text" | "sdk" => Some(JointFormat::KinectText),
             "ntu" | "skeleton" | "ntu-skeleton" => Some(JointFormat::NtuSkeleton),
+            "k4abt" | "azure-kinect" | "azure" => Some(JointFormat::AzureKinect),
             _ => None,
         }
     }
 
-    /// Recognises the format from the content: JSON starts with `{`; a Kinect text dump has 61
-    /// numbers on its first data line; an NTU file starts with a single integer (frame count).
+    /// Recognises the format from the content: JSON starts with `{` (Azure Kinect's when it has
+    /// the key `"k4abt_sdk_version"` or `"joint_positions"`, else `symcorr.joints/1`); a Kinect
+    /// text dump has 61 numbers on its first data line; an NTU file starts with a single integer
+    /// (frame count).
     /// [`JointFormat::detect_with_reason`] also says why nothing matched.
     pub fn detect(text: &str) -> Option<JointFormat> {
         JointFormat::detect_with_reason(text).ok()
@@ -115,7 +122,13 @@ impl JointFormat {
             return Err("the file is empty (or only white space)".into());
         };
         if c == '{' {
-            return Ok(JointFormat::Json);
+            return Ok(
+                if crate::k4abt::K4ABT_KEYS.iter().any(|k| trimmed.contains(k)) {
+                    JointFormat::AzureKinect
+                } else {
+                    JointFormat::Json
+                },
+            );
         }
         let not_json = format!("not JSON (starts with `{}`, not `{{`)", c.escape_debug());
         let Some(first) = trimmed
@@ -170,7 +183,7 @@ pub(crate) fn quote(line: &str) -> String {
     out
 }
 
-/// Which body of a multi-body NTU file to keep.
+/// Which body of a multi-body file (NTU, Azure Kinect) to keep.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BodySelect {
     /// The body with the most tracked joints summed over the file.
@@ -178,6 +191,27 @@ pub enum BodySelect {
     MostTracked,
     /// The body with this tracking id.
     Id(u64),
+}
+
+/// [`BodySelect::MostTracked`] over a multi-body file: from `(body id, tracked joints)` per
+/// body per frame, the id with the most tracked joints summed over the file, the first seen on
+/// a tie; `None` without bodies.
+pub(crate) fn most_tracked(bodies: impl Iterator<Item = (u64, usize)>) -> Option<u64> {
+    // (id, sum), in order of first appearance.
+    let mut score: Vec<(u64, usize)> = Vec::new();
+    for (id, tracked) in bodies {
+        match score.iter_mut().find(|s| s.0 == id) {
+            Some(s) => s.1 += tracked,
+            None => score.push((id, tracked)),
+        }
+    }
+    score
+        .iter()
+        .fold(None::<(u64, usize)>, |best, s| match best {
+            Some(b) if b.1 >= s.1 => Some(b),
+            _ => Some(*s),
+        })
+        .map(|(id, _)| id)
 }
 
 /// Reads a joint file, recognising its format from the content ([`JointFormat::detect`]).
@@ -230,6 +264,7 @@ pub fn parse_joints_as(
         JointFormat::Json => parse_joints_json(text, file),
         JointFormat::KinectText => crate::sdk_text::parse_kinect_text(text, file),
         JointFormat::NtuSkeleton => crate::ntu::parse_ntu(text, file, body),
+        JointFormat::AzureKinect => crate::k4abt::parse_k4abt(text, file, body),
     }?;
     if !log.frames.iter().any(|f| f.skeleton.tracks_any()) {
         return Err(KinectError::NoBody {

@@ -4,7 +4,8 @@
 //! # Data flow
 //! * Joints: a file in any supported format ([`joints`]: `symcorr.joints/1` JSON with
 //!   skeletons `kinect_v1`, `nite` or `kinect_v2`; Kinect SDK v1 text dumps, [`sdk_text`]; NTU
-//!   RGB+D `.skeleton` files, [`ntu`]; detected from the content) → [`mapping`] onto the 20
+//!   RGB+D `.skeleton` files, [`ntu`]; Azure Kinect body tracking JSON, [`k4abt`]; detected
+//!   from the content) → [`mapping`] onto the 20
 //!   Kinect v1 joints (missing joints interpolated along their chain and flagged) → a
 //!   [`JointLog`] in metres → [`replay`]: a frame by index or time, or a robust average over a
 //!   window ([`FrameSelect`]) → one [`Skeleton`] for symcorr-attach.
@@ -42,7 +43,9 @@
 //!
 //! # Invariants and conventions
 //! * Joint logs are held in metres in Kinect camera space (+x to the sensor's left, +y up, +z
-//!   into the scene); `"units": "mm"` is converted on reading. The writer always writes the
+//!   into the scene); `"units": "mm"` is converted on reading, and the Azure Kinect SDK's
+//!   millimetres in its own camera frame (+x right, +y down) by a half turn about the optical
+//!   axis ([`k4abt`]). The writer always writes the
 //!   canonical 20 joints (`kinect_v1`, `m`) and lists interpolated joints per frame. A
 //!   `kinect_v1` frame must name all 20 joints; files without timestamps get
 //!   `time_s = frame / 30`; SDK text dumps' untracked `0 0 0` joints are interpolated.
@@ -64,6 +67,7 @@ pub mod depth;
 mod error;
 mod geom;
 pub mod joints;
+pub mod k4abt;
 pub mod mapping;
 pub mod ntu;
 #[cfg(feature = "openni2")]

@@ -1,5 +1,6 @@
-//! Mapping of other trackers' skeletons (NiTE 15 joints, Kinect v2 25 joints) onto the canonical
-//! Kinect v1 20-joint skeleton, and interpolation of joints a source lacks.
+//! Mapping of other trackers' skeletons (NiTE 15 joints, Kinect v2 25 joints, Azure Kinect 32
+//! joints) onto the canonical Kinect v1 20-joint skeleton, and interpolation of joints a source
+//! lacks.
 //!
 //! ## NiTE (OpenNI/NiTE 2, 15 joints) → Kinect v1
 //!
@@ -26,6 +27,22 @@
 //! | head (3) | head |
 //! | shoulder/elbow/wrist/hand/hip/knee/ankle/foot left/right (4–19) | same name, same index |
 //! | neck (2), hand_tip_* (21, 23), thumb_* (22, 24) | dropped (neck is used for shoulder_center only if spine_shoulder is missing) |
+//!
+//! ## Azure Kinect Body Tracking (32 joints) → Kinect v1
+//!
+//! | Azure Kinect (`k4abt_joint_id_t`) | Kinect v1 | note |
+//! |---|---|---|
+//! | pelvis (0) | hip_center | |
+//! | spine_navel (1) | spine | |
+//! | neck (3) | shoulder_center | the base of the neck, where v1 and v2 put the shoulder centre |
+//! | head (26) | head | |
+//! | shoulder/elbow/wrist/hand/hip/knee/ankle/foot left/right | same name | |
+//! | spine_chest (2), clavicle_* (4, 11), handtip_*, thumb_* (9, 10, 16, 17) | dropped | |
+//! | nose, eye_*, ear_* (27–31) | dropped | |
+//!
+//! The SDK's own files are in its depth camera's frame (millimetres, +x right, +y down):
+//! [`crate::k4abt`] turns them into Kinect camera space. A `symcorr.joints/1` file with skeleton
+//! `azure_kinect` is, like every `symcorr.joints/1` file, in Kinect camera space already.
 //!
 //! ## Interpolation rules (any source)
 //!
@@ -67,6 +84,8 @@ pub enum SkeletonKind {
     Nite,
     /// Kinect for Windows SDK v2 / NTU RGB+D: 25 joints.
     KinectV2,
+    /// Azure Kinect Body Tracking SDK (`k4abt`, also behind Orbbec's Femto cameras): 32 joints.
+    AzureKinect,
 }
 
 impl SkeletonKind {
@@ -76,6 +95,7 @@ impl SkeletonKind {
             SkeletonKind::KinectV1 => "kinect_v1",
             SkeletonKind::Nite => "nite",
             SkeletonKind::KinectV2 => "kinect_v2",
+            SkeletonKind::AzureKinect => "azure_kinect",
         }
     }
 
@@ -85,6 +105,7 @@ impl SkeletonKind {
             "kinect_v1" => Some(SkeletonKind::KinectV1),
             "nite" => Some(SkeletonKind::Nite),
             "kinect_v2" => Some(SkeletonKind::KinectV2),
+            "azure_kinect" => Some(SkeletonKind::AzureKinect),
             _ => None,
         }
     }
@@ -95,6 +116,7 @@ impl SkeletonKind {
             SkeletonKind::KinectV1 => &KINECT_V1_NAMES,
             SkeletonKind::Nite => &NITE_NAMES,
             SkeletonKind::KinectV2 => &KINECT_V2_NAMES,
+            SkeletonKind::AzureKinect => &AZURE_KINECT_NAMES,
         }
     }
 
@@ -105,6 +127,7 @@ impl SkeletonKind {
             SkeletonKind::KinectV1 => Joint::ALL.get(native).copied(),
             SkeletonKind::Nite => NITE_TO_V1.get(native).copied(),
             SkeletonKind::KinectV2 => KINECT_V2_TO_V1.get(native).copied().flatten(),
+            SkeletonKind::AzureKinect => AZURE_KINECT_TO_V1.get(native).copied().flatten(),
         }
     }
 }
@@ -214,6 +237,81 @@ const KINECT_V2_TO_V1: [Option<Joint>; 25] = {
         None,
         None,
         None,
+    ]
+};
+
+/// The Azure Kinect Body Tracking SDK's 32 joints in `k4abt_joint_id_t` order, lower case (the
+/// SDK's own spelling is upper case: `SPINE_NAVEL`).
+pub const AZURE_KINECT_NAMES: [&str; 32] = [
+    "pelvis",
+    "spine_navel",
+    "spine_chest",
+    "neck",
+    "clavicle_left",
+    "shoulder_left",
+    "elbow_left",
+    "wrist_left",
+    "hand_left",
+    "handtip_left",
+    "thumb_left",
+    "clavicle_right",
+    "shoulder_right",
+    "elbow_right",
+    "wrist_right",
+    "hand_right",
+    "handtip_right",
+    "thumb_right",
+    "hip_left",
+    "knee_left",
+    "ankle_left",
+    "foot_left",
+    "hip_right",
+    "knee_right",
+    "ankle_right",
+    "foot_right",
+    "head",
+    "nose",
+    "eye_left",
+    "ear_left",
+    "eye_right",
+    "ear_right",
+];
+
+const AZURE_KINECT_TO_V1: [Option<Joint>; 32] = {
+    use Joint as J;
+    [
+        Some(J::HipCenter),
+        Some(J::Spine),
+        None, // spine_chest
+        Some(J::ShoulderCenter),
+        None, // clavicle_left
+        Some(J::ShoulderLeft),
+        Some(J::ElbowLeft),
+        Some(J::WristLeft),
+        Some(J::HandLeft),
+        None, // handtip_left
+        None, // thumb_left
+        None, // clavicle_right
+        Some(J::ShoulderRight),
+        Some(J::ElbowRight),
+        Some(J::WristRight),
+        Some(J::HandRight),
+        None, // handtip_right
+        None, // thumb_right
+        Some(J::HipLeft),
+        Some(J::KneeLeft),
+        Some(J::AnkleLeft),
+        Some(J::FootLeft),
+        Some(J::HipRight),
+        Some(J::KneeRight),
+        Some(J::AnkleRight),
+        Some(J::FootRight),
+        Some(J::Head),
+        None, // nose
+        None, // eye_left
+        None, // ear_left
+        None, // eye_right
+        None, // ear_right
     ]
 };
 

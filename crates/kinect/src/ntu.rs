@@ -17,7 +17,7 @@
 //! the body is an error ([`KinectError::NoBody`]).
 
 use crate::error::KinectError;
-use crate::joints::{BodySelect, JointFrame, JointLog, KINECT_FPS};
+use crate::joints::{most_tracked, BodySelect, JointFrame, JointLog, KINECT_FPS};
 use crate::mapping::{Partial, SkeletonKind};
 use crate::sdk_text::tokens;
 use nalgebra::Point3;
@@ -173,32 +173,16 @@ pub fn parse_ntu(text: &str, file: &str, select: BodySelect) -> Result<JointLog,
 
     let id = match select {
         BodySelect::Id(id) => id,
-        BodySelect::MostTracked => {
-            let mut score: Vec<(u64, usize)> = Vec::new();
-            for b in frames.iter().flatten() {
-                let tracked = b.1.iter().filter(|j| j.1 == 2).count();
-                match score.iter_mut().find(|s| s.0 == b.0) {
-                    Some(s) => s.1 += tracked,
-                    None => score.push((b.0, tracked)),
-                }
-            }
-            // First-seen body wins ties.
-            let best = score
+        BodySelect::MostTracked => most_tracked(
+            frames
                 .iter()
-                .fold(None::<(u64, usize)>, |best, s| match best {
-                    Some(b) if b.1 >= s.1 => Some(b),
-                    _ => Some(*s),
-                });
-            match best {
-                Some((id, _)) => id,
-                None => {
-                    return Err(KinectError::NoBody {
-                        file: file.to_string(),
-                        message: format!("no frame of the {frame_count} has a body"),
-                    })
-                }
-            }
-        }
+                .flatten()
+                .map(|b| (b.0, b.1.iter().filter(|j| j.1 == 2).count())),
+        )
+        .ok_or_else(|| KinectError::NoBody {
+            file: file.to_string(),
+            message: format!("no frame of the {frame_count} has a body"),
+        })?,
     };
     let mut out = Vec::new();
     for (fi, bodies) in frames.iter().enumerate() {

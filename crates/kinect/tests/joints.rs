@@ -501,6 +501,46 @@ mod props {
                 prop_assert!((a.time_s - b.time_s).abs() < 1e-9);
             }
         }
+
+        /// Written as the Azure Kinect SDK writes it and read back: every frame at its time (to
+        /// the microsecond), its joints where they were (to a nanometre: the file holds
+        /// millimetres), tracked; a frame without a body stays one.
+        #[test]
+        fn azure_kinect_round_trip(
+            frames in proptest::collection::vec((0u64..10_000_000_000, arb_skeleton(true), any::<bool>()), 1..5)
+        ) {
+            let log = JointLog {
+                skeleton_kind: SkeletonKind::KinectV1,
+                frames: frames
+                    .into_iter()
+                    .map(|(us, mut skeleton, lost)| {
+                        if lost {
+                            skeleton.confidence = [0.0; 20];
+                        }
+                        JointFrame { time_s: us as f64 * 1e-6, skeleton }
+                    })
+                    .collect(),
+            };
+            let text = symcorr_kinect::k4abt::to_k4abt_json(&log);
+            let result = parse_joints(&text, "<memory>");
+            if !log.frames.iter().any(|f| f.skeleton.tracks_any()) {
+                prop_assert!(matches!(result, Err(KinectError::NoBody { .. })), "{:?}", result);
+                return Ok(());
+            }
+            let (back, format) = result.unwrap();
+            prop_assert_eq!(format, JointFormat::AzureKinect);
+            prop_assert_eq!(back.frames.len(), log.frames.len());
+            for (a, b) in back.frames.iter().zip(&log.frames) {
+                prop_assert!((a.time_s - b.time_s).abs() < 1e-9);
+                prop_assert_eq!(a.skeleton.tracks_any(), b.skeleton.tracks_any());
+                if b.skeleton.tracks_any() {
+                    for j in Joint::ALL {
+                        prop_assert!(close(a.skeleton.position(j), b.skeleton.position(j)));
+                        prop_assert_eq!(a.skeleton.confidence[j.index()], 1.0);
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -812,4 +852,206 @@ fn frames_before_the_header_read_the_same() {
     assert_eq!(a.frames.len(), 2);
     // Millimetres: 2.0 mm is 0.002 m.
     assert_abs_diff_eq!(a.frames[1].skeleton.position(Joint::Head).z, 0.002);
+}
+
+/// A body in the Azure Kinect SDK's own frame (millimetres, +x right, +y down): the 32 joints of
+/// the canonical skeleton `s` as `to_k4abt_json` places them.
+fn k4abt_body(id: u64, s: &Skeleton) -> String {
+    let log = JointLog::from_skeletons(vec![s.clone()], 30.0);
+    let text = symcorr_kinect::k4abt::to_k4abt_json(&log);
+    let start = text.find("{\"body_id\"").unwrap();
+    let end = text[start..].find("]]}").unwrap() + start + 3;
+    text[start..end].replacen("\"body_id\": 1", &format!("\"body_id\": {id}"), 1)
+}
+
+fn k4abt_file(frames: &[(u64, Vec<String>)]) -> String {
+    let frames: Vec<String> = frames
+        .iter()
+        .map(|(t, bodies)| {
+            format!(
+                "{{\"timestamp_usec\": {t}, \"num_bodies\": {}, \"bodies\": [{}]}}",
+                bodies.len(),
+                bodies.join(", ")
+            )
+        })
+        .collect();
+    format!(
+        "{{\"k4abt_sdk_version\": \"1.1.2\", \"source_file\": \"take.mkv\", \"frames\": [{}]}}",
+        frames.join(", ")
+    )
+}
+
+#[test]
+fn an_azure_kinect_log_reads_in_kinect_space_keeping_the_body_seen_most() {
+    let a = read_joints(fixture("standing_v1.json")).unwrap().frames[0]
+        .skeleton
+        .clone();
+    let b = skeleton(7);
+    let text = k4abt_file(&[
+        (1_000_000, vec![k4abt_body(3, &a), k4abt_body(5, &b)]),
+        (1_033_333, vec![]),
+        (1_066_667, vec![k4abt_body(3, &a)]),
+    ]);
+    let (log, format) = parse_joints(&text, "take.json").unwrap();
+    assert_eq!(format, JointFormat::AzureKinect);
+    assert_eq!(log.skeleton_kind, SkeletonKind::AzureKinect);
+    let times: Vec<f64> = log.frames.iter().map(|f| f.time_s).collect();
+    assert_eq!(times, vec![1.0, 1.033333, 1.066667]);
+    // Body 3 is in two frames, body 5 in one. Its canonical joints come back where they were
+    // (the file holds them as (−x, −y, z) in millimetres), every one tracked.
+    for f in [&log.frames[0], &log.frames[2]] {
+        for j in Joint::ALL {
+            assert!(close(f.skeleton.position(j), a.position(j)), "{}", j.name());
+            assert_eq!(f.skeleton.confidence[j.index()], 1.0);
+            assert!(!f.skeleton.interpolated[j.index()]);
+        }
+    }
+    // The subject's left stays their left: facing the camera, the left shoulder at −x.
+    assert!(log.frames[0].skeleton.position(Joint::ShoulderLeft).x < 0.0);
+    // The frame without the body is a frame in which the tracker lost it.
+    assert!(!log.frames[1].skeleton.tracks_any());
+    // Asked for by id.
+    let other = parse_joints_as(
+        &text,
+        "take.json",
+        JointFormat::AzureKinect,
+        BodySelect::Id(5),
+    )
+    .unwrap();
+    assert!(close(
+        other.frames[0].skeleton.position(Joint::Head),
+        b.position(Joint::Head)
+    ));
+    assert!(!other.frames[2].skeleton.tracks_any());
+    let none = parse_joints_as(
+        &text,
+        "take.json",
+        JointFormat::AzureKinect,
+        BodySelect::Id(9),
+    );
+    assert!(matches!(none, Err(KinectError::NoBody { .. })), "{none:?}");
+    // Without `joint_names`, the SDK's order; with them in another order, by name.
+    let names: Vec<String> = symcorr_kinect::mapping::AZURE_KINECT_NAMES
+        .iter()
+        .map(|n| format!("\"{}\"", n.to_ascii_uppercase()))
+        .collect();
+    let mut reversed = names.clone();
+    reversed.reverse();
+    let body = k4abt_body(1, &a);
+    let start = body.find("[[").unwrap() + 1;
+    let mut joints: Vec<&str> = body[start..body.len() - 2].split("], [").collect();
+    joints.reverse();
+    let joints: Vec<String> = joints
+        .iter()
+        .map(|j| format!("[{}]", j.trim_matches(|c| c == '[' || c == ']')))
+        .collect();
+    let reordered = format!(
+        "{{\"joint_names\": [{}], \"frames\": [{{\"timestamp_usec\": 0, \"bodies\": [{{\"body_id\": 1, \"joint_positions\": [{}]}}]}}]}}",
+        reversed.join(", "),
+        joints.join(", ")
+    );
+    let log = parse_joints(&reordered, "r.json").unwrap().0;
+    for j in Joint::ALL {
+        assert!(close(log.frames[0].skeleton.position(j), a.position(j)));
+    }
+    // `symcorr.joints/1` with skeleton `azure_kinect`: the SDK's names, Kinect space already.
+    let kind = SkeletonKind::AzureKinect;
+    let named: Vec<String> = kind
+        .joint_names()
+        .iter()
+        .enumerate()
+        .filter_map(|(i, n)| {
+            let p = a.position(kind.canonical(i)?);
+            Some(format!("\"{n}\": [{}, {}, {}]", p.x, p.y, p.z))
+        })
+        .collect();
+    let text = format!(
+        "{{\"format\": \"symcorr.joints/1\", \"skeleton\": \"azure_kinect\", \"frames\": [{{\"joints\": {{{}}}}}]}}",
+        named.join(", ")
+    );
+    let (log, format) = parse_joints(&text, "n.json").unwrap();
+    assert_eq!(format, JointFormat::Json);
+    assert_eq!(log.skeleton_kind, SkeletonKind::AzureKinect);
+    for j in Joint::ALL {
+        assert!(close(log.frames[0].skeleton.position(j), a.position(j)));
+    }
+}
+
+#[test]
+fn bad_azure_kinect_logs_give_typed_errors_naming_the_file_and_frame() {
+    let a = skeleton(3);
+    let body = k4abt_body(1, &a);
+    let one = |frame: &str| format!("{{\"k4abt_sdk_version\": \"1.1.2\", \"frames\": [{frame}]}}");
+    let cases: Vec<(String, &str)> = vec![
+        (
+            "{\"k4abt_sdk_version\": \"1\"}".into(),
+            "missing \"frames\"",
+        ),
+        (one(""), "has no frames"),
+        (
+            one(&format!("{{\"bodies\": [{body}]}}")),
+            "frame 0: missing \"timestamp_usec\"",
+        ),
+        (
+            one(&format!("{{\"timestamp_usec\": -5, \"bodies\": [{body}]}}")),
+            "frame 0: timestamp_usec is -5",
+        ),
+        (
+            one(&format!(
+                "{{\"timestamp_usec\": 0, \"bodies\": [{}]}}",
+                body.replacen(
+                    "\"joint_positions\": [",
+                    "\"joint_positions\": [[1, 2, 3], ",
+                    1
+                )
+            )),
+            "frame 0: body 0: 33 joint positions for 32 joints",
+        ),
+        (
+            one("{\"timestamp_usec\": 0, \"bodies\": [{\"joint_positions\": []}]}"),
+            "frame 0: body 0: missing \"body_id\"",
+        ),
+        (
+            one("{\"timestamp_usec\": 0, \"bodies\": [{\"body_id\": 1}]}"),
+            "frame 0: body 0: missing \"joint_positions\"",
+        ),
+        (
+            one("{\"timestamp_usec\": 0, \"bodies\": []}"),
+            "no frame of the 1 has a body",
+        ),
+        (
+            "{\"joint_names\": [\"PELVIS\", \"TAIL\"], \"joint_positions\": 1, \"frames\": []}"
+                .into(),
+            "\"TAIL\" is not an Azure Kinect body tracking joint",
+        ),
+        (
+            "{\"joint_names\": [\"PELVIS\", \"pelvis\"], \"joint_positions\": 1, \"frames\": []}"
+                .into(),
+            "\"pelvis\" is listed twice",
+        ),
+        (
+            "{\"k4abt_sdk_version\": \"1\", \"frames\": [1, 2]}".into(),
+            "not an Azure Kinect body tracking file",
+        ),
+        (
+            "{\"k4abt_sdk_version\": \"1\", \"frames\": [".into(),
+            "invalid JSON",
+        ),
+    ];
+    for (text, expected) in cases {
+        let e = parse_joints(&text, "take.json").unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.starts_with("take.json: ") && m.contains(expected),
+            "{text:.120} → {m}"
+        );
+    }
+    // Forced on a file of another format.
+    let e =
+        read_joints_with_format(fixture("standing_v1.json"), JointFormat::AzureKinect).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("frame 0: missing \"timestamp_usec\""),
+        "{e}"
+    );
 }

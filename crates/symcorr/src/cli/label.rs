@@ -27,7 +27,7 @@ pub struct LabelArgs {
     #[arg(long)]
     pub frame: Option<usize>,
     /// Force the joint file's format instead of detecting it from content:
-    /// json, kinect-text or ntu.
+    /// json, kinect-text, ntu or k4abt.
     #[arg(long, value_name = "FORMAT")]
     pub joints_format: Option<String>,
     /// Also write the mesh coloured by segment as PLY.

@@ -51,7 +51,7 @@ pub struct MatchArgs {
     #[arg(long, value_name = "N")]
     pub target_frame: Option<usize>,
     /// Force the joint files' format instead of detecting it from content:
-    /// json, kinect-text or ntu.
+    /// json, kinect-text, ntu or k4abt.
     #[arg(long, value_name = "FORMAT")]
     pub joints_format: Option<String>,
     /// Also write coloured meshes into DIR: matched points share colours

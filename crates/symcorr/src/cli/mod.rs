@@ -20,7 +20,7 @@ pub fn joints_format(name: Option<&str>) -> Result<Option<symcorr_kinect::JointF
     name.map(|n| {
         symcorr_kinect::JointFormat::from_name(n).ok_or_else(|| {
             CliError(format!(
-                "--joints-format {n:?}: expected json, kinect-text or ntu"
+                "--joints-format {n:?}: expected json, kinect-text, ntu or k4abt"
             ))
         })
     })

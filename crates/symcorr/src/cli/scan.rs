@@ -40,7 +40,8 @@ pub struct ScanArgs {
     /// Joint file (symcorr.joints/1, Kinect SDK text, NTU .skeleton), same camera space.
     #[arg(long, value_name = "J")]
     pub joints: PathBuf,
-    /// Force the joint file format: json, kinect-text or ntu (default: detected from content).
+    /// Force the joint file format: json, kinect-text, ntu or k4abt (default: detected from
+    /// content).
     #[arg(long, value_name = "FORMAT")]
     pub joints_format: Option<String>,
     /// Use this frame of the joint log (0-based) instead of the robust average of all frames.
