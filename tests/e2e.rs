@@ -1727,6 +1727,12 @@ fn track_head_options_are_checked_recorded_and_kept_on_resume() {
         assert!(e.contains("--head-twist-prior"), "{e}");
         assert!(!out.exists(), "{bad}: {}", out.display());
     }
+    for bad in ["-1", "NaN"] {
+        let o = track(&["--head-turn-prior", bad]);
+        let e = assert_one_line_error(&o);
+        assert!(e.contains("--head-turn-prior"), "{e}");
+        assert!(!out.exists(), "{bad}: {}", out.display());
+    }
     for bad in ["-0.5", "1.5", "NaN"] {
         let o = track(&["--head-warm-twist", bad]);
         let e = assert_one_line_error(&o);
@@ -1736,6 +1742,10 @@ fn track_head_options_are_checked_recorded_and_kept_on_resume() {
     assert!(track(&["--head-twist-prior", "0"]).status.success());
     let doc = read_json(&out.join("track.json"));
     assert_eq!(doc["run"]["head_twist_prior"], 0.0);
+    assert_eq!(
+        doc["run"]["head_turn_prior"],
+        symcorr_correspond::DEFAULT_HEAD_TURN_PRIOR
+    );
     assert_eq!(
         doc["run"]["head_warm_twist"],
         symcorr_correspond::DEFAULT_HEAD_WARM_TWIST

@@ -242,6 +242,22 @@ def test_track_refuses_a_mirrored_joint_log(tmp_path):
     assert len(it) == 1
 
 
+def test_track_reads_an_azure_kinect_log():
+    # The recording's log as the Azure Kinect's tracker writes it (32 joints in its own camera
+    # frame, millimetres, a face): read like any joint file, tracked like the Kinect v1 log.
+    template = symcorr.Body(*body("s0_rest"))
+    v1 = list(symcorr.track(RECORDING, RECORDING / "joints.json", template, frames=[20, 21],
+                            joint_offset=0.04))
+    azure = list(symcorr.track(RECORDING, RECORDING / "joints_k4abt.json", template,
+                               frames=[20, 21], joint_offset=0.04))
+    assert [f.status for f in azure] == ["ok", "ok"]
+    shown = v1[0].target_of >= 0
+    assert (azure[0].target_of >= 0).sum() > 0.9 * shown.sum()
+    head = symcorr.read_joints(RECORDING / "joints.json", frame=20)["head"]
+    head_azure = symcorr.read_joints(RECORDING / "joints_k4abt.json", frame=20)["head"]
+    np.testing.assert_allclose(head_azure, head, atol=1e-9)
+
+
 def restamped(tmp_path, seconds):
     """The recording's joint log with every time `seconds` later, written in `tmp_path`."""
     log = json.loads((RECORDING / "joints.json").read_text())

@@ -639,6 +639,9 @@ pub(crate) fn attach_with_usable(
     }
     lap("labels", &mut clock);
     let mut joints = Skeleton::from_positions(positions);
+    // A relative angle, read without left/right labels: the same for the refined joints and
+    // whichever sides the mirror check kept.
+    joints.head_turn = skeleton.head_turn;
     for j in Joint::ALL {
         joints.confidence[j.index()] = if usable[j.index()] {
             skeleton.confidence[j.mirror_if(mirror.swapped).index()].max(0.0)

@@ -310,6 +310,10 @@ struct FrameFile {
     confidence: Option<Named<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     interpolated: Option<Vec<String>>,
+    /// [`Skeleton::head_turn`] (radians, so that it reads back exactly), when the tracker
+    /// reported it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    head_turn_rad: Option<f64>,
 }
 
 /// `time_s` is optional, but `null` is not a time.
@@ -602,11 +606,20 @@ fn frame_from_json(
     for (i, f) in flagged.iter().enumerate() {
         skeleton.interpolated[i] |= *f;
     }
+    if let Some(turn) = frame.head_turn_rad {
+        if !(turn.is_finite() && turn.abs() <= std::f64::consts::FRAC_PI_2) {
+            return Err(format!(
+                "head_turn_rad is {turn}, expected a number in [-π/2, π/2]"
+            ));
+        }
+        skeleton.head_turn = Some(turn);
+    }
     Ok(JointFrame { time_s, skeleton })
 }
 
 /// The `symcorr.joints/1` text of a log: skeleton `kinect_v1` (the canonical joints), units `m`,
-/// joints in SDK order, an `interpolated` list of joint names per frame when any joint is.
+/// joints in SDK order, an `interpolated` list of joint names per frame when any joint is, and
+/// `head_turn_rad` when the frame reports the head's turn ([`Skeleton::head_turn`]).
 pub fn to_json_string(log: &JointLog) -> String {
     let named =
         |f: &dyn Fn(Joint) -> f64| Named(Joint::ALL.map(|j| (j.name().to_string(), f(j))).to_vec());
@@ -633,6 +646,7 @@ pub fn to_json_string(log: &JointLog) -> String {
                         )),
                         confidence: Some(named(&|j| sk.confidence[j.index()])),
                         interpolated: (!interpolated.is_empty()).then_some(interpolated),
+                        head_turn_rad: sk.head_turn,
                     }
                 })
                 .collect(),

@@ -26,11 +26,14 @@
 //! selected ([`BodySelect`]: by default the body present in the most frames, the first seen on
 //! a tie) is kept; a frame without it is kept as a frame in which the tracker lost the body
 //! (every joint untracked), so that a recording's frame at that time is reported as such. The
+//! nose and the ears say how far the head is turned against the chest
+//! ([`Skeleton::head_turn`](symcorr_skeleton::Skeleton::head_turn), from
+//! [`head_turn_from_face`]): the joints do not show a head turning about its own bone. The
 //! orientations and the bone list are not read.
 
 use crate::error::KinectError;
 use crate::joints::{most_tracked, BodySelect, JointFrame, JointLog};
-use crate::mapping::{Partial, SkeletonKind, AZURE_KINECT_NAMES};
+use crate::mapping::{head_turn_from_face, FacePoints, Partial, SkeletonKind, AZURE_KINECT_NAMES};
 use nalgebra::Point3;
 use serde::Deserialize;
 use serde_json::error::Category;
@@ -213,7 +216,7 @@ pub fn parse_k4abt(text: &str, file: &str, select: BodySelect) -> Result<JointLo
                 }
             }
         }
-        let skeleton = partial.complete().map_err(|j| {
+        let mut skeleton = partial.complete().map_err(|j| {
             frame_err(
                 fi,
                 format!(
@@ -222,6 +225,22 @@ pub fn parse_k4abt(text: &str, file: &str, select: BodySelect) -> Result<JointLo
                 ),
             )
         })?;
+        if let Some((_, positions)) = frame.iter().find(|b| b.0 == id) {
+            let at = |name: &str| {
+                let native = AZURE_KINECT_NAMES.iter().position(|n| *n == name)?;
+                let p = positions[order.iter().position(|&o| o == native)?];
+                Some(Point3::new(-p[0], -p[1], p[2]) * 1e-3)
+            };
+            if let (Some(nose), Some(left), Some(right)) =
+                (at("nose"), at("ear_left"), at("ear_right"))
+            {
+                let face = FacePoints {
+                    nose,
+                    ears: [left, right],
+                };
+                skeleton.head_turn = head_turn_from_face(&skeleton, &face);
+            }
+        }
         out.push(JointFrame { time_s, skeleton });
     }
     Ok(JointLog {
@@ -230,13 +249,45 @@ pub fn parse_k4abt(text: &str, file: &str, select: BodySelect) -> Result<JointLo
     })
 }
 
+/// Where [`to_k4abt_json`] puts the face point `name` (`nose`, `eye_*`, `ear_*`) of a skeleton
+/// whose head is turned by [`Skeleton::head_turn`](symcorr_skeleton::Skeleton::head_turn):
+/// about a head 15 cm wide looking that far from the chest's forward direction. `None` without
+/// a turn or a chest direction.
+fn face_point(s: &symcorr_skeleton::Skeleton, name: &str) -> Option<Point3<f64>> {
+    use symcorr_skeleton::Joint as J;
+    let unit = |v: nalgebra::Vector3<f64>| {
+        let n = v.norm();
+        (n > 1e-12 && n.is_finite()).then(|| v / n)
+    };
+    let turn = s.head_turn?;
+    let head = s.position(J::Head);
+    let up = unit(head - s.position(J::ShoulderCenter))?;
+    let lateral = s.position(J::ShoulderLeft) - s.position(J::ShoulderRight);
+    let chest = unit(lateral.cross(&up))?;
+    let looks =
+        nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(up), turn) * chest;
+    // Towards the subject's left.
+    let left = up.cross(&looks);
+    let offset = match name {
+        "nose" => looks * 0.10,
+        "eye_left" => looks * 0.08 + left * 0.03,
+        "eye_right" => looks * 0.08 - left * 0.03,
+        "ear_left" => left * 0.075,
+        "ear_right" => -left * 0.075,
+        _ => return None,
+    };
+    Some(head + offset)
+}
+
 /// The Azure Kinect Body Tracking JSON of a log, as the SDK's `offline_processor` writes it
 /// (the canonical joints turned into its depth camera's frame, millimetres; `timestamp_usec`
 /// from each frame's time, rounded to the microsecond; one body, id 1, in every frame that
 /// tracks a joint, none in the others). The SDK's joints the canonical skeleton lacks are placed
 /// on it: `spine_chest` midway spine → shoulder centre, each clavicle 30 % of the way shoulder
 /// centre → shoulder, each thumb 80 % of the way wrist → hand, each hand tip half a wrist → hand
-/// beyond the hand, the nose, eyes and ears at the head. The file has no confidences: an
+/// beyond the hand, the nose, eyes and ears at the head — or, for a skeleton that reports the
+/// head's turn, on a head looking that way, so that reading it back gives the turn. The file
+/// has no confidences: an
 /// untracked joint of a tracked frame is written where it is, and a time before 0 gives a
 /// timestamp the reader refuses. For conversions and tests;
 /// [`parse_k4abt`] reads it back to the same canonical positions.
@@ -272,7 +323,7 @@ pub fn to_k4abt_json(log: &JointLog) -> String {
                     "thumb_right" => lerp(J::WristRight, J::HandRight, 0.8),
                     "handtip_left" => lerp(J::WristLeft, J::HandLeft, 1.5),
                     "handtip_right" => lerp(J::WristRight, J::HandRight, 1.5),
-                    _ => p(J::Head),
+                    face => face_point(s, face).unwrap_or_else(|| p(J::Head)),
                 },
             })
             .collect();

@@ -38,7 +38,7 @@
 //! | head (26) | head | |
 //! | shoulder/elbow/wrist/hand/hip/knee/ankle/foot left/right | same name | |
 //! | spine_chest (2), clavicle_* (4, 11), handtip_*, thumb_* (9, 10, 16, 17) | dropped | |
-//! | nose, eye_*, ear_* (27–31) | dropped | |
+//! | nose, eye_*, ear_* (27–31) | dropped | the nose and ears give `Skeleton::head_turn` |
 //!
 //! The SDK's own files are in its depth camera's frame (millimetres, +x right, +y down):
 //! [`crate::k4abt`] turns them into Kinect camera space. A `symcorr.joints/1` file with skeleton
@@ -315,6 +315,60 @@ const AZURE_KINECT_TO_V1: [Option<Joint>; 32] = {
     ]
 };
 
+/// A tracker's face: the points that say which way the head looks (the Azure Kinect's nose and
+/// ears; its eyes add nothing the ears do not).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FacePoints {
+    /// The tip of the nose.
+    pub nose: Point3<f64>,
+    /// The two ears, in either order.
+    pub ears: [Point3<f64>; 2],
+}
+
+/// How far the head is turned against the chest ([`Skeleton::head_turn`]), from a tracker's
+/// face and the canonical skeleton `s` it belongs to: the face looks from the ears' midpoint to
+/// the nose, the chest along the normal of the shoulder line and the neck → head axis (shoulder
+/// centre → head) — on the side the face is on, so that no left/right label is read, and a
+/// turn beyond ±π/2 is taken for the nearer one within it (a neck turns about ±80°); the
+/// signed angle between the two about the neck → head axis, right-handed about it (positive:
+/// towards the subject's left). `None` when an axis is degenerate (the face points together,
+/// the shoulders or the face along the neck).
+///
+/// ```
+/// use nalgebra::Point3;
+/// use symcorr_kinect::mapping::{head_turn_from_face, FacePoints};
+/// use symcorr_skeleton::{Joint, Skeleton};
+/// // Facing the camera (−z), the subject's left at −x; the face turned 30° to the left.
+/// let mut xyz = [[0.0, 1.0, 2.5]; Joint::COUNT];
+/// xyz[Joint::ShoulderCenter.index()] = [0.0, 1.4, 2.5];
+/// xyz[Joint::Head.index()] = [0.0, 1.6, 2.5];
+/// xyz[Joint::ShoulderLeft.index()] = [-0.2, 1.4, 2.5];
+/// xyz[Joint::ShoulderRight.index()] = [0.2, 1.4, 2.5];
+/// let s = Skeleton::from_arrays(xyz);
+/// let (sin, cos) = 30f64.to_radians().sin_cos();
+/// let face = FacePoints {
+///     nose: Point3::new(-0.1 * sin, 1.6, 2.5 - 0.1 * cos),
+///     ears: [
+///         Point3::new(0.07 * cos, 1.6, 2.5 - 0.07 * sin),
+///         Point3::new(-0.07 * cos, 1.6, 2.5 + 0.07 * sin),
+///     ],
+/// };
+/// let turn = head_turn_from_face(&s, &face).unwrap();
+/// assert!((turn - 30f64.to_radians()).abs() < 1e-9);
+/// ```
+pub fn head_turn_from_face(s: &Skeleton, face: &FacePoints) -> Option<f64> {
+    let up = normalize(s.position(Joint::Head) - s.position(Joint::ShoulderCenter))?;
+    let flat = |v: Vector3<f64>| normalize(v - up * up.dot(&v));
+    let mid = Point3::from((face.ears[0].coords + face.ears[1].coords) * 0.5);
+    let looks = flat(face.nose - mid)?;
+    let lateral = s.position(Joint::ShoulderLeft) - s.position(Joint::ShoulderRight);
+    let mut chest = flat(lateral.cross(&up))?;
+    if chest.dot(&looks) < 0.0 {
+        chest = -chest;
+    }
+    Some(up.dot(&chest.cross(&looks)).atan2(chest.dot(&looks)))
+}
+
 /// Index of Kinect v2's neck joint (used as a fallback for shoulder_center).
 pub(crate) const KINECT_V2_NECK: usize = 2;
 
@@ -407,6 +461,7 @@ impl Partial {
             positions,
             confidence: self.confidence,
             interpolated,
+            head_turn: None,
         })
     }
 

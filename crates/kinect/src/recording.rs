@@ -531,7 +531,8 @@ impl JointTrack {
     ///   exchanged between the two frames (a tracker's left/right swap: [`limb_swap_evidence`]
     ///   above [`SWAP_EVIDENCE_THRESHOLD`]) is not interpolated: its joints are the nearer
     ///   frame's.
-    ///   The `interpolated` flag of a tracked joint is that of the frame(s) it came from;
+    ///   The `interpolated` flag of a tracked joint is that of the frame(s) it came from; the
+    ///   head's turn ([`Skeleton::head_turn`]) is blended like a tracked joint's position;
     /// * a result with every confidence 0 → [`SkipReason::NoBody`].
     ///
     /// ```
@@ -624,6 +625,13 @@ impl JointTrack {
             out.confidence[j] = c;
             out.interpolated[j] = flag;
         }
+        // The head's turn as a tracked joint's position: blended, or the near frame's alone.
+        out.head_turn = match (a.head_turn, b.head_turn) {
+            (Some(x), Some(y)) => Some(x + (y - x) * w),
+            (Some(x), None) if gap_a <= half => Some(x),
+            (None, Some(y)) if gap_b <= half => Some(y),
+            _ => None,
+        };
         out
     }
 }
@@ -808,7 +816,9 @@ impl OneEuroFilter {
     }
 }
 
-/// One [`OneEuroFilter`] per joint coordinate of a skeleton (60 in all).
+/// One [`OneEuroFilter`] per joint coordinate of a skeleton (60 in all), and one for the head's
+/// turn ([`Skeleton::head_turn`], when the skeleton reports it), filtered as the arc the nose
+/// moves along ([`TURN_ARM_M`] × the turn, metres) so that the joints' parameters apply.
 ///
 /// ```
 /// use symcorr_kinect::{OneEuroFilter, SkeletonFilter};
@@ -823,7 +833,14 @@ impl OneEuroFilter {
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkeletonFilter {
     filters: [[OneEuroFilter; 3]; Joint::COUNT],
+    turn: OneEuroFilter,
 }
+
+/// The lever arm at which [`SkeletonFilter`] filters the head's turn, metres: about the nose's
+/// distance from the head's axis. In radians a tracker's noise moves the turn ten times as
+/// fast as it moves a joint in metres, and the one-euro filter's speed term would open up for
+/// it.
+pub const TURN_ARM_M: f64 = 0.1;
 
 impl SkeletonFilter {
     /// A filter for every joint coordinate, each a fresh copy of `template`'s parameters.
@@ -832,6 +849,7 @@ impl SkeletonFilter {
         fresh.reset();
         SkeletonFilter {
             filters: [[fresh; 3]; Joint::COUNT],
+            turn: fresh,
         }
     }
 
@@ -840,9 +858,11 @@ impl SkeletonFilter {
         for f in self.filters.iter_mut().flatten() {
             f.reset();
         }
+        self.turn.reset();
     }
 
-    /// The skeleton at `time_s` with every joint position filtered ([`OneEuroFilter::filter`]);
+    /// The skeleton at `time_s` with every joint position and the head's turn filtered
+    /// ([`OneEuroFilter::filter`]; a skeleton without a turn forgets the turn's past);
     /// confidences and `interpolated` flags are kept as they are.
     pub fn filter(&mut self, time_s: f64, skeleton: &Skeleton) -> Skeleton {
         let mut out = skeleton.clone();
@@ -852,6 +872,10 @@ impl SkeletonFilter {
                 fs[1].filter(time_s, p.y),
                 fs[2].filter(time_s, p.z),
             );
+        }
+        match skeleton.head_turn {
+            Some(t) => out.head_turn = Some(self.turn.filter(time_s, t * TURN_ARM_M) / TURN_ARM_M),
+            None => self.turn.reset(),
         }
         out
     }

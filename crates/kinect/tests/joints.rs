@@ -467,6 +467,7 @@ mod props {
                         positions: positions.map(Into::into),
                         confidence,
                         interpolated,
+                        head_turn: None,
                     }
                 }
             })
@@ -1052,6 +1053,45 @@ fn bad_azure_kinect_logs_give_typed_errors_naming_the_file_and_frame() {
     assert!(
         e.to_string()
             .contains("frame 0: missing \"timestamp_usec\""),
+        "{e}"
+    );
+}
+
+/// A log that reports the head's turn against the chest: written as the Azure Kinect SDK writes
+/// it (the turn as a face: nose and ears), read back to the same turn; in `symcorr.joints/1` as
+/// `head_turn_rad`, exactly; a log without a face reports none. A turn outside ±π/2 is refused.
+#[test]
+fn a_reported_head_turn_survives_both_formats() {
+    let mut s = read_joints(fixture("standing_v1.json")).unwrap().frames[0]
+        .skeleton
+        .clone();
+    let plain = JointLog::from_skeletons(vec![s.clone()], 30.0);
+    for turn in [-1.2, -0.3, 0.0, 0.5, 1.4] {
+        s.head_turn = Some(turn);
+        let log = JointLog::from_skeletons(vec![s.clone()], 30.0);
+        let azure = parse_joints(&symcorr_kinect::k4abt::to_k4abt_json(&log), "a.json")
+            .unwrap()
+            .0;
+        let back = azure.frames[0].skeleton.head_turn.unwrap();
+        assert!((back - turn).abs() < 1e-6, "{turn} → {back}");
+        let json = parse_joints(&to_json_string(&log), "j.json").unwrap().0;
+        assert_eq!(json.frames[0].skeleton.head_turn, Some(turn));
+    }
+    // The face at the head (no turn reported): no turn read.
+    let azure = parse_joints(&symcorr_kinect::k4abt::to_k4abt_json(&plain), "a.json").unwrap();
+    assert_eq!(azure.0.frames[0].skeleton.head_turn, None);
+    assert!(!to_json_string(&plain).contains("head_turn"));
+    let text = to_json_string(&JointLog::from_skeletons(
+        vec![Skeleton {
+            head_turn: Some(0.125),
+            ..s.clone()
+        }],
+        30.0,
+    ))
+    .replace("\"head_turn_rad\":0.125", "\"head_turn_rad\":2.5");
+    let e = parse_joints(&text, "j.json").unwrap_err().to_string();
+    assert!(
+        e.contains("frame 0: head_turn_rad is 2.5, expected a number in [-π/2, π/2]"),
         "{e}"
     );
 }

@@ -942,3 +942,40 @@ fn swap_evidence_is_antisymmetric_and_ignores_untracked_joints() {
     assert!(!legs_swapped(&a, &lost));
     assert!(arms_swapped(&a, &lost));
 }
+
+/// The head's turn a log reports is read at a depth frame's time like a tracked joint: blended
+/// between the two log frames around it, the near frame's alone when only one reports it (and
+/// it is within half a period), none otherwise; the smoothing filters it and forgets it when a
+/// frame reports none.
+#[test]
+fn a_reported_head_turn_is_blended_and_smoothed_like_a_joint() {
+    let body = Skeleton::from_arrays(std::array::from_fn(|i| [0.01 * i as f64, 1.0, 2.5]));
+    let with = |turn: Option<f64>| Skeleton {
+        head_turn: turn,
+        ..body.clone()
+    };
+    let log = JointLog::from_skeletons(vec![with(Some(0.2)), with(Some(0.4)), with(None)], 30.0);
+    let track = JointTrack::new(log, 0.0).unwrap();
+    let at = |t: f64| track.at(t).unwrap().skeleton.head_turn;
+    assert!((at(1.0 / 60.0).unwrap() - 0.3).abs() < 1e-12);
+    assert_eq!(at(1.0 / 30.0 + 0.01), Some(0.4));
+    assert_eq!(at(1.0 / 30.0 + 0.02), None);
+    let mut filter = SkeletonFilter::new(OneEuroFilter::default());
+    for i in 0..5 {
+        let out = filter.filter(i as f64 / 30.0, &with(Some(0.5)));
+        assert!((out.head_turn.unwrap() - 0.5).abs() < 1e-12);
+    }
+    // A jump is followed part of the way, as a joint's is.
+    let jumped = filter
+        .filter(5.0 / 30.0, &with(Some(0.9)))
+        .head_turn
+        .unwrap();
+    assert!(jumped > 0.5 && jumped < 0.9, "{jumped}");
+    assert_eq!(filter.filter(6.0 / 30.0, &with(None)).head_turn, None);
+    // Forgotten: the next reported turn passes through.
+    let fresh = filter
+        .filter(7.0 / 30.0, &with(Some(-0.2)))
+        .head_turn
+        .unwrap();
+    assert!((fresh + 0.2).abs() < 1e-12, "{fresh}");
+}

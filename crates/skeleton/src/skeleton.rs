@@ -14,6 +14,13 @@ pub struct Skeleton {
     pub confidence: [f64; Joint::COUNT],
     /// Joints whose position was not measured but interpolated along the bone chain by an importer.
     pub interpolated: [bool; Joint::COUNT],
+    /// How far the head is turned against the chest, in radians, about the neck → head axis
+    /// (shoulder centre → head), when the tracker reports the face (the Azure Kinect's nose and
+    /// ears); positive turns the face towards the subject's left (counter-clockwise seen from
+    /// above), within ±π/2. The joints do not show it: a head turns about its own bone. A
+    /// relative angle, so a rigid motion of the positions keeps it and a reflection negates it.
+    /// `None`: not reported.
+    pub head_turn: Option<f64>,
 }
 
 impl Skeleton {
@@ -23,6 +30,7 @@ impl Skeleton {
             positions,
             confidence: [1.0; Joint::COUNT],
             interpolated: [false; Joint::COUNT],
+            head_turn: None,
         }
     }
 
@@ -112,7 +120,8 @@ impl Skeleton {
         Some(self.map_positions(|p| pivot + r * (p - pivot)))
     }
 
-    /// The skeleton with every position mapped by `f` (confidence and provenance kept).
+    /// The skeleton with every position mapped by `f` (confidence, provenance and the head's
+    /// turn kept: `f` is a rigid motion).
     pub fn map_positions(&self, f: impl Fn(Point3<f64>) -> Point3<f64>) -> Skeleton {
         Skeleton {
             positions: self.positions.map(f),

@@ -5,7 +5,8 @@
 //! skull's pitch, and the head's anchor at the neck's base
 //! (`ArticulatedOptions::head_neck_anchor`) is weaker than its other anchors. And the head
 //! of a tracked subject who looks aside (`fixtures/synth/head_turn`), followed by the warm
-//! twist search (`ArticulatedOptions::head_warm_twist`).
+//! twist search (`ArticulatedOptions::head_warm_twist`), or held at the turn an Azure Kinect
+//! log reports (`ArticulatedOptions::head_turn_prior`).
 
 use std::path::{Path, PathBuf};
 use symcorr::{Mode, Pipeline, PipelineOptions};
@@ -77,11 +78,11 @@ fn a_skull_nodding_against_its_neck_is_followed() {
 /// `v` matched to a scan vertex whose pixel shows body vertex `b` errs by |rest(v) − rest(b)|
 /// and is flipped when `b` lies nearer `v`'s mirror twin, 3 cm or more from `v` (distances on
 /// the body at rest).
-fn tracked_head(head_warm_twist: Option<f64>) -> (f64, usize) {
+fn tracked_head(head_warm_twist: Option<f64>, log: &str) -> (f64, usize) {
     use symcorr::track::{FrameOutcome, TrackOptions, Tracker};
     let rec_dir = bodies().join("../head_turn");
     let rec = symcorr_kinect::Recording::open(&rec_dir).unwrap();
-    let log = symcorr_kinect::read_joints(rec_dir.join("joints.json")).unwrap();
+    let log = symcorr_kinect::read_joints(rec_dir.join(log)).unwrap();
     let track = symcorr_kinect::JointTrack::new(log, 0.0).unwrap();
     let mut options = PipelineOptions {
         mode: Mode::Dense,
@@ -146,13 +147,16 @@ fn tracked_head(head_warm_twist: Option<f64>) -> (f64, usize) {
 /// (`ArticulatedOptions::head_warm_twist`) turns it by the scan's head points.
 #[test]
 fn a_head_turned_against_the_chest_is_followed_through_a_recording() {
-    let on = tracked_head(symcorr_correspond::ArticulatedOptions::default().head_warm_twist);
-    let off = tracked_head(None);
+    let on = tracked_head(
+        symcorr_correspond::ArticulatedOptions::default().head_warm_twist,
+        "joints.json",
+    );
+    let off = tracked_head(None, "joints.json");
     eprintln!(
         "head: warm twist search {:.4} m, {} flips; without {:.4} m, {} flips",
         on.0, on.1, off.0, off.1
     );
-    // Measured 2026-12-05: 0.0296 m and 2,596 flips against 0.0461 m and 4,537.
+    // Measured 2026-12-05: 0.0307 m and 2,674 flips against 0.0468 m and 4,582.
     assert!(
         on.0 < 0.8 * off.0,
         "mean head error {} m against {} m",
@@ -164,5 +168,38 @@ fn a_head_turned_against_the_chest_is_followed_through_a_recording() {
         "{} head flips against {}",
         on.1,
         off.1
+    );
+}
+
+/// The same subject in the log an Azure Kinect's tracker writes (`joints_k4abt.json`: the same
+/// joints and a face, jittered like a joint): the log reports how far the head is turned
+/// against the chest, and the head is held there
+/// (`ArticulatedOptions::head_turn_prior`) instead of searched for.
+#[test]
+fn a_head_turn_the_log_reports_is_followed() {
+    let searched = tracked_head(
+        symcorr_correspond::ArticulatedOptions::default().head_warm_twist,
+        "joints.json",
+    );
+    let reported = tracked_head(
+        symcorr_correspond::ArticulatedOptions::default().head_warm_twist,
+        "joints_k4abt.json",
+    );
+    eprintln!(
+        "head: reported turn {:.4} m, {} flips; searched {:.4} m, {} flips",
+        reported.0, reported.1, searched.0, searched.1
+    );
+    // Measured 2026-12-05: 0.0199 m and 918 flips against 0.0307 m and 2,674.
+    assert!(
+        reported.0 < 0.8 * searched.0,
+        "mean head error {} m against {} m",
+        reported.0,
+        searched.0
+    );
+    assert!(
+        2 * reported.1 < searched.1,
+        "{} head flips against {}",
+        reported.1,
+        searched.1
     );
 }

@@ -92,6 +92,10 @@ struct Args {
     /// keep (default: the method's; 0 turns the search off).
     #[arg(long)]
     head_warm_twist: Option<f64>,
+    /// Weight of the prior that holds the head at the turn the joint log reports (default: the
+    /// method's; 0 turns it off).
+    #[arg(long)]
+    head_turn_prior: Option<f64>,
     /// Weight of the target → template pairs in the ICP rounds against the template → target
     /// pairs (default: the method's; 0 turns them off).
     #[arg(long)]
@@ -145,6 +149,9 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     a.head_neck_anchor = args.head_neck_anchor.unwrap_or(a.head_neck_anchor);
     if let Some(w) = args.head_twist_prior {
         a.head_twist_prior = (w > 0.0).then_some(w);
+    }
+    if let Some(w) = args.head_turn_prior {
+        a.head_turn_prior = (w > 0.0).then_some(w);
     }
     if let Some(g) = args.head_warm_twist {
         a.head_warm_twist = (g > 0.0).then_some(g);

@@ -157,6 +157,24 @@ pub fn kinect_joints(body: &Body<'_>, posed: &Posed) -> Result<Skeleton> {
     Ok(Skeleton::from_arrays(positions))
 }
 
+/// The face points an Azure Kinect tracker reports, `[nose, ear_left, ear_right]` (OBJ frame,
+/// metres): rest points about the centre of the skull (the Kinect head joint, the midpoint of
+/// the `head` bone) — the nose 10 cm in front, the ears 7.5 cm to each side — carried by the
+/// `head` bone, so that they turn with the head as the joints do not. Only their directions
+/// matter to a reader (the face looks from the ears' midpoint to the nose).
+pub fn face_points(body: &Body<'_>, posed: &Posed) -> Result<[V3; 3]> {
+    let b = body.bone("head")?;
+    let bone = &body.bones[b];
+    let mid = Vector3::from(bone.head) * 0.5 + Vector3::from(bone.tail) * 0.5;
+    // Blender frame: +z up, the body faces −y, its left is +x.
+    let at = |d: [f64; 3]| body.carry(&posed.skin, b, (mid + Vector3::from(d)).into());
+    Ok([
+        at([0.0, -0.10, 0.0]),
+        at([0.075, 0.0, 0.0]),
+        at([-0.075, 0.0, 0.0]),
+    ])
+}
+
 fn point_segment_distance(p: V3, a: V3, b: V3) -> f64 {
     let (p, a) = (Point3::from(p), Point3::from(a));
     let ab = Point3::from(b) - a;

@@ -37,11 +37,13 @@
 
 use std::path::Path;
 
+use nalgebra::Point3;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 use serde_json::json;
 use symcorr_kinect::joints::{write_joints_json, JointFrame, JointLog};
-use symcorr_kinect::mapping::SkeletonKind;
+use symcorr_kinect::k4abt::to_k4abt_json;
+use symcorr_kinect::mapping::{head_turn_from_face, FacePoints, SkeletonKind};
 use symcorr_kinect::{write_depth_png16, Intrinsics};
 use symcorr_mesh::TriMesh;
 use symcorr_skeleton::{Joint, Skeleton};
@@ -51,7 +53,7 @@ use crate::dataset::{mkdir, write_text};
 use crate::error::{Result, SynthError};
 use crate::fixtures::WALK_PERIOD_S;
 use crate::kinect::skeleton_to_camera;
-use crate::mapping::kinect_joints;
+use crate::mapping::{face_points, kinect_joints};
 use crate::noise::standard_normal;
 use crate::poses::{unit_f64, walk_pose, WalkCurves};
 use crate::render::{render, Camera, Realism};
@@ -124,6 +126,9 @@ pub fn fixture_recording() -> Result<(RecordingSpec, Camera, Realism)> {
     };
     Ok((spec, camera, Realism::kinect(7)))
 }
+
+/// First noise stream of the face points' jitter (one per frame, after it the frame number).
+const FACE_STREAM: u64 = 1 << 41;
 
 /// Noise stream of the corruption schedule (frame streams are the frame numbers).
 const SCHEDULE_STREAM: u64 = 1 << 40;
@@ -222,14 +227,15 @@ fn turn_point(p: [f64; 3], deg: f64) -> [f64; 3] {
     [c * p[0] + s * p[2], p[1], -s * p[0] + c * p[2]]
 }
 
-/// The turned body mesh (world frame) and its exact joints (camera space) at true time `t_s`.
+/// The turned body mesh (world frame), its exact joints (camera space), its turn and its face
+/// points (camera space, [`face_points`]) at true time `t_s`.
 fn body_at(
     body: &Body<'_>,
     walk: Option<&WalkCurves>,
     spec: &RecordingSpec,
     camera: &Camera,
     t_s: f64,
-) -> Result<(TriMesh, Skeleton, f64)> {
+) -> Result<(TriMesh, Skeleton, f64, FacePoints)> {
     let duration = spec.frames as f64 / spec.fps;
     let turn = turn_deg(t_s, duration, spec.max_turn_deg);
     let mut pose = walk_pose(walk, t_s / WALK_PERIOD_S);
@@ -242,6 +248,13 @@ fn body_at(
     }
     let posed = body.pose(&pose)?;
     let joints = kinect_joints(body, &posed)?;
+    let to_cam = camera.world_to_camera();
+    let [nose, ear_left, ear_right] =
+        face_points(body, &posed)?.map(|p| Point3::from(to_cam.apply(turn_point(p, turn))));
+    let face = FacePoints {
+        nose,
+        ears: [ear_left, ear_right],
+    };
     let mut mesh = posed.mesh;
     for p in mesh.positions.iter_mut() {
         *p = turn_point(*p, turn);
@@ -250,11 +263,7 @@ fn body_at(
     for p in world.positions.iter_mut() {
         *p = turn_point((*p).into(), turn).into();
     }
-    Ok((
-        mesh,
-        skeleton_to_camera(&world, &camera.world_to_camera()),
-        turn,
-    ))
+    Ok((mesh, skeleton_to_camera(&world, &to_cam), turn, face))
 }
 
 /// Runs of consecutive frames among `ok` (inclusive ranges).
@@ -387,9 +396,10 @@ pub fn write_recording(
     let mut log_frames = Vec::with_capacity(n);
     let mut turns = Vec::with_capacity(n);
     let mut inferred_frames = Vec::new();
+    let mut head_turns = vec![None; n];
     for f in 0..n {
         // The depth frame and its truth.
-        let (mesh, exact, turn) = body_at(body, walk, spec, camera, depth_times[f])?;
+        let (mesh, exact, turn, _) = body_at(body, walk, spec, camera, depth_times[f])?;
         turns.push(turn);
         let r = render(&mesh, camera, realism, f as u64);
         let name = format!("{f:06}.png");
@@ -402,7 +412,7 @@ pub fn write_recording(
 
         // The joint log's frame f: the body at true time f/fps, corrupted.
         let t_log = f as f64 / spec.fps;
-        let (_, exact_log, _) = body_at(body, walk, spec, camera, t_log)?;
+        let (_, exact_log, _, face) = body_at(body, walk, spec, camera, t_log)?;
         let mut s = exact_log.clone();
         if lost.contains(&f) {
             s.positions = [nalgebra::Point3::origin(); Joint::COUNT];
@@ -432,6 +442,18 @@ pub fn write_recording(
                     *x += sigma * standard_normal(&mut rng);
                 }
             }
+            // The face points jitter as a tracked joint does (their own stream: the joints'
+            // noise stays what it was). Read against the jittered joints: the reported turn.
+            let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+            rng.set_stream(FACE_STREAM + f as u64);
+            let mut jittered = face;
+            for p in std::iter::once(&mut jittered.nose).chain(jittered.ears.iter_mut()) {
+                let sigma = jitter_sigma_m(p.z, false);
+                for x in p.coords.iter_mut() {
+                    *x += sigma * standard_normal(&mut rng);
+                }
+            }
+            head_turns[f] = head_turn_from_face(&s, &jittered);
         }
         log_frames.push(JointFrame {
             time_s: t_log + JOINT_CLOCK_OFFSET_S,
@@ -439,14 +461,16 @@ pub fn write_recording(
         });
     }
 
-    write_joints_json(
-        out.join("joints.json"),
-        &JointLog {
-            skeleton_kind: SkeletonKind::KinectV1,
-            frames: log_frames,
-        },
-    )
-    .map_err(kerr)?;
+    let mut log = JointLog {
+        skeleton_kind: SkeletonKind::KinectV1,
+        frames: log_frames,
+    };
+    write_joints_json(out.join("joints.json"), &log).map_err(kerr)?;
+    // The same log as the Azure Kinect's tracker writes it, which also reports the face.
+    for (frame, turn) in log.frames.iter_mut().zip(head_turns) {
+        frame.skeleton.head_turn = turn;
+    }
+    write_text(&out.join("joints_k4abt.json"), &to_k4abt_json(&log))?;
     write_joints_json(
         out.join("truth").join("joints.json"),
         &JointLog {
@@ -492,6 +516,7 @@ fn write_manifest(
             "depth": "depth/NNNNNN.png",
             "depth_times": "depth_times.txt",
             "joints": "joints.json",
+            "joints_k4abt": "joints_k4abt.json",
             "truth_vertex_ids": "truth/NNNNNN.png",
             "truth_joints": "truth/joints.json",
             "camera": "camera.json",

@@ -128,6 +128,7 @@ fn layout_is_exactly_the_recording_format() {
         "depth",
         "depth_times.txt",
         "joints.json",
+        "joints_k4abt.json",
         "truth",
         "recording.json",
         "camera.json",
@@ -319,7 +320,7 @@ fn committed_recording_regenerates_bit_for_bit() {
             files += 1;
         }
     }
-    assert_eq!(files, 2 * frames() + 6);
+    assert_eq!(files, 2 * frames() + 7);
 }
 
 /// `symcorr-synth oni` writes the recording as an `.oni` file whose depth frames are the
@@ -394,7 +395,56 @@ fn a_head_turned_against_the_chest_shows_in_the_depth_not_in_the_joints() {
     let text = std::fs::read_to_string(looking.path().join("recording.json")).unwrap();
     let m: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(m["head_turn_deg"], 40.0);
+    // The Azure Kinect log's face reports the turn (jittered): read back against the truth,
+    // 40° · sin(2πt / 3 s) at the log's true time, within the jitter on average; the still
+    // subject's log reports about none.
+    let reported = |dir: &Path| -> Vec<(f64, f64)> {
+        read_joints(dir.join("joints_k4abt.json"))
+            .unwrap()
+            .frames
+            .iter()
+            .filter_map(|f| {
+                let t = f.time_s - 0.04;
+                let truth = symcorr_synth::recording::head_turn_deg(t, 40.0);
+                Some((f.skeleton.head_turn?.to_degrees(), truth))
+            })
+            .collect()
+    };
+    let (moving, resting) = (reported(looking.path()), reported(still.path()));
+    assert_eq!(moving.len(), 22, "the frames with a body report a turn");
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let error: Vec<f64> = moving.iter().map(|(r, t)| (r - t).abs()).collect();
+    assert!(mean(&error) < 12.0, "mean error {}°", mean(&error));
+    // It follows the look: large where the truth is large.
+    let turned: Vec<f64> = moving
+        .iter()
+        .filter(|(_, t)| t.abs() > 30.0)
+        .map(|(r, t)| r * t.signum())
+        .collect();
+    assert!(!turned.is_empty() && mean(&turned) > 25.0, "{turned:?}");
+    let still_turn: Vec<f64> = resting.iter().map(|(r, _)| *r).collect();
+    assert!(mean(&still_turn).abs() < 6.0, "{still_turn:?}");
     spec.head_turn_deg = 100.0;
     let e = write(&spec).unwrap_err();
     assert!(e.to_string().contains("±80°"), "{e}");
+}
+
+/// `joints_k4abt.json` is `joints.json` as the Azure Kinect's tracker writes it: the same frames
+/// at the same times, the same joints where the log has a body, none where it lost it.
+#[test]
+fn the_azure_kinect_log_holds_the_same_joints() {
+    let v1 = log();
+    let azure = read_joints(dir().join("joints_k4abt.json")).unwrap();
+    assert_eq!(azure.frames.len(), v1.frames.len());
+    for (a, b) in azure.frames.iter().zip(&v1.frames) {
+        assert!((a.time_s - b.time_s).abs() < 1e-6);
+        assert_eq!(a.skeleton.tracks_any(), b.skeleton.tracks_any());
+        if b.skeleton.tracks_any() {
+            for j in Joint::ALL {
+                let d = (a.skeleton.position(j) - b.skeleton.position(j)).norm();
+                assert!(d < 1e-9, "{j:?}: {d}");
+            }
+            assert!(a.skeleton.head_turn.is_some());
+        }
+    }
 }

@@ -43,7 +43,10 @@
 //!    [`ArticulatedOptions::head_neck_anchor`]: the neck bends below the skull, so the two
 //!    joints do not give the skull's pitch); with a target viewpoint the head's fit also pulls
 //!    its twist towards the chest's ([`ArticulatedOptions::head_twist_prior`]: one view of a
-//!    round head barely pins it). Then the template is re-skinned (module `icp`). From an
+//!    round head barely pins it) — or, where the target's skeleton reports the head's turn
+//!    against the chest (`Skeleton::head_turn`, a tracker that sees the face), towards that
+//!    turn ([`ArticulatedOptions::head_turn_prior`]). Then the template is re-skinned (module
+//!    `icp`). From an
 //!    earlier fit ([`ArticulatedStart::Warm`]) onto a view, the head is then started again at
 //!    each of [`WARM_TWISTS`] and refined scan → template on its own points; a turned start
 //!    is kept only when it explains the scan's head clearly better
@@ -218,6 +221,15 @@ pub struct ArticulatedOptions {
     /// only biased the turned heads of bodies20's random poses: 0.0025 → 0.0031 mean error).
     /// (0.1, [`DEFAULT_HEAD_TWIST_PRIOR`]: `docs/decisions/2026-12-03-head-twist-prior.md`.)
     pub head_twist_prior: Option<f64>,
+    /// Reported head turn prior (`None`: off): when the target's skeleton reports how far the
+    /// head is turned against the chest ([`Skeleton::head_turn`], a tracker that sees the face:
+    /// the Azure Kinect's nose and ears), the weight, relative to the head's total pair weight
+    /// in each of its ICP fits, of the four pairs that hold the head's twist at that turn
+    /// against the chest's fitted pose (less the template's own reported turn). It replaces
+    /// [`ArticulatedOptions::head_twist_prior`] there, on any target: a measured turn, where
+    /// the other assumes the head turns with the chest.
+    /// ([`DEFAULT_HEAD_TURN_PRIOR`]: `docs/decisions/2026-12-05-reported-head-turn.md`.)
+    pub head_turn_prior: Option<f64>,
     /// Warm twist search (`None`, or a share not above 0: off): from an earlier fit onto a
     /// target seen from a viewpoint, after the ICP rounds the head is started again at ±15°
     /// and ±30° about its bone and each start refined scan → template on the head's own points
@@ -267,6 +279,7 @@ impl Default for ArticulatedOptions {
             reciprocal_radius: None,
             guess_hidden: true,
             head_twist_prior: Some(DEFAULT_HEAD_TWIST_PRIOR),
+            head_turn_prior: Some(DEFAULT_HEAD_TURN_PRIOR),
             head_warm_twist: Some(DEFAULT_HEAD_WARM_TWIST),
             target_to_template: Some(TargetPairs::default()),
         }
@@ -296,6 +309,9 @@ pub enum ArticulatedStart<'a> {
 
 /// Default [`ArticulatedOptions::head_twist_prior`].
 pub const DEFAULT_HEAD_TWIST_PRIOR: f64 = 0.1;
+
+/// Default [`ArticulatedOptions::head_turn_prior`].
+pub const DEFAULT_HEAD_TURN_PRIOR: f64 = 0.3;
 
 /// Default [`ArticulatedOptions::head_warm_twist`].
 pub const DEFAULT_HEAD_WARM_TWIST: f64 = 0.85;
@@ -1209,11 +1225,22 @@ fn initial_transforms(
         from_skeletons[head_bone],
         twist::MAX_HEAD_TWIST_DEG,
     );
-    let prior = al
-        .options
-        .head_twist_prior
-        .filter(|&w| w > 0.0 && al.target.viewpoint.is_some())
-        .and_then(|w| TwistPrior::new(al.template.joints, head_bone, w));
+    let reported = al
+        .target
+        .joints
+        .head_turn
+        .zip(al.options.head_turn_prior.filter(|&w| w > 0.0));
+    let prior = match reported {
+        Some((turn, w)) => {
+            let own = al.template.joints.head_turn.unwrap_or(0.0);
+            TwistPrior::new(al.template.joints, head_bone, w, turn - own)
+        }
+        None => al
+            .options
+            .head_twist_prior
+            .filter(|&w| w > 0.0 && al.target.viewpoint.is_some())
+            .and_then(|w| TwistPrior::new(al.template.joints, head_bone, w, 0.0)),
+    };
     let transforms = match start {
         ArticulatedStart::Skeletons => {
             let mut t = from_skeletons;

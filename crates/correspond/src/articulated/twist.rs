@@ -94,13 +94,20 @@ pub(super) struct TwistPrior {
     offsets: [Vector3<f64>; 4],
     /// The weight of each of the four prior pairs, relative to the bone's total pair weight.
     weight: f64,
+    /// The turn (radians, right-handed about the bone) the bone is held at against its parent,
+    /// beyond the template's own: 0 for the template's rest relation.
+    turn: f64,
 }
 
 impl TwistPrior {
     /// The prior of bone `b` of the `template` skeleton (at rest) with `weight`
-    /// ([`ArticulatedOptions::head_twist_prior`](super::ArticulatedOptions::head_twist_prior));
-    /// `None` for a bone without a parent bone or without length.
-    pub fn new(template: &Skeleton, b: usize, weight: f64) -> Option<TwistPrior> {
+    /// ([`ArticulatedOptions::head_twist_prior`](super::ArticulatedOptions::head_twist_prior)),
+    /// holding the bone turned by `turn` radians about itself against the template's own
+    /// relation to its parent (0: that relation;
+    /// [`ArticulatedOptions::head_turn_prior`](super::ArticulatedOptions::head_turn_prior): the
+    /// turn the target's tracker reports less the template's); `None` for a bone without a
+    /// parent bone or without length.
+    pub fn new(template: &Skeleton, b: usize, weight: f64, turn: f64) -> Option<TwistPrior> {
         let (p, c) = (BONES[b].parent, BONES[b].child);
         let parent = BONES.iter().position(|pb| pb.child == p)?;
         let (tp, tc) = (template.position(p), template.position(c));
@@ -119,15 +126,16 @@ impl TwistPrior {
             mid: Point3::from((tp.coords + tc.coords) * 0.5),
             offsets: [e1, -e1, e2, -e2],
             weight: weight / 4.0,
+            turn,
         })
     }
 
     /// The prior's four pairs for the bone's weighted rigid fit in `transforms` (the round's
     /// current pose), `pair_weight` the bone's total pair weight: the offsets from the bone's
     /// midpoint, each pulled to where the parent's current rotation, swung onto the bone's
-    /// current direction, carries it about the bone's current midpoint. Centred on the
-    /// midpoint and keeping the bone's direction, they act on its twist alone; the swing is
-    /// left to the pairs and the joint anchors.
+    /// current direction and turned by the prior's turn about it, carries it about the bone's
+    /// current midpoint. Centred on the midpoint and keeping the bone's direction, they act on
+    /// its twist alone; the swing is left to the pairs and the joint anchors.
     pub fn pairs(
         &self,
         transforms: &super::transforms::BoneTransforms,
@@ -137,6 +145,7 @@ impl TwistPrior {
         // The bone's current direction: the prior holds the twist about it, not the swing.
         let current = transforms[self.bone].rotation.matrix() * self.template_axis;
         let r = super::transforms::swing(parent * self.template_axis, current) * parent;
+        let r = Rotation3::from_axis_angle(&Unit::new_normalize(current), self.turn) * r;
         let mid = transforms[self.bone] * self.mid;
         let w = self.weight * pair_weight;
         self.offsets.map(|d| (self.mid + d, mid + r * d, w))
@@ -462,7 +471,7 @@ mod tests {
         let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), 70f64.to_radians());
         let turned = rest.map_positions(|x| turn * x);
         let h = super::super::head_bone();
-        let prior = TwistPrior::new(&rest, h, 1.0).unwrap();
+        let prior = TwistPrior::new(&rest, h, 1.0, 0.0).unwrap();
         let mut transforms = bone_transforms(&rest, &turned);
         let chest = transforms[prior.parent].rotation;
         approx::assert_relative_eq!(chest.matrix(), turn.matrix(), epsilon = 1e-9);
@@ -486,7 +495,7 @@ mod tests {
     fn the_prior_holds_the_twist_not_the_tilt() {
         let rest = symcorr_attach::testbody::t_pose(1.0);
         let h = super::super::head_bone();
-        let prior = TwistPrior::new(&rest, h, 1.0).unwrap();
+        let prior = TwistPrior::new(&rest, h, 1.0, 0.0).unwrap();
         let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians());
         let axis = nalgebra::Unit::new_normalize(prior.template_axis);
         let twist = Rotation3::from_axis_angle(&axis, 40f64.to_radians());
@@ -494,6 +503,28 @@ mod tests {
         transforms[h] =
             IsometryMatrix3::from_parts(nalgebra::Translation3::identity(), tilt * twist);
         let fit = kabsch(&prior.pairs(&transforms, 1.0)).unwrap();
+        approx::assert_relative_eq!(fit.rotation.matrix(), tilt.matrix(), epsilon = 1e-9);
+    }
+
+    /// With a turn (a log that reports the head turned 35° against the chest), the prior's
+    /// pairs alone turn a head left at the chest's twist by those 35° about its bone, right-
+    /// handed, tilt and all.
+    #[test]
+    fn the_prior_holds_a_reported_turn() {
+        let rest = symcorr_attach::testbody::t_pose(1.0);
+        let h = super::super::head_bone();
+        let turn = 35f64.to_radians();
+        let prior = TwistPrior::new(&rest, h, 1.0, turn).unwrap();
+        let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 10f64.to_radians());
+        let mut transforms = [IsometryMatrix3::identity(); Bone::COUNT];
+        transforms[h] = IsometryMatrix3::from_parts(nalgebra::Translation3::identity(), tilt);
+        let fit = kabsch(&prior.pairs(&transforms, 1.0)).unwrap();
+        let about = nalgebra::Unit::new_normalize(tilt * prior.template_axis);
+        let expected = Rotation3::from_axis_angle(&about, turn) * tilt;
+        approx::assert_relative_eq!(fit.rotation.matrix(), expected.matrix(), epsilon = 1e-9);
+        // No turn: the prior of before.
+        let plain = TwistPrior::new(&rest, h, 1.0, 0.0).unwrap();
+        let fit = kabsch(&plain.pairs(&transforms, 1.0)).unwrap();
         approx::assert_relative_eq!(fit.rotation.matrix(), tilt.matrix(), epsilon = 1e-9);
     }
 }

@@ -90,6 +90,16 @@ pub struct TrackArgs {
         allow_hyphen_values = true
     )]
     pub head_twist_prior: f64,
+    /// Weight of the prior that holds the head at the turn against the chest the joint log
+    /// reports, where it reports one (an Azure Kinect log: its nose and ears); it replaces the
+    /// head twist prior there. 0 turns it off.
+    #[arg(
+        long,
+        value_name = "W",
+        default_value_t = symcorr_correspond::DEFAULT_HEAD_TURN_PRIOR,
+        allow_hyphen_values = true
+    )]
+    pub head_turn_prior: f64,
     /// Share of its unturned score a turned head must reach to be kept, when the head's twist
     /// is searched again in every frame (a subject looking aside, which the joints do not
     /// show); in (0, 1], 0 turns the search off.
@@ -225,6 +235,7 @@ fn journal_header(
         "joint_offset_s": joint_offset_s,
         "joint_offset_estimated": args.joint_offset == JointOffset::Auto,
         "head_twist_prior": args.head_twist_prior,
+        "head_turn_prior": args.head_turn_prior,
         "head_warm_twist": args.head_warm_twist,
         "scans": args.scans,
         "method": method,
@@ -293,11 +304,15 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             .build_global()
             .map_err(|e| CliError(format!("--threads {n}: {e}")))?;
     }
-    if !(args.head_twist_prior >= 0.0 && args.head_twist_prior.is_finite()) {
-        return Err(CliError(format!(
-            "--head-twist-prior {}: expected a finite weight ≥ 0",
-            args.head_twist_prior
-        )));
+    for (flag, w) in [
+        ("--head-twist-prior", args.head_twist_prior),
+        ("--head-turn-prior", args.head_turn_prior),
+    ] {
+        if !(w >= 0.0 && w.is_finite()) {
+            return Err(CliError(format!(
+                "{flag} {w}: expected a finite weight ≥ 0"
+            )));
+        }
     }
     if !(0.0..=1.0).contains(&args.head_warm_twist) {
         return Err(CliError(format!(
@@ -328,6 +343,8 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     };
     options.articulated.head_twist_prior =
         (args.head_twist_prior > 0.0).then_some(args.head_twist_prior);
+    options.articulated.head_turn_prior =
+        (args.head_turn_prior > 0.0).then_some(args.head_turn_prior);
     options.articulated.head_warm_twist =
         (args.head_warm_twist > 0.0).then_some(args.head_warm_twist);
     // Estimated on frames spread over the whole recording, so that slices of one run merge.
