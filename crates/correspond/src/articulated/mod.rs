@@ -227,7 +227,9 @@ pub struct ArticulatedOptions {
     /// in each of its ICP fits, of the four pairs that hold the head's twist at that turn
     /// against the chest's fitted pose (less the template's own reported turn). It replaces
     /// [`ArticulatedOptions::head_twist_prior`] there, on any target: a measured turn, where
-    /// the other assumes the head turns with the chest.
+    /// the other assumes the head turns with the chest. From the skeletons the head starts at
+    /// that turn instead of the twist search's pick, and from a warm start the warm twist
+    /// search ([`ArticulatedOptions::head_warm_twist`]) is skipped.
     /// ([`DEFAULT_HEAD_TURN_PRIOR`]: `docs/decisions/2026-12-05-reported-head-turn.md`.)
     pub head_turn_prior: Option<f64>,
     /// Warm twist search (`None`, or a share not above 0: off): from an earlier fit onto a
@@ -542,7 +544,9 @@ pub fn articulated_match_indexed(
     )?;
     // From an earlier fit, the head's twist is searched again on the rounds' pose: its own
     // points of the scan say when the head turned against the chest (module `twist`).
-    let warm = matches!(start, ArticulatedStart::Warm { .. });
+    // Not where the target's skeleton reports the head's turn: that is measured, where the
+    // search guesses (`docs/decisions/2026-12-05-reported-head-turn.md`).
+    let warm = matches!(start, ArticulatedStart::Warm { .. }) && reported_turn(&al).is_none();
     if let (true, Some(gain)) = (warm, options.head_warm_twist.filter(|&g| g > 0.0)) {
         if let Some(own) = twist::OwnPoints::new(&al, head_bone()) {
             transforms[own.bone] = twist::twist_search(
@@ -1206,13 +1210,24 @@ fn head_bone() -> usize {
     BONES.iter().position(|&b| b == head).unwrap_or(2)
 }
 
+/// The head's turn the target's skeleton reports ([`Skeleton::head_turn`]) and the weight of
+/// the prior that holds it ([`ArticulatedOptions::head_turn_prior`]), when both are there.
+fn reported_turn(al: &Alignment<'_>) -> Option<(f64, f64)> {
+    al.target
+        .joints
+        .head_turn
+        .zip(al.options.head_turn_prior.filter(|&w| w > 0.0))
+}
+
 /// The bone transforms that pose the template on the target's skeleton
-/// ([`bone_transforms`]), with the head bone's roll chosen by the twist search, and the limit
+/// ([`bone_transforms`]), with the head bone's roll chosen by the twist search — or set at the
+/// turn the target's skeleton reports ([`ArticulatedOptions::head_turn_prior`]) — and the limit
 /// that holds the head's twist near the chest's pose ([`twist::MAX_HEAD_TWIST_DEG`]) in every
 /// later fit.
 /// From a warm start, the earlier transforms moved by their bones' motion instead (no twist
-/// search), the head held within the same limit. From either start, the head's twist prior
-/// when the target has a viewpoint ([`ArticulatedOptions::head_twist_prior`]).
+/// search), the head held within the same limit. From either start, the prior that holds the
+/// head at the reported turn, or else the head's twist prior when the target has a viewpoint
+/// ([`ArticulatedOptions::head_twist_prior`]).
 fn initial_transforms(
     al: &Alignment<'_>,
     start: ArticulatedStart<'_>,
@@ -1225,11 +1240,7 @@ fn initial_transforms(
         from_skeletons[head_bone],
         twist::MAX_HEAD_TWIST_DEG,
     );
-    let reported = al
-        .target
-        .joints
-        .head_turn
-        .zip(al.options.head_turn_prior.filter(|&w| w > 0.0));
+    let reported = reported_turn(al);
     let prior = match reported {
         Some((turn, w)) => {
             let own = al.template.joints.head_turn.unwrap_or(0.0);
@@ -1244,14 +1255,22 @@ fn initial_transforms(
     let transforms = match start {
         ArticulatedStart::Skeletons => {
             let mut t = from_skeletons;
-            t[head_bone] = twist::twist_search(
-                al,
-                head_bone,
-                t[head_bone],
-                limit.as_ref(),
-                &twist::TWISTS,
-                twist::TwistScore::TemplateToTarget,
-            )?;
+            // A reported turn is where the head starts: the prior's pairs alone place it there
+            // (the chest's pose from the skeletons, swung onto the head bone, turned).
+            let at_reported = reported
+                .and(prior.as_ref())
+                .and_then(|p| transforms::kabsch(&p.pairs(&t, 1.0)));
+            t[head_bone] = match at_reported {
+                Some(pose) => pose,
+                None => twist::twist_search(
+                    al,
+                    head_bone,
+                    t[head_bone],
+                    limit.as_ref(),
+                    &twist::TWISTS,
+                    twist::TwistScore::TemplateToTarget,
+                )?,
+            };
             t
         }
         ArticulatedStart::Warm { transforms, joints } => {
