@@ -287,10 +287,9 @@ fn face_point(s: &symcorr_skeleton::Skeleton, name: &str) -> Option<Point3<f64>>
 /// centre → shoulder, each thumb 80 % of the way wrist → hand, each hand tip half a wrist → hand
 /// beyond the hand, the nose, eyes and ears at the head — or, for a skeleton that reports the
 /// head's turn, on a head looking that way, so that reading it back gives the turn. The file
-/// has no confidences: an
-/// untracked joint of a tracked frame is written where it is, and a time before 0 gives a
-/// timestamp the reader refuses. For conversions and tests;
-/// [`parse_k4abt`] reads it back to the same canonical positions.
+/// has no confidences: an untracked joint of a tracked frame is written where it is, and a time
+/// before 0 gives a timestamp the reader refuses. For conversions and tests; [`parse_k4abt`]
+/// reads it back to the same canonical positions.
 pub fn to_k4abt_json(log: &JointLog) -> String {
     use symcorr_skeleton::Joint as J;
     let mut out = String::from("{\n  \"k4abt_sdk_version\": \"1.1.2\",\n  \"joint_names\": [");
