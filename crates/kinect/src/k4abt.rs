@@ -33,7 +33,9 @@
 
 use crate::error::KinectError;
 use crate::joints::{most_tracked, BodySelect, JointFrame, JointLog};
-use crate::mapping::{head_turn_from_face, FacePoints, Partial, SkeletonKind, AZURE_KINECT_NAMES};
+use crate::mapping::{
+    head_turn_from_face, neck_axis_and_chest, FacePoints, Partial, SkeletonKind, AZURE_KINECT_NAMES,
+};
 use nalgebra::Point3;
 use serde::Deserialize;
 use serde_json::error::Category;
@@ -208,12 +210,17 @@ pub fn parse_k4abt(text: &str, file: &str, select: BodySelect) -> Result<JointLo
     }
     let mut out = Vec::with_capacity(bodies.len());
     for (fi, (frame, time_s)) in bodies.iter().zip(times).enumerate() {
-        let mut partial = Partial::new();
+        // The body's positions in Kinect space, by native index.
+        let mut native = [None; AZURE_KINECT_NAMES.len()];
         if let Some((_, positions)) = frame.iter().find(|b| b.0 == id) {
-            for (&native, p) in order.iter().zip(positions) {
-                if let Some(j) = SkeletonKind::AzureKinect.canonical(native) {
-                    partial.set(j, Point3::new(-p[0], -p[1], p[2]) * 1e-3, 1.0);
-                }
+            for (&k, p) in order.iter().zip(positions) {
+                native[k] = Some(Point3::new(-p[0], -p[1], p[2]) * 1e-3);
+            }
+        }
+        let mut partial = Partial::new();
+        for (k, p) in native.iter().enumerate() {
+            if let (Some(p), Some(j)) = (p, SkeletonKind::AzureKinect.canonical(k)) {
+                partial.set(j, *p, 1.0);
             }
         }
         let mut skeleton = partial.complete().map_err(|j| {
@@ -225,21 +232,17 @@ pub fn parse_k4abt(text: &str, file: &str, select: BodySelect) -> Result<JointLo
                 ),
             )
         })?;
-        if let Some((_, positions)) = frame.iter().find(|b| b.0 == id) {
-            let at = |name: &str| {
-                let native = AZURE_KINECT_NAMES.iter().position(|n| *n == name)?;
-                let p = positions[order.iter().position(|&o| o == native)?];
-                Some(Point3::new(-p[0], -p[1], p[2]) * 1e-3)
+        let at = |name: &str| {
+            let k = AZURE_KINECT_NAMES.iter().position(|n| *n == name)?;
+            native[k]
+        };
+        if let (Some(nose), Some(left), Some(right)) = (at("nose"), at("ear_left"), at("ear_right"))
+        {
+            let face = FacePoints {
+                nose,
+                ears: [left, right],
             };
-            if let (Some(nose), Some(left), Some(right)) =
-                (at("nose"), at("ear_left"), at("ear_right"))
-            {
-                let face = FacePoints {
-                    nose,
-                    ears: [left, right],
-                };
-                skeleton.head_turn = head_turn_from_face(&skeleton, &face);
-            }
+            skeleton.head_turn = head_turn_from_face(&skeleton, &face);
         }
         out.push(JointFrame { time_s, skeleton });
     }
@@ -249,25 +252,32 @@ pub fn parse_k4abt(text: &str, file: &str, select: BodySelect) -> Result<JointLo
     })
 }
 
-/// Where [`to_k4abt_json`] puts the face point `name` (`nose`, `eye_*`, `ear_*`) of a skeleton
-/// whose head is turned by [`Skeleton::head_turn`](symcorr_skeleton::Skeleton::head_turn):
-/// about a head 15 cm wide looking that far from the chest's forward direction. `None` without
-/// a turn or a chest direction.
-fn face_point(s: &symcorr_skeleton::Skeleton, name: &str) -> Option<Point3<f64>> {
-    use symcorr_skeleton::Joint as J;
-    let unit = |v: nalgebra::Vector3<f64>| {
-        let n = v.norm();
-        (n > 1e-12 && n.is_finite()).then(|| v / n)
-    };
+/// Where [`to_k4abt_json`] puts the face of a skeleton whose head is turned by
+/// [`Skeleton::head_turn`](symcorr_skeleton::Skeleton::head_turn): the head joint, the unit
+/// direction the face looks (the chest's forward direction turned that far about the neck →
+/// head axis) and the unit direction towards the subject's left across it. `None` without a
+/// turn or a chest direction.
+fn face_axes(
+    s: &symcorr_skeleton::Skeleton,
+) -> Option<(Point3<f64>, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>)> {
     let turn = s.head_turn?;
-    let head = s.position(J::Head);
-    let up = unit(head - s.position(J::ShoulderCenter))?;
-    let lateral = s.position(J::ShoulderLeft) - s.position(J::ShoulderRight);
-    let chest = unit(lateral.cross(&up))?;
+    let (up, across) = neck_axis_and_chest(s)?;
+    let chest = crate::geom::normalize(across)?;
     let looks =
         nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(up), turn) * chest;
-    // Towards the subject's left.
-    let left = up.cross(&looks);
+    Some((
+        s.position(symcorr_skeleton::Joint::Head),
+        looks,
+        up.cross(&looks),
+    ))
+}
+
+/// The face point `name` (`nose`, `eye_*`, `ear_*`) on a head 15 cm wide at `face` (from
+/// [`face_axes`]); `None` for another name.
+fn face_point(
+    (head, looks, left): (Point3<f64>, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>),
+    name: &str,
+) -> Option<Point3<f64>> {
     let offset = match name {
         "nose" => looks * 0.10,
         "eye_left" => looks * 0.08 + left * 0.03,
@@ -301,6 +311,7 @@ pub fn to_k4abt_json(log: &JointLog) -> String {
     out.push_str("],\n  \"frames\": [");
     for (fi, frame) in log.frames.iter().enumerate() {
         let s = &frame.skeleton;
+        let face = face_axes(s);
         let p = |j: J| s.position(j);
         // Where the estimate overflows (coordinates near f64::MAX), the joint it leans on.
         let lerp = |a: J, b: J, t: f64| {
@@ -322,7 +333,9 @@ pub fn to_k4abt_json(log: &JointLog) -> String {
                     "thumb_right" => lerp(J::WristRight, J::HandRight, 0.8),
                     "handtip_left" => lerp(J::WristLeft, J::HandLeft, 1.5),
                     "handtip_right" => lerp(J::WristRight, J::HandRight, 1.5),
-                    face => face_point(s, face).unwrap_or_else(|| p(J::Head)),
+                    name => face
+                        .and_then(|f| face_point(f, name))
+                        .unwrap_or_else(|| p(J::Head)),
                 },
             })
             .collect();

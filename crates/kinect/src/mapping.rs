@@ -357,16 +357,25 @@ pub struct FacePoints {
 /// assert!((turn - 30f64.to_radians()).abs() < 1e-9);
 /// ```
 pub fn head_turn_from_face(s: &Skeleton, face: &FacePoints) -> Option<f64> {
-    let up = normalize(s.position(Joint::Head) - s.position(Joint::ShoulderCenter))?;
+    let (up, across) = neck_axis_and_chest(s)?;
     let flat = |v: Vector3<f64>| normalize(v - up * up.dot(&v));
     let mid = Point3::from((face.ears[0].coords + face.ears[1].coords) * 0.5);
     let looks = flat(face.nose - mid)?;
-    let lateral = s.position(Joint::ShoulderLeft) - s.position(Joint::ShoulderRight);
-    let mut chest = flat(lateral.cross(&up))?;
+    let mut chest = flat(across)?;
     if chest.dot(&looks) < 0.0 {
         chest = -chest;
     }
     Some(up.dot(&chest.cross(&looks)).atan2(chest.dot(&looks)))
+}
+
+/// The axes a head's turn is measured in: the unit neck → head axis (shoulder centre → head)
+/// and the chest's forward direction normal to it, `(left − right shoulder) × axis`, not
+/// normalised (by the labels: [`head_turn_from_face`] takes the side the face is on). `None`
+/// when the axis is degenerate.
+pub(crate) fn neck_axis_and_chest(s: &Skeleton) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let up = normalize(s.position(Joint::Head) - s.position(Joint::ShoulderCenter))?;
+    let lateral = s.position(Joint::ShoulderLeft) - s.position(Joint::ShoulderRight);
+    Some((up, lateral.cross(&up)))
 }
 
 /// Index of Kinect v2's neck joint (used as a fallback for shoulder_center).
