@@ -1770,3 +1770,65 @@ fn track_head_options_are_checked_recorded_and_kept_on_resume() {
     assert!(e.contains("cannot resume") && e.contains("`method`"), "{e}");
     assert_eq!(std::fs::read_to_string(&journal).unwrap(), other);
 }
+
+/// A recording from a camera whose depth is not mirrored as the Kinect SDK's (the Azure
+/// Kinect's, RealSense's: the image as the lens forms it) tracks as the mirrored recording of
+/// the same view when its intrinsics say `"mirrored": false`: the fixture with every depth
+/// image's columns reversed and `cx → width − 1 − cx` gives the same frames and poses. Without
+/// the key the log check refuses it, naming the key.
+#[test]
+fn track_reads_a_recording_whose_depth_is_not_mirrored() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let direct = dir.path().join("direct");
+    std::fs::create_dir_all(direct.join("depth")).unwrap();
+    std::fs::copy(rec.join("depth_times.txt"), direct.join("depth_times.txt")).unwrap();
+    for entry in std::fs::read_dir(rec.join("depth")).unwrap() {
+        let path = entry.unwrap().path();
+        let f = symcorr_kinect::read_depth_png16(&path).unwrap();
+        let data = f
+            .data_mm
+            .chunks(f.width as usize)
+            .flat_map(|row| row.iter().rev().copied())
+            .collect();
+        let flipped = symcorr_kinect::DepthFrame::new(f.width, f.height, data).unwrap();
+        let name = path.file_name().unwrap();
+        symcorr_kinect::write_depth_png16(direct.join("depth").join(name), &flipped).unwrap();
+    }
+    let k = symcorr_kinect::Intrinsics::read(rec.join("intrinsics.json")).unwrap();
+    let kd = k.columns_reversed();
+    kd.write(direct.join("intrinsics.json")).unwrap();
+    assert!(std::fs::read_to_string(direct.join("intrinsics.json"))
+        .unwrap()
+        .contains(r#""mirrored":false"#));
+    let extra = ["--joint-offset", "0.04", "--frames", "20..24"];
+    let joints = rec.join("joints.json");
+    let (fa, pa) = track_frames_and_poses(&rec, &extra, &joints, &dir.path().join("a"));
+    let (fb, pb) = track_frames_and_poses(&direct, &extra, &joints, &dir.path().join("b"));
+    let ok = |f: &[Value]| -> Vec<bool> { f.iter().map(|f| f["status"] == "ok").collect() };
+    assert_eq!(ok(&fa), ok(&fb));
+    assert!(ok(&fa).iter().filter(|&&o| o).count() >= 3, "{fa:?}");
+    for (a, b) in pa.iter().zip(&pb) {
+        let mean = mean_point_distance(a, b);
+        assert!(mean < 0.005, "mean distance between the poses {mean}");
+    }
+    // The same folder with the key left out reads the images as mirrored: refused.
+    symcorr_kinect::Intrinsics {
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
+        ..kd
+    }
+    .write(direct.join("intrinsics.json"))
+    .unwrap();
+    let out = dir.path().join("c");
+    let o = run(bin()
+        .arg("track")
+        .arg(&direct)
+        .args(extra)
+        .arg("--joints")
+        .arg(&joints)
+        .arg("--out")
+        .arg(&out));
+    let msg = assert_one_line_error(&o);
+    assert!(msg.contains(r#""mirrored": false"#), "{msg}");
+    assert!(!out.exists());
+}

@@ -957,9 +957,10 @@ impl Prepared {
 /// Turns a depth image (``uint16 (h, w)``, millimetres, 0 = no depth) into a scan mesh of the
 /// body, as ``symcorr scan --depth`` does: floor and background removed with the skeleton, the
 /// components near the bones kept. ``intrinsics`` is a dict with ``fx``, ``fy``, ``cx``, ``cy``
-/// (pixels; ``width``/``height`` optional, and then must match the image) or the path of a
-/// symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or a ``(20, 3)`` array in camera
-/// space, metres. Returns vertices ``float64 (n, 3)`` (camera space, metres), faces
+/// (pixels; ``width``/``height`` optional, and then must match the image; ``mirrored``
+/// optional, ``False`` for an image as the lens forms it, not mirrored as the Kinect SDK's)
+/// or the path of a symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or a ``(20, 3)``
+/// array in camera space, metres. Returns vertices ``float64 (n, 3)`` (camera space, metres), faces
 /// ``int64 (m, 3)`` and per vertex its pixel id ``v * w + u`` (``int64 (n,)``).
 ///
 /// Example::
@@ -1083,6 +1084,14 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrins
             fy: number("fy")?,
             cx: number("cx")?,
             cy: number("cy")?,
+            mirroring: match get("mirrored")? {
+                None => symcorr_kinect::Mirroring::Mirrored,
+                Some(m) => match m.extract::<bool>() {
+                    Ok(true) => symcorr_kinect::Mirroring::Mirrored,
+                    Ok(false) => symcorr_kinect::Mirroring::Direct,
+                    Err(_) => return Err(value_err("intrinsics: \"mirrored\" must be a bool")),
+                },
+            },
         }
     } else {
         let path: PathBuf = obj.extract().map_err(|_| {

@@ -193,6 +193,26 @@ def test_scan_equals_the_command_line_and_matches_as_a_partial_target(rest, cli,
     assert again.turned_about_spine and again.view_held == back.view_held
 
 
+def test_scan_reads_an_image_that_is_not_mirrored():
+    # A camera that delivers depth as the lens forms it (Azure Kinect, RealSense): the same
+    # view with the columns reversed and ``mirrored`` False gives the same surface.
+    depth = symcorr.read_depth(SCAN / "depth.png")
+    joints = symcorr.read_joints(SCAN / "joints.json")
+    k = json.loads((SCAN / "intrinsics.json").read_text())
+    v, f, px = symcorr.scan(depth, SCAN / "intrinsics.json", joints)
+    w = depth.shape[1]
+    direct = {"fx": k["fx"], "fy": k["fy"], "cx": w - 1 - k["cx"], "cy": k["cy"],
+              "mirrored": False}
+    vd, fd, pxd = symcorr.scan(np.ascontiguousarray(depth[:, ::-1]), direct, joints)
+    assert len(vd) == len(v) and len(fd) == len(f)
+    mirrored_px = (pxd // w) * w + (w - 1 - pxd % w)
+    order = np.argsort(px)
+    at = order[np.searchsorted(px, mirrored_px, sorter=order)]
+    np.testing.assert_allclose(vd, v[at], rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match="mirrored"):
+        symcorr.scan(depth, {**direct, "mirrored": "no"}, joints)
+
+
 def test_track_equals_the_command_line(cli, tmp_path):
     template = symcorr.Body(*body("s0_rest"))
     frames = list(symcorr.track(RECORDING, RECORDING / "joints.json", template,

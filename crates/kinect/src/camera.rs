@@ -11,16 +11,21 @@
 //!
 //! Depth pixels `(u, v)`: `u` is the column (0 at the left edge of the image, growing rightwards),
 //! `v` the row (0 at the top, growing downwards); pixel centres are at integer `(u, v)`.
-//! The projection is the Kinect SDK v1's own (`NuiTransformSkeletonToDepthImage`):
+//! The projection is the Kinect SDK v1's own (`NuiTransformSkeletonToDepthImage`) for a
+//! [`Mirroring::Mirrored`] image, the default:
 //!
 //! ```text
 //! u = cx + fx · x / z        (+x, the sensor's left, appears on the image's right: the image is
-//!                             mirrored, as SDK v1 delivers it; a subject facing the sensor sees
-//!                             their right hand on the image's right, as in a mirror)
+//!                             mirrored, as SDK v1 and v2 deliver it; a subject facing the sensor
+//!                             sees their right hand on the image's right, as in a mirror)
 //! v = cy − fy · y / z        (+y up in space means v grows downward)
 //! ```
 //!
-//! and `unproject(u, v, z) = ((u − cx)·z/fx, (cy − v)·z/fy, z)`.
+//! and `unproject(u, v, z) = ((u − cx)·z/fx, (cy − v)·z/fy, z)`. A [`Mirroring::Direct`] image —
+//! the image as the lens forms it, which the Azure Kinect and Orbbec SDKs, Intel RealSense and
+//! OpenNI with mirroring off deliver — has `u = cx − fx · x / z` and
+//! `unproject(u, v, z) = ((cx − u)·z/fx, (cy − v)·z/fy, z)`: the same camera space, its columns
+//! the other way round (`"mirrored": false` in the JSON form).
 //!
 //! symcorr never uses OpenNI's `CoordinateConverter` (whose world X grows with u as well, but
 //! whose y/z units are millimetres); depth frames from any source are unprojected with these
@@ -40,8 +45,22 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Focal lengths [`Intrinsics::validate`] accepts, pixels (a Kinect v1 has 571 px at 640×480).
 pub const FOCAL_RANGE_PX: std::ops::RangeInclusive<f64> = 1.0..=100_000.0;
 
+/// Which way a depth image's columns run against Kinect camera space's +x (the sensor's left;
+/// module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mirroring {
+    /// +x on the image's right, as a mirror shows the subject: the Kinect SDK v1 and v2
+    /// images, and the default of `symcorr.intrinsics/1`.
+    #[default]
+    Mirrored,
+    /// +x on the image's left, the image as the lens forms it: the Azure Kinect and Orbbec
+    /// SDKs, Intel RealSense, OpenNI with mirroring off (`"mirrored": false`).
+    Direct,
+}
+
 /// Pinhole intrinsics of a depth camera, in pixels. JSON form:
-/// `{"format":"symcorr.intrinsics/1","width":640,"height":480,"fx":580.0,"fy":580.0,"cx":319.5,"cy":239.5}`.
+/// `{"format":"symcorr.intrinsics/1","width":640,"height":480,"fx":580.0,"fy":580.0,"cx":319.5,"cy":239.5}`,
+/// with `"mirrored": false` for a [`Mirroring::Direct`] image (absent: mirrored).
 ///
 /// ```
 /// use symcorr_kinect::Intrinsics;
@@ -67,6 +86,9 @@ pub struct Intrinsics {
     pub cx: f64,
     /// Principal point row, pixels.
     pub cy: f64,
+    /// Which way the image's columns run ([`Mirroring::Mirrored`] unless the JSON says
+    /// `"mirrored": false`).
+    pub mirroring: Mirroring,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -79,6 +101,9 @@ struct IntrinsicsJson {
     fy: f64,
     cx: f64,
     cy: f64,
+    /// Absent (true) for the Kinect SDK's mirrored images; written only when false.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mirrored: Option<bool>,
 }
 
 impl TryFrom<IntrinsicsJson> for Intrinsics {
@@ -97,6 +122,10 @@ impl TryFrom<IntrinsicsJson> for Intrinsics {
             fy: j.fy,
             cx: j.cx,
             cy: j.cy,
+            mirroring: match j.mirrored {
+                Some(false) => Mirroring::Direct,
+                Some(true) | None => Mirroring::Mirrored,
+            },
         };
         k.validate().map_err(|e| e.to_string())?;
         Ok(k)
@@ -113,6 +142,7 @@ impl From<Intrinsics> for IntrinsicsJson {
             fy: k.fy,
             cx: k.cx,
             cy: k.cy,
+            mirrored: (k.mirroring == Mirroring::Direct).then_some(false),
         }
     }
 }
@@ -152,6 +182,7 @@ impl Intrinsics {
             fy,
             cx: w / 2.0,
             cy: h / 2.0,
+            mirroring: Mirroring::Mirrored,
         }
     }
 
@@ -170,6 +201,7 @@ impl Intrinsics {
             fy: 571.26,
             cx: 320.0,
             cy: 240.0,
+            mirroring: Mirroring::Mirrored,
         }
     }
 
@@ -220,17 +252,58 @@ impl Intrinsics {
 
     /// Projects a camera-space point (metres) to pixel coordinates `[u, v]` (see the module docs).
     /// Points with z ≤ 0 give non-finite or meaningless pixels; callers check `z > 0`.
+    ///
+    /// ```
+    /// use symcorr_kinect::{Intrinsics, Mirroring};
+    /// let mirrored = Intrinsics::kinect_v1();
+    /// let direct = Intrinsics { mirroring: Mirroring::Direct, ..mirrored };
+    /// let p = nalgebra::Point3::new(0.3, 0.0, 2.0); // the sensor's left
+    /// assert!(mirrored.project(&p)[0] > mirrored.cx && direct.project(&p)[0] < direct.cx);
+    /// ```
     pub fn project(&self, p: &Point3<f64>) -> [f64; 2] {
-        [self.cx + self.fx * p.x / p.z, self.cy - self.fy * p.y / p.z]
+        let x = self.fx * p.x / p.z;
+        let u = match self.mirroring {
+            Mirroring::Mirrored => self.cx + x,
+            Mirroring::Direct => self.cx - x,
+        };
+        [u, self.cy - self.fy * p.y / p.z]
     }
 
     /// The camera-space point (metres) seen at pixel `(u, v)` with depth `depth_m` (its z).
     pub fn unproject(&self, u: f64, v: f64, depth_m: f64) -> Point3<f64> {
+        let du = match self.mirroring {
+            Mirroring::Mirrored => u - self.cx,
+            Mirroring::Direct => self.cx - u,
+        };
         Point3::new(
-            (u - self.cx) * depth_m / self.fx,
+            du * depth_m / self.fx,
             (self.cy - v) * depth_m / self.fy,
             depth_m,
         )
+    }
+
+    /// The same camera with its image's columns reversed: the other [`Mirroring`] and
+    /// `cx → width − 1 − cx` (pixel centres at integers), so that column `u` of one image is
+    /// column `width − 1 − u` of the other and both unproject it to the same point.
+    ///
+    /// ```
+    /// use symcorr_kinect::{Intrinsics, Mirroring};
+    /// let k = Intrinsics::kinect_v1();
+    /// let d = k.columns_reversed();
+    /// assert_eq!((d.mirroring, d.cx), (Mirroring::Direct, 319.0));
+    /// let (p, q) = (k.unproject(100.0, 50.0, 2.0), d.unproject(539.0, 50.0, 2.0));
+    /// assert!((p - q).norm() < 1e-12);
+    /// assert_eq!(d.columns_reversed(), k);
+    /// ```
+    pub fn columns_reversed(&self) -> Intrinsics {
+        Intrinsics {
+            cx: f64::from(self.width) - 1.0 - self.cx,
+            mirroring: match self.mirroring {
+                Mirroring::Mirrored => Mirroring::Direct,
+                Mirroring::Direct => Mirroring::Mirrored,
+            },
+            ..*self
+        }
     }
 
     /// Reads a `symcorr.intrinsics/1` JSON file and checks it ([`Intrinsics::validate`]): the
@@ -284,8 +357,11 @@ impl Intrinsics {
     /// the intrinsics validate (non-finite values are written as `null`).
     ///
     /// ```
-    /// use symcorr_kinect::Intrinsics;
-    /// let k = Intrinsics { width: 4, height: 3, fx: 5.0, fy: 5.0, cx: 1.5, cy: 1.0 };
+    /// use symcorr_kinect::{Intrinsics, Mirroring};
+    /// let k = Intrinsics {
+    ///     width: 4, height: 3, fx: 5.0, fy: 5.0, cx: 1.5, cy: 1.0,
+    ///     mirroring: Mirroring::Mirrored,
+    /// };
     /// assert_eq!(
     ///     k.to_json(),
     ///     concat!(
@@ -293,6 +369,9 @@ impl Intrinsics {
     ///         r#""fx":5.0,"fy":5.0,"cx":1.5,"cy":1.0}"#
     ///     )
     /// );
+    /// let direct = Intrinsics { mirroring: Mirroring::Direct, ..k };
+    /// assert!(direct.to_json().ends_with(r#""cy":1.0,"mirrored":false}"#));
+    /// assert_eq!(Intrinsics::from_json_str(&direct.to_json(), "<memory>").unwrap(), direct);
     /// ```
     pub fn to_json(&self) -> String {
         serde_json::to_string(&IntrinsicsJson::from(*self)).unwrap_or_default()
@@ -305,10 +384,13 @@ impl Intrinsics {
     /// file), else an I/O error.
     ///
     /// ```
-    /// use symcorr_kinect::{Intrinsics, KinectError};
+    /// use symcorr_kinect::{Intrinsics, KinectError, Mirroring};
     /// let dir = tempfile::tempdir().unwrap();
     /// let path = dir.path().join("intrinsics.json");
-    /// let bad = Intrinsics { width: 4, height: 3, fx: f64::NAN, fy: 5.0, cx: 1.5, cy: 1.0 };
+    /// let bad = Intrinsics {
+    ///     width: 4, height: 3, fx: f64::NAN, fy: 5.0, cx: 1.5, cy: 1.0,
+    ///     mirroring: Mirroring::Mirrored,
+    /// };
     /// assert!(matches!(bad.write(&path), Err(KinectError::Intrinsics(_))));
     /// assert!(!path.exists());
     /// let k = Intrinsics { fx: 5.0, ..bad };

@@ -79,10 +79,13 @@ pub struct OffsetEstimate {
 /// ```
 /// use nalgebra::{Point3, Vector3};
 /// use symcorr_kinect::clock::{estimate_joint_offset, OffsetSearch};
-/// use symcorr_kinect::{DepthFrame, Intrinsics, JointLog, JointTrack};
+/// use symcorr_kinect::{DepthFrame, Intrinsics, JointLog, JointTrack, Mirroring};
 /// use symcorr_skeleton::Skeleton;
 /// // A hand swinging left and right in front of a wall 3 m away.
-/// let cam = Intrinsics { width: 64, height: 48, fx: 60.0, fy: 60.0, cx: 32.0, cy: 24.0 };
+/// let cam = Intrinsics {
+///     width: 64, height: 48, fx: 60.0, fy: 60.0, cx: 32.0, cy: 24.0,
+///     mirroring: Mirroring::Mirrored,
+/// };
 /// let hand = |t: f64| Point3::new(0.5 * (2.0 * t).sin(), 0.0, 2.0);
 /// let frame = |t: f64| {
 ///     let mut mm = vec![3000u16; 64 * 48];
@@ -277,6 +280,7 @@ mod tests {
         fy: 70.0,
         cx: 40.0,
         cy: 30.0,
+        mirroring: crate::Mirroring::Mirrored,
     };
 
     /// Two hands swinging at different rates in front of a wall 3.5 m away, a torso between them;

@@ -50,7 +50,8 @@
 //!   `kinect_v1` frame must name all 20 joints; files without timestamps get
 //!   `time_s = frame / 30`; SDK text dumps' untracked `0 0 0` joints are interpolated.
 //! * One projection convention ([`Intrinsics::project`]): the Kinect SDK v1's
-//!   `u = cx + fx·x/z`, `v = cy − fy·y/z` (its mirrored depth image);
+//!   `u = cx + fx·x/z`, `v = cy − fy·y/z` (its mirrored depth image), or `u = cx − fx·x/z` for
+//!   an image as the lens forms it ([`Mirroring::Direct`]: Azure Kinect, RealSense);
 //!   [`Intrinsics::kinect_v1`] is the nominal 571.26 px focal length at 640×480.
 //! * Every failure is a typed [`KinectError`] naming the file and the line (text formats) or
 //!   frame (JSON); nothing panics on bad input (fuzzed: `crates/kinect/fuzz`). Writes are atomic.
@@ -83,7 +84,7 @@ pub mod scan;
 pub mod sdk_text;
 pub mod source;
 
-pub use camera::Intrinsics;
+pub use camera::{Intrinsics, Mirroring};
 pub use depth::{read_depth_png16, write_depth_png16, DepthFrame};
 pub use error::KinectError;
 pub use joints::{

@@ -163,6 +163,14 @@ pub enum OniWriteError {
         /// Image height, pixels.
         height: u32,
     },
+    /// Intrinsics of a [`Mirroring::Direct`](crate::Mirroring) image: an .oni recording is read
+    /// back as a mirrored image (its pixels are unprojected as the Kinect SDK's), so the file
+    /// would show the subject's left as their right.
+    #[error(
+        "the intrinsics say \"mirrored\": false, but an .oni file is read back as a mirrored image: \
+         write it with the frames' columns reversed and mirrored intrinsics"
+    )]
+    Direct,
     /// An image too large for one record (its bytes overflow the u32 payload size, or a side
     /// overflows the u16 of the cropping property).
     #[error("a {width}x{height} depth frame does not fit in an .oni record")]
@@ -219,6 +227,9 @@ impl Plan {
     fn new(k: &Intrinsics, times_us: &[u64]) -> Result<Plan, OniWriteError> {
         k.validate()
             .map_err(|e| OniWriteError::Intrinsics(e.to_string()))?;
+        if k.mirroring == crate::Mirroring::Direct {
+            return Err(OniWriteError::Direct);
+        }
         let (w, h) = (f64::from(k.width), f64::from(k.height));
         if k.cx != w / 2.0 || k.cy != h / 2.0 {
             return Err(OniWriteError::OffCentre {
@@ -738,6 +749,12 @@ mod tests {
             e.to_string().contains("not the image centre (2, 1.5)"),
             "{e}"
         );
+        let direct = Intrinsics {
+            mirroring: crate::Mirroring::Direct,
+            ..k(4, 3)
+        };
+        let e = oni_bytes(&direct, &[5, 6], &fs).unwrap_err();
+        assert!(matches!(e, OniWriteError::Direct), "{e}");
         let mut bad = k(4, 3);
         bad.fx = f64::NAN;
         let e = oni_bytes(&bad, &[5, 6], &fs).unwrap_err();

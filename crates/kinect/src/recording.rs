@@ -22,9 +22,12 @@
 //! and one `f64` per frame (its time), never the depth images.
 //!
 //! ```
-//! use symcorr_kinect::{write_depth_png16, DepthFrame, Intrinsics, Recording};
+//! use symcorr_kinect::{write_depth_png16, DepthFrame, Intrinsics, Mirroring, Recording};
 //! let dir = tempfile::tempdir().unwrap();
-//! let k = Intrinsics { width: 4, height: 3, fx: 5.0, fy: 5.0, cx: 1.5, cy: 1.0 };
+//! let k = Intrinsics {
+//!     width: 4, height: 3, fx: 5.0, fy: 5.0, cx: 1.5, cy: 1.0,
+//!     mirroring: Mirroring::Mirrored,
+//! };
 //! k.write(dir.path().join("intrinsics.json")).unwrap();
 //! std::fs::create_dir(dir.path().join("depth")).unwrap();
 //! for i in 0..2 {

@@ -14,7 +14,10 @@
 //!    `floor_threshold_m`) are dropped.
 //! 4. Grid triangulation: each 2×2 pixel block gives up to two triangles, kept only if no edge
 //!    spans a depth jump larger than `discontinuity_m` (a silhouette edge, not a surface).
-//!    Triangles are counter-clockwise seen from the camera (their normals face it).
+//!    Triangles are counter-clockwise seen from the camera (their normals face it). A
+//!    [`Mirroring::Direct`](crate::Mirroring) image splits each block along its other diagonal
+//!    and turns the triangles the other way, so that it gives the triangles of the same
+//!    image mirrored, as the same camera-space surface.
 //! 5. Connected components are kept by [`ScanOptions::components`] ([`ComponentFilter`]): by
 //!    default every component near the skeleton's bones (a body seen in profile falls apart at
 //!    its own depth jumps — the near arm in front of the torso, one leg in front of the other
@@ -24,7 +27,7 @@
 //! related back to the depth image. [`fuse_depth_frames`] merges a few frames of a static subject
 //! into one (per-pixel median) before meshing, which removes most of the sensor's flicker.
 
-use crate::camera::Intrinsics;
+use crate::camera::{Intrinsics, Mirroring};
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
 use crate::geom::{median, normalize};
@@ -499,9 +502,12 @@ pub fn depth_unit_hint(depth_ratio: Option<f64>) -> String {
 /// outside the frame (intrinsics of another size) have no reading.
 ///
 /// ```
-/// use symcorr_kinect::{scan::joints_on_depth, DepthFrame, Intrinsics};
+/// use symcorr_kinect::{scan::joints_on_depth, DepthFrame, Intrinsics, Mirroring};
 /// use symcorr_skeleton::Skeleton;
-/// let k = Intrinsics { width: 8, height: 6, fx: 7.0, fy: 7.0, cx: 3.5, cy: 2.5 };
+/// let k = Intrinsics {
+///     width: 8, height: 6, fx: 7.0, fy: 7.0, cx: 3.5, cy: 2.5,
+///     mirroring: Mirroring::Mirrored,
+/// };
 /// // A wall 2 m away (2000 mm); joints 2 m away lie on it, joints "2000 m" away do not.
 /// let frame = DepthFrame::new(8, 6, vec![2000; 48]).unwrap();
 /// let on = joints_on_depth(&frame, &k, &Skeleton::from_arrays([[0.0, 0.0, 2.0]; 20]));
@@ -653,11 +659,20 @@ pub fn scan_mesh(
     let (w, h) = (frame.width as usize, frame.height as usize);
     let ok = |a: Point3<f64>, b: Point3<f64>| (a.z - b.z).abs() <= opts.discontinuity_m;
     let mut tris: Vec<[usize; 3]> = Vec::new();
+    let direct = k.mirroring == Mirroring::Direct;
     for v in 0..h.saturating_sub(1) {
         for u in 0..w.saturating_sub(1) {
             let ia = v * w + u;
             let (ib, ic, id) = (ia + 1, ia + w, ia + w + 1);
-            for [x, y, z] in [[ia, ib, ic], [ib, id, ic]] {
+            // A block's corners a b / c d. Mirrored: +x grows with u, so a → b → c turns
+            // towards the camera, split along b–c. Direct: +x falls with u; the mirrored
+            // image's b–c diagonal is this one's a–d, and a → c → d turns towards the camera.
+            let block = if direct {
+                [[ia, ic, id], [ia, id, ib]]
+            } else {
+                [[ia, ib, ic], [ib, id, ic]]
+            };
+            for [x, y, z] in block {
                 if let (Some(px), Some(py), Some(pz)) = (points[x], points[y], points[z]) {
                     if ok(px, py) && ok(py, pz) && ok(pz, px) {
                         tris.push([x, y, z]);

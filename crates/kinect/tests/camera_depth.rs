@@ -14,6 +14,7 @@ fn intrinsics_json_form_is_exact_and_round_trips() {
         fy: 580.0,
         cx: 319.5,
         cy: 239.5,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     };
     let text = serde_json::to_string(&k).unwrap();
     assert_eq!(
@@ -78,6 +79,7 @@ fn unproject_inverts_project() {
         fy: 364.9,
         cx: 257.3,
         cy: 208.2,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     };
     for i in 0..50 {
         let t = i as f64;

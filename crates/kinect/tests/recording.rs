@@ -24,6 +24,7 @@ fn intrinsics() -> Intrinsics {
         fy: 7.0,
         cx: 3.5,
         cy: 2.5,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     }
 }
 

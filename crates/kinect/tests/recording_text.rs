@@ -5,7 +5,7 @@
 
 use proptest::prelude::*;
 use symcorr_kinect::camera::{FOCAL_RANGE_PX, MAX_IMAGE_SIDE};
-use symcorr_kinect::{parse_depth_times, Intrinsics, KinectError, Recording};
+use symcorr_kinect::{parse_depth_times, Intrinsics, KinectError, Mirroring, Recording};
 
 // ---------------------------------------------------------------------------------------------
 // intrinsics.json
@@ -42,15 +42,23 @@ fn side() -> impl Strategy<Value = u32> {
 /// Intrinsics that validate.
 fn valid_intrinsics() -> impl Strategy<Value = Intrinsics> {
     (side(), side(), focal(), focal()).prop_flat_map(|(width, height, fx, fy)| {
-        (principal(width), principal(height)).prop_map(move |(cx, cy)| Intrinsics {
-            width,
-            height,
-            fx,
-            fy,
-            cx,
-            cy,
+        (principal(width), principal(height), mirroring()).prop_map(move |(cx, cy, mirroring)| {
+            Intrinsics {
+                width,
+                height,
+                fx,
+                fy,
+                cx,
+                cy,
+                mirroring,
+            }
         })
     })
+}
+
+/// Either way round.
+fn mirroring() -> impl Strategy<Value = Mirroring> {
+    prop_oneof![Just(Mirroring::Mirrored), Just(Mirroring::Direct)]
 }
 
 /// Any `f64`, non-finite ones and values near the accepted ranges included.
@@ -75,31 +83,34 @@ fn any_intrinsics() -> impl Strategy<Value = Intrinsics> {
         any_value(),
         any_value(),
         any_value(),
+        mirroring(),
     )
-        .prop_map(|(width, height, fx, fy, cx, cy)| Intrinsics {
+        .prop_map(|(width, height, fx, fy, cx, cy, mirroring)| Intrinsics {
             width,
             height,
             fx,
             fy,
             cx,
             cy,
+            mirroring,
         })
 }
 
 /// The bits of every value, so that equality is exact (and -0.0 is not 0.0).
-fn bits(k: &Intrinsics) -> (u32, u32, [u64; 4]) {
+fn bits(k: &Intrinsics) -> (u32, u32, [u64; 4], Mirroring) {
     (
         k.width,
         k.height,
         [k.fx, k.fy, k.cx, k.cy].map(f64::to_bits),
+        k.mirroring,
     )
 }
 
 /// Text that looks like an intrinsics file: its keys and an unknown one, numbers, format tags,
-/// `null`, `[]`.
+/// booleans, `null`, `[]`.
 const INTRINSICS_LIKE: &str = concat!(
-    "\\{ ?(\"(format|width|height|fx|fy|cx|cy|cz)\" ?: ?",
-    "(-?[0-9]{1,6}(\\.[0-9]{1,3})?(e-?[0-9]{1,3})?|\"symcorr\\.intrinsics/[0-9]\"|null|\\[\\])",
+    "\\{ ?(\"(format|width|height|fx|fy|cx|cy|cz|mirrored)\" ?: ?",
+    "(-?[0-9]{1,6}(\\.[0-9]{1,3})?(e-?[0-9]{1,3})?|\"symcorr\\.intrinsics/[0-9]\"|null|true|false|\\[\\])",
     " ?,?){0,9}\\}"
 );
 
@@ -183,6 +194,7 @@ fn read_parses_the_file_with_from_json_str() {
         fy: 7.5,
         cx: -4.0,
         cy: 9.0,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     };
     k.write(&p).unwrap();
     assert_eq!(std::fs::read_to_string(&p).unwrap(), k.to_json());
@@ -467,6 +479,7 @@ fn recording_open_reports_the_parsers_errors_on_its_times_file() {
         fy: 2.0,
         cx: 1.0,
         cy: 1.0,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     }
     .write(dir.join("intrinsics.json"))
     .unwrap();

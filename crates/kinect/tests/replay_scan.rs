@@ -285,6 +285,7 @@ fn small_k() -> Intrinsics {
         fy: 285.63,
         cx: 160.0,
         cy: 120.0,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     }
 }
 
@@ -326,6 +327,105 @@ fn scan_keeps_only_the_subject_surface() {
     assert!(scan.report.background_removed > 1000);
     // The blob was inside the foreground box but is a separate, smaller component.
     assert!(scan.report.component_vertices_removed > 10);
+}
+
+/// A frame and the same frame with its columns reversed, `(u, v) → (width − 1 − u, v)`.
+fn columns_reversed(frame: &DepthFrame) -> DepthFrame {
+    let w = frame.width as usize;
+    let data = frame
+        .data_mm
+        .chunks(w)
+        .flat_map(|row| row.iter().rev().copied())
+        .collect();
+    DepthFrame::new(frame.width, frame.height, data).unwrap()
+}
+
+/// An image as the lens forms it (the Azure Kinect's, RealSense's: `Mirroring::Direct`) scans
+/// as the same camera-space surface as the Kinect SDK's mirrored image of the same view: the
+/// same points from mirrored pixels, the same triangles, facing the camera; read as mirrored
+/// instead, the surface comes out mirrored in x.
+#[test]
+fn a_direct_image_scans_as_the_surface_its_mirror_shows() {
+    let k = small_k();
+    let frame = render(&k);
+    let s = subject_skeleton();
+    let opts = ScanOptions::default();
+    let mirrored = scan_mesh(&frame, &k, Some(&s), &opts).unwrap();
+    let kd = k.columns_reversed();
+    assert_eq!(kd.mirroring, symcorr_kinect::Mirroring::Direct);
+    let flipped = columns_reversed(&frame);
+    let direct = scan_mesh(&flipped, &kd, Some(&s), &opts).unwrap();
+    let w = k.width;
+    let mirror_pixel = |id: u32| (id / w) * w + (w - 1 - id % w);
+    // Vertex by vertex through the pixels: the same points.
+    let at: std::collections::HashMap<u32, usize> = mirrored
+        .pixel_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &id)| (id, i))
+        .collect();
+    assert_eq!(direct.mesh.num_vertices(), mirrored.mesh.num_vertices());
+    let mut to_mirrored = Vec::new();
+    for (i, &id) in direct.pixel_ids.iter().enumerate() {
+        let j = at[&mirror_pixel(id)];
+        let (p, q) = (direct.mesh.positions[i], mirrored.mesh.positions[j]);
+        assert!(
+            (0..3).all(|c| (p[c] - q[c]).abs() < 1e-9),
+            "{p:?} against {q:?}"
+        );
+        to_mirrored.push(j);
+    }
+    // The same triangles (as vertex sets), every one facing the camera.
+    let key = |t: [u32; 3]| {
+        let mut t = t;
+        t.sort_unstable();
+        t
+    };
+    let mut a: Vec<[u32; 3]> = (0..direct.mesh.num_triangles())
+        .map(|t| key(direct.mesh.triangles[t].map(|v| to_mirrored[v as usize] as u32)))
+        .collect();
+    let mut b: Vec<[u32; 3]> = mirrored.mesh.triangles.iter().map(|&t| key(t)).collect();
+    a.sort_unstable();
+    b.sort_unstable();
+    assert_eq!(a, b);
+    for t in 0..direct.mesh.num_triangles() {
+        let [p, q, r] = direct.mesh.corners(t).map(Point3::from);
+        assert!(
+            (q - p).cross(&(r - p)).dot(&p.coords) < 0.0,
+            "triangle {t} faces away"
+        );
+    }
+    // The pixel ids still name the direct image's own pixels.
+    for (i, &id) in direct.pixel_ids.iter().enumerate() {
+        let [u, v] = kd.project(&Point3::from(direct.mesh.positions[i]));
+        assert!((u - f64::from(id % w)).abs() < 1e-6 && (v - f64::from(id / w)).abs() < 1e-6);
+    }
+    // The flipped image read as mirrored is the mirror image: its points at −x.
+    let as_mirrored = Intrinsics {
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
+        ..kd
+    };
+    let wrong = scan_mesh(&flipped, &as_mirrored, None, &ScanOptions::default()).unwrap();
+    let right = scan_mesh(&frame, &k, None, &ScanOptions::default()).unwrap();
+    let sorted = |m: &TriMesh, sx: f64| {
+        let mut p: Vec<[f64; 3]> = m
+            .positions
+            .iter()
+            .map(|p| [sx * p[0], p[1], p[2]])
+            .collect();
+        p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        p
+    };
+    let (a, b) = (sorted(&wrong.mesh, -1.0), sorted(&right.mesh, 1.0));
+    assert_eq!(a.len(), b.len());
+    assert!(a
+        .iter()
+        .zip(&b)
+        .all(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() < 1e-9)));
+    assert!(
+        b.iter().any(|p| p[0].abs() > 0.1),
+        "a scene that is not flat in x"
+    );
 }
 
 #[test]

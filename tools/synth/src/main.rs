@@ -202,8 +202,13 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
         /// Also write the depth frames as an OpenNI2 recording (.oni) at this path.
-        #[arg(long, value_name = "FILE")]
+        #[arg(long, value_name = "FILE", conflicts_with = "unmirrored")]
         oni: Option<PathBuf>,
+        /// Write the depth images as the lens forms them (`"mirrored": false` in
+        /// intrinsics.json), as the Azure Kinect and Orbbec SDKs and RealSense deliver them,
+        /// instead of mirrored as the Kinect SDK's.
+        #[arg(long)]
+        unmirrored: bool,
     },
     /// Write a recording folder's depth frames, times and intrinsics as an OpenNI2 recording
     /// (.oni) that OpenNI2's file player plays (`symcorr track` reads either).
@@ -482,9 +487,14 @@ fn run(cli: Cli) -> Result<()> {
             head_turn_deg,
             out,
             oni,
+            unmirrored,
         } => {
+            let mut intrinsics = kinect_v1_intrinsics(width, height)?;
+            if unmirrored {
+                intrinsics.mirroring = symcorr_kinect::Mirroring::Direct;
+            }
             let camera = Camera {
-                intrinsics: kinect_v1_intrinsics(width, height)?,
+                intrinsics,
                 ..view.camera()?
             };
             let body = model.body(&Shape::parse(&view.shape)?)?;

@@ -182,6 +182,7 @@ pub fn kinect_v1_intrinsics(width: u32, height: u32) -> Result<Intrinsics> {
         fy: f,
         cx: f64::from(width) / 2.0,
         cy: f64::from(height) / 2.0,
+        ..base
     };
     k.validate()
         .map_err(|e| SynthError::Invalid(e.to_string()))?;

@@ -436,6 +436,7 @@ fn native_camera(camera: &Camera) -> Option<Camera> {
             fy: k.fy * scale,
             cx: k.cx * scale + offset,
             cy: k.cy * scale + offset,
+            ..*k
         },
         ..*camera
     })

@@ -235,6 +235,7 @@ fn stream_intrinsics(
         fy,
         cx: w / 2.0,
         cy: h / 2.0,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
     }
 }
 
@@ -338,6 +339,7 @@ mod tests {
             fy: 142.8,
             cx: 80.0,
             cy: 60.0,
+            mirroring: symcorr_kinect::Mirroring::Mirrored,
         }
     }
 
