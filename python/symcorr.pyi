@@ -169,7 +169,7 @@ def match(
 
 def scan(
     depth: npt.NDArray[np.uint16],
-    intrinsics: Union[Mapping[str, float], Path],
+    intrinsics: Union[Mapping[str, Union[float, bool]], Path],
     joints: JointsLike,
     *,
     discontinuity: float = 0.05,

@@ -1060,6 +1060,21 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrins
                 .extract::<f64>()
                 .map_err(|_| value_err(format!("intrinsics: {key:?} must be a number")))
         };
+        // As the JSON form: an unknown key (a misspelt "mirrored") is refused, not ignored.
+        const KEYS: [&str; 8] = [
+            "format", "width", "height", "fx", "fy", "cx", "cy", "mirrored",
+        ];
+        for key in d.keys() {
+            let name: String = key
+                .extract()
+                .map_err(|_| value_err("intrinsics: keys must be strings"))?;
+            if !KEYS.contains(&name.as_str()) {
+                return Err(value_err(format!(
+                    "intrinsics: unknown key {name:?} (expected {})",
+                    KEYS.join(", ")
+                )));
+            }
+        }
         for key in ["width", "height"] {
             if let Some(v) = get(key)? {
                 let v: u64 = v
@@ -1334,7 +1349,8 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 /// worker thread, without the GIL. First, as ``symcorr track`` does, a few frames are observed
 /// and a joint log that does not belong to the frames (no log frame near any depth frame's
 /// time: another clock; its joints on no depth frame: another unit; its bones sticking out of
-/// the body the camera sees: another recording or clock, x mirrored) raises ``ValueError``;
+/// the body the camera sees: another recording or clock, x mirrored, or depth not mirrored as
+/// the Kinect SDK's without ``"mirrored": false`` in intrinsics.json) raises ``ValueError``;
 /// ``check_log=False`` skips that check.
 ///
 /// Example::

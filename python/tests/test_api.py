@@ -211,6 +211,12 @@ def test_scan_reads_an_image_that_is_not_mirrored():
     np.testing.assert_allclose(vd, v[at], rtol=0, atol=1e-9)
     with pytest.raises(ValueError, match="mirrored"):
         symcorr.scan(depth, {**direct, "mirrored": "no"}, joints)
+    with pytest.raises(ValueError, match='unknown key "mirror"'):
+        symcorr.scan(depth, {**{n: k[n] for n in ["fx", "fy", "cx", "cy"]}, "mirror": False},
+                     joints)
+    # The file's own keys, "format" included, are accepted as a dict.
+    v2, _, _ = symcorr.scan(depth, k, joints)
+    np.testing.assert_array_equal(v, v2)
 
 
 def test_track_equals_the_command_line(cli, tmp_path):

@@ -101,9 +101,18 @@ struct IntrinsicsJson {
     fy: f64,
     cx: f64,
     cy: f64,
-    /// Absent (true) for the Kinect SDK's mirrored images; written only when false.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    mirrored: Option<bool>,
+    /// True (or absent) for the Kinect SDK's mirrored images; written only when false. A
+    /// `bool`: `null` is refused like any other non-boolean.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    mirrored: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 impl TryFrom<IntrinsicsJson> for Intrinsics {
@@ -122,9 +131,10 @@ impl TryFrom<IntrinsicsJson> for Intrinsics {
             fy: j.fy,
             cx: j.cx,
             cy: j.cy,
-            mirroring: match j.mirrored {
-                Some(false) => Mirroring::Direct,
-                Some(true) | None => Mirroring::Mirrored,
+            mirroring: if j.mirrored {
+                Mirroring::Mirrored
+            } else {
+                Mirroring::Direct
             },
         };
         k.validate().map_err(|e| e.to_string())?;
@@ -142,7 +152,7 @@ impl From<Intrinsics> for IntrinsicsJson {
             fy: k.fy,
             cx: k.cx,
             cy: k.cy,
-            mirrored: (k.mirroring == Mirroring::Direct).then_some(false),
+            mirrored: k.mirroring == Mirroring::Mirrored,
         }
     }
 }
@@ -284,7 +294,10 @@ impl Intrinsics {
 
     /// The same camera with its image's columns reversed: the other [`Mirroring`] and
     /// `cx → width − 1 − cx` (pixel centres at integers), so that column `u` of one image is
-    /// column `width − 1 − u` of the other and both unproject it to the same point.
+    /// column `width − 1 − u` of the other and both unproject it to the same point (to
+    /// rounding). Reversing twice gives `cx` back to rounding (exactly where `cx` and
+    /// `width − 1 − cx` are exact, as for whole and half pixels). A principal point within a
+    /// pixel of the upper end of [`Intrinsics::validate`]'s range lands below its lower end.
     ///
     /// ```
     /// use symcorr_kinect::{Intrinsics, Mirroring};

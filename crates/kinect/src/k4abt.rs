@@ -15,9 +15,8 @@
 //! shows them, +z into the scene. Kinect camera space (DESIGN.md, [`crate::camera`]) has +x to
 //! the sensor's left and +y up, so a position `(x, y, z)` becomes `(−x, −y, z) / 1000` metres: a
 //! turn by half a turn about the optical axis, not a mirror, so the subject's left stays their
-//! left. The SDK's depth images are not mirrored; a recording folder holds depth as the Kinect
-//! SDK v1 delivers it, mirrored (`u = cx + fx·x/z`): each depth PNG made from an Azure Kinect
-//! frame has its columns reversed (and `cx` becomes `width − 1 − cx`).
+//! left. The SDK's depth images are not mirrored: a recording folder made from them keeps them as
+//! they are with `"mirrored": false` in its intrinsics ([`crate::Mirroring::Direct`]).
 //!
 //! A frame's time is its `timestamp_usec` (the device clock, in µs; the depth frames' times of a
 //! recording folder made from the same capture are on that clock). The joints map onto the

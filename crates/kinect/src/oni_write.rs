@@ -167,8 +167,8 @@ pub enum OniWriteError {
     /// back as a mirrored image (its pixels are unprojected as the Kinect SDK's), so the file
     /// would show the subject's left as their right.
     #[error(
-        "the intrinsics say \"mirrored\": false, but an .oni file is read back as a mirrored image: \
-         write it with the frames' columns reversed and mirrored intrinsics"
+        "the intrinsics say \"mirrored\": false, but an .oni file keeps no image direction and \
+         is read back as a mirrored image"
     )]
     Direct,
     /// An image too large for one record (its bytes overflow the u32 payload size, or a side

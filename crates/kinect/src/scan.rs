@@ -635,7 +635,16 @@ pub fn scan_mesh(
             .and_then(|(top, low)| normalize(top - low))
             .unwrap_or_else(Vector3::y);
         let hip = low;
-        let candidates: Vec<Point3<f64>> = points.iter().flatten().copied().collect();
+        // In the order of the mirrored image's pixels whatever the image's direction, so that
+        // the seeded samples, and the plane, do not depend on it.
+        let w = frame.width as usize;
+        let candidates: Vec<Point3<f64>> = match k.mirroring {
+            Mirroring::Mirrored => points.iter().flatten().copied().collect(),
+            Mirroring::Direct => points
+                .chunks(w.max(1))
+                .flat_map(|row| row.iter().rev().flatten().copied())
+                .collect(),
+        };
         if let Some((plane, count)) = ransac_floor(&candidates, up, hip, opts) {
             // A handful of coplanar points is not a floor.
             if count >= 50 && count * 50 >= candidates.len() {

@@ -35,6 +35,21 @@ fn intrinsics_json_form_is_exact_and_round_trips() {
         serde_json::from_str::<Intrinsics>(&text.replace("\"fx\":580.0", "\"fx\":-1.0")).is_err()
     );
     assert!(serde_json::from_str::<Intrinsics>(&text.replace("\"cy\"", "\"cz\"")).is_err());
+    // "mirrored": a boolean, false for a direct image; true is the default and is not written.
+    let with = |v: &str| text.replace('}', &format!(",\"mirrored\":{v}}}"));
+    let direct: Intrinsics = serde_json::from_str(&with("false")).unwrap();
+    assert_eq!(direct.mirroring, symcorr_kinect::Mirroring::Direct);
+    assert_eq!(serde_json::to_string(&direct).unwrap(), with("false"));
+    assert_eq!(
+        serde_json::from_str::<Intrinsics>(&with("true")).unwrap(),
+        k
+    );
+    for bad in ["null", "0", "\"false\""] {
+        assert!(
+            serde_json::from_str::<Intrinsics>(&with(bad)).is_err(),
+            "{bad}"
+        );
+    }
     std::fs::write(&p, "{").unwrap();
     assert!(matches!(
         Intrinsics::read(&p),

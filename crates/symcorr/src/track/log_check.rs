@@ -79,9 +79,9 @@ pub enum LogMismatch {
          median {median:.0} % of the points along its bones lie outside the body the camera \
          sees (at most {max:.0} % accepted; logs recorded with their frames measured 0–11 %). \
          The log may belong to another recording or clock (check the joint offset, or estimate \
-         it from the frames), its axes may differ from the depth camera's (mirrored: a depth \
-         image not mirrored as the Kinect SDK's needs \"mirrored\": false in its intrinsics; \
-         another up axis), or the intrinsics may be another camera's",
+         it from the frames), its axes may differ from the depth camera's (mirrored: a recording \
+         folder whose depth is not mirrored as the Kinect SDK's needs \"mirrored\": false in its \
+         intrinsics.json; another up axis), or the intrinsics may be another camera's",
         median = 100.0 * median_outside,
         max = 100.0 * MAX_LOG_OUTSIDE
     )]
@@ -100,8 +100,9 @@ pub enum LogMismatch {
          the run fewer than half of the joints project onto a surface within {tolerance} m of \
          their depth{hint}. The log may be in another unit, belong to another recording or \
          clock (check the joint offset), its axes may differ from the depth camera's \
-         (mirrored: a depth image not mirrored as the Kinect SDK's needs \"mirrored\": false \
-         in its intrinsics; another up axis), or the intrinsics may be another camera's",
+         (mirrored: a recording folder whose depth is not mirrored as the Kinect SDK's needs \
+         \"mirrored\": false in its intrinsics.json; another up axis), or the intrinsics may be \
+         another camera's",
         tolerance = symcorr_kinect::scan::JOINT_DEPTH_TOLERANCE_M
     )]
     OffBody {
