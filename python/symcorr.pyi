@@ -185,7 +185,9 @@ def track(
     frames: Optional[Iterable[int]] = None,
     joint_offset: Union[float, Literal["auto"], None] = None,
     check_log: bool = True,
+    intrinsics: Union[Mapping[str, Union[float, bool]], Path, None] = None,
 ) -> FrameIterator:
     """The frames of a recording matched one by one, as ``symcorr track``: the joint log read
     at each frame's time + ``joint_offset`` seconds (``None``: 0; ``"auto"``: estimated from the
-    frames), refused first when it does not fit the frames (``check_log``)."""
+    frames), refused first when it does not fit the frames (``check_log``); ``intrinsics``
+    replaces the recording's."""

@@ -1775,7 +1775,7 @@ fn track_head_options_are_checked_recorded_and_kept_on_resume() {
 /// Kinect's, RealSense's: the image as the lens forms it) tracks as the mirrored recording of
 /// the same view when its intrinsics say `"mirrored": false`: the fixture with every depth
 /// image's columns reversed and `cx → width − 1 − cx` gives the same frames and poses. Without
-/// the key the log check refuses it, naming the key.
+/// the key the log check refuses it, naming the key; `--intrinsics` supplies them instead.
 #[test]
 fn track_reads_a_recording_whose_depth_is_not_mirrored() {
     let dir = tempfile::tempdir().unwrap();
@@ -1831,4 +1831,51 @@ fn track_reads_a_recording_whose_depth_is_not_mirrored() {
     let msg = assert_one_line_error(&o);
     assert!(msg.contains(r#""mirrored": false"#), "{msg}");
     assert!(!out.exists());
+    // `--intrinsics` gives the camera in the recording's place (as for an .oni file): the same
+    // run as with the key in the folder. Resuming it without them is refused: its frames were
+    // read with other intrinsics.
+    let k_direct = dir.path().join("direct.json");
+    kd.write(&k_direct).unwrap();
+    let with_k: Vec<&str> = extra
+        .iter()
+        .copied()
+        .chain(["--intrinsics", k_direct.to_str().unwrap()])
+        .collect();
+    let (fc, pc) = track_frames_and_poses(&direct, &with_k, &joints, &out);
+    assert_eq!(ok(&fc), ok(&fb));
+    assert_eq!(pc, pb, "the same intrinsics, the same poses");
+    let o = run(bin()
+        .arg("track")
+        .arg(&direct)
+        .args(extra)
+        .args(["--resume", "--joints"])
+        .arg(&joints)
+        .arg("--out")
+        .arg(&out));
+    let msg = assert_one_line_error(&o);
+    assert!(
+        msg.contains("cannot resume") && msg.contains("intrinsics"),
+        "{msg}"
+    );
+    // Intrinsics of another image size are refused naming the file.
+    let k_wrong = dir.path().join("wrong.json");
+    symcorr_kinect::Intrinsics::kinect_v1()
+        .write(&k_wrong)
+        .unwrap();
+    let o = run(bin()
+        .arg("track")
+        .arg(&direct)
+        .args(extra)
+        .arg("--intrinsics")
+        .arg(&k_wrong)
+        .arg("--joints")
+        .arg(&joints)
+        .arg("--out")
+        .arg(dir.path().join("d")));
+    let msg = assert_one_line_error(&o);
+    assert!(
+        msg.contains("wrong.json") && msg.contains("640x480"),
+        "{msg}"
+    );
+    assert!(!dir.path().join("d").exists());
 }

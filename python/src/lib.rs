@@ -984,7 +984,7 @@ fn scan<'py>(
     Bound<'py, PyArray1<i64>>,
 )> {
     let frame = depth_in(depth)?;
-    let k = intrinsics_in(intrinsics, &frame)?;
+    let k = intrinsics_in(intrinsics, frame.width, frame.height)?;
     let skeleton = skeleton_in(joints, "joints")?;
     if !(discontinuity.is_finite() && discontinuity > 0.0) {
         return Err(value_err(format!(
@@ -1051,7 +1051,8 @@ fn depth_in(obj: &Bound<'_, PyAny>) -> PyResult<DepthFrame> {
     DepthFrame::new(side(w)?, side(h)?, data).map_err(kinect_err)
 }
 
-fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrinsics> {
+/// Intrinsics from a dict or a symcorr.intrinsics/1 path, for an image of `width × height`.
+fn intrinsics_in(obj: &Bound<'_, PyAny>, width: u32, height: u32) -> PyResult<Intrinsics> {
     let k = if let Ok(d) = obj.cast::<PyDict>() {
         let get = |key: &str| -> PyResult<Option<Bound<'_, PyAny>>> { d.get_item(key) };
         let number = |key: &str| -> PyResult<f64> {
@@ -1080,11 +1081,7 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrins
                 let v: u64 = v
                     .extract()
                     .map_err(|_| value_err(format!("intrinsics: {key:?} must be an integer")))?;
-                let image = if key == "width" {
-                    frame.width
-                } else {
-                    frame.height
-                };
+                let image = if key == "width" { width } else { height };
                 if v != u64::from(image) {
                     return Err(value_err(format!(
                         "intrinsics: {key} = {v} but the depth image's {key} is {image}"
@@ -1093,8 +1090,8 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrins
             }
         }
         Intrinsics {
-            width: frame.width,
-            height: frame.height,
+            width,
+            height,
             fx: number("fx")?,
             fy: number("fy")?,
             cx: number("cx")?,
@@ -1113,14 +1110,14 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, frame: &DepthFrame) -> PyResult<Intrins
             value_err("intrinsics: expected a dict with fx, fy, cx, cy or a symcorr.intrinsics/1 file path")
         })?;
         let k = Intrinsics::read(&path).map_err(kinect_err)?;
-        if (k.width, k.height) != (frame.width, frame.height) {
+        if (k.width, k.height) != (width, height) {
             return Err(value_err(format!(
                 "{}: intrinsics for {}×{} but the depth image is {}×{}",
                 path.display(),
                 k.width,
                 k.height,
-                frame.width,
-                frame.height
+                width,
+                height
             )));
         }
         k
@@ -1351,7 +1348,8 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 /// time: another clock; its joints on no depth frame: another unit; its bones sticking out of
 /// the body the camera sees: another recording or clock, x mirrored, or depth not mirrored as
 /// the Kinect SDK's without ``"mirrored": false`` in intrinsics.json) raises ``ValueError``;
-/// ``check_log=False`` skips that check.
+/// ``check_log=False`` skips that check. ``intrinsics`` (a dict or a symcorr.intrinsics/1 path,
+/// as for ``scan``) replaces the recording's, as ``symcorr track --intrinsics`` does.
 ///
 /// Example::
 ///
@@ -1359,7 +1357,8 @@ fn frame_out(py: Python<'_>, r: TrackedFrame) -> PyResult<Frame> {
 ///     for f in symcorr.track(rec, f"{rec}/joints.json", body("s0_rest"), frames=range(0, 60, 10)):
 ///         print(f.index, f.status, f.coverage)
 #[pyfunction]
-#[pyo3(signature = (recording, joints, template, *, frames=None, joint_offset=None, check_log=true))]
+#[pyo3(signature = (recording, joints, template, *, frames=None, joint_offset=None, check_log=true, intrinsics=None))]
+#[allow(clippy::too_many_arguments)]
 fn track(
     py: Python<'_>,
     recording: PathBuf,
@@ -1368,6 +1367,7 @@ fn track(
     frames: Option<&Bound<'_, PyAny>>,
     joint_offset: Option<&Bound<'_, PyAny>>,
     check_log: bool,
+    intrinsics: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<FrameIterator> {
     // Seconds (None: 0), or "auto": estimated once the log is read.
     let joint_offset = match joint_offset {
@@ -1385,6 +1385,11 @@ fn track(
     let mut source = py
         .detach(|| DepthSource::open(&recording))
         .map_err(kinect_err)?;
+    if let Some(obj) = intrinsics {
+        let now = source.intrinsics();
+        let k = intrinsics_in(obj, now.width, now.height)?;
+        source.set_intrinsics(k).map_err(kinect_err)?;
+    }
     let len = source.len();
     let list: Vec<usize> = match frames {
         None => (0..len).collect(),

@@ -284,6 +284,24 @@ def test_track_reads_an_azure_kinect_log():
     np.testing.assert_allclose(head_azure, head, atol=1e-9)
 
 
+def test_track_takes_intrinsics_in_the_recordings_place():
+    # The recording's own intrinsics given again: the same frames. Said to be unmirrored,
+    # which its depth is not, they make the log stick out of the body: refused by the check.
+    template = symcorr.Body(*body("s0_rest"))
+    k = json.loads((RECORDING / "intrinsics.json").read_text())
+    plain = list(symcorr.track(RECORDING, RECORDING / "joints.json", template, frames=[20],
+                               joint_offset=0.04))
+    given = list(symcorr.track(RECORDING, RECORDING / "joints.json", template, frames=[20],
+                               joint_offset=0.04, intrinsics=k))
+    np.testing.assert_array_equal(given[0].target_of, plain[0].target_of)
+    with pytest.raises(ValueError, match="mirrored"):
+        list(symcorr.track(RECORDING, RECORDING / "joints.json", template, joint_offset=0.04,
+                           intrinsics={**k, "mirrored": False}))
+    with pytest.raises(ValueError, match="width = 640"):
+        symcorr.track(RECORDING, RECORDING / "joints.json", template,
+                      intrinsics={**k, "width": 640})
+
+
 def restamped(tmp_path, seconds):
     """The recording's joint log with every time `seconds` later, written in `tmp_path`."""
     log = json.loads((RECORDING / "joints.json").read_text())

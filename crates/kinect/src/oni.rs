@@ -51,7 +51,7 @@ pub const FRAME_TIMEOUT_MS: i32 = 5000;
 #[derive(Debug)]
 pub struct OniRecording {
     path: PathBuf,
-    intrinsics: Intrinsics,
+    pub(crate) intrinsics: Intrinsics,
     /// Every depth frame's timestamp in the file, microseconds, strictly increasing.
     stamps_us: Vec<u64>,
     times_s: Vec<f64>,

@@ -68,7 +68,7 @@ pub const FRAME_DIGITS: usize = 6;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recording {
     dir: PathBuf,
-    intrinsics: Intrinsics,
+    pub(crate) intrinsics: Intrinsics,
     times_s: Vec<f64>,
 }
 

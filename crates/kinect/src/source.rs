@@ -97,6 +97,39 @@ impl DepthSource {
         }
     }
 
+    /// Replaces the camera's intrinsics with `k` — a calibration of the camera, or the image's
+    /// direction ([`Mirroring`](crate::Mirroring)) of an `.oni` stream, which is read as
+    /// mirrored with its principal point at the centre and its focal length from the field of
+    /// view. Frames are then unprojected with `k`.
+    ///
+    /// Errors: [`KinectError::Intrinsics`] when `k` does not validate or describes another
+    /// image size than the recording's frames (nothing is replaced then).
+    ///
+    /// ```
+    /// use symcorr_kinect::{DepthSource, Intrinsics, Mirroring};
+    /// let mut source = DepthSource::open("../../fixtures/synth/recording").unwrap();
+    /// let direct = Intrinsics { mirroring: Mirroring::Direct, ..*source.intrinsics() };
+    /// source.set_intrinsics(direct).unwrap();
+    /// assert_eq!(source.intrinsics().mirroring, Mirroring::Direct);
+    /// assert!(source.set_intrinsics(Intrinsics::kinect_v1()).is_err()); // 640×480, not 320×240
+    /// ```
+    pub fn set_intrinsics(&mut self, k: Intrinsics) -> Result<(), KinectError> {
+        k.validate()?;
+        let now = self.intrinsics();
+        if (k.width, k.height) != (now.width, now.height) {
+            return Err(KinectError::Intrinsics(format!(
+                "{}x{} px, but the recording's frames are {}x{} px",
+                k.width, k.height, now.width, now.height
+            )));
+        }
+        match self {
+            DepthSource::Folder(r) => r.intrinsics = k,
+            #[cfg(feature = "openni2")]
+            DepthSource::Oni(r) => r.intrinsics = k,
+        }
+        Ok(())
+    }
+
     /// Depth frame `i` ([`Recording::frame`], `OniRecording::frame`).
     pub fn frame(&mut self, i: usize) -> Result<DepthFrame, KinectError> {
         match self {

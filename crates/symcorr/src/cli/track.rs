@@ -36,7 +36,7 @@ use symcorr::track::log_check::{check_log, LOG_CHECK_FRAMES};
 use symcorr::track::{FrameOutcome, TrackOptions, TrackedFrame, Tracker};
 use symcorr::{Pipeline, PipelineOptions};
 use symcorr_kinect::clock::JointOffset;
-use symcorr_kinect::{DepthSource, JointTrack};
+use symcorr_kinect::{DepthSource, Intrinsics, JointTrack};
 
 const EXAMPLES: &str = "Examples:
   symcorr track fixtures/synth/recording --joints fixtures/synth/recording/joints.json --out track/
@@ -53,6 +53,11 @@ pub struct TrackArgs {
     /// The skeleton tracker's joint log (any joint format symcorr reads).
     #[arg(long)]
     pub joints: PathBuf,
+    /// The depth camera's intrinsics (symcorr.intrinsics/1), replacing the recording's: a
+    /// calibration, or `"mirrored": false` for an .oni file of a camera whose depth is not
+    /// mirrored (an .oni is read as mirrored, its focal length from its field of view).
+    #[arg(long, value_name = "K.json")]
+    pub intrinsics: Option<PathBuf>,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -217,17 +222,22 @@ fn load_template(
 }
 
 /// The journal's first line: what the run is, so `--resume` continues only the same run.
-/// `method`: [`method_fingerprint`] of the run's options.
+/// `method`: [`method_fingerprint`] of the run's options; `intrinsics`: the camera the frames
+/// are read with (the recording's, or `--intrinsics`), so that a run does not go on with
+/// frames unprojected another way.
 fn journal_header(
     args: &TrackArgs,
     frames: &[usize],
     (template, vertices): (&str, usize),
     method: &str,
     joint_offset_s: f64,
+    intrinsics: &Intrinsics,
 ) -> Value {
+    let intrinsics: Value = serde_json::to_value(intrinsics).unwrap_or(Value::Null);
     json!({
         "format": "symcorr.track-journal/1",
         "recording": args.recording.display().to_string(),
+        "intrinsics": intrinsics,
         "joints": args.joints.display().to_string(),
         "template": template,
         "template_vertices": vertices,
@@ -281,8 +291,8 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
     let (first, frames, complete) = parse_journal(&text).map_err(err)?;
     if &first != header {
         return Err(err(
-            "it was written for another recording, template, joints, frame list or options, or by \
-             a build whose method differs (the header's `method`)"
+            "it was written for another recording or intrinsics, template, joints, frame list or \
+             options, or by a build whose method differs (the header's `method`)"
                 .into(),
         ));
     }
@@ -334,6 +344,12 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         )));
     }
     let mut recording = DepthSource::open(&args.recording).map_err(|e| CliError(e.to_string()))?;
+    if let Some(path) = &args.intrinsics {
+        let k = Intrinsics::read(path).map_err(|e| CliError(e.to_string()))?;
+        recording
+            .set_intrinsics(k)
+            .map_err(|e| CliError::with(path.display(), e))?;
+    }
     let frames = frame_list(args.frames.as_deref(), args.every, recording.len())?;
     let log = symcorr_kinect::read_joints(&args.joints).map_err(|e| CliError(e.to_string()))?;
     let joints = JointTrack::new(log, 0.0).map_err(|e| CliError::with(args.joints.display(), e))?;
@@ -359,7 +375,14 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     let pipeline = Pipeline::new(options);
     let (template, template_name) = load_template(&args, &pipeline, max_input_bytes)?;
     let n = template.input_mesh().num_vertices();
-    let header = journal_header(&args, &frames, (&template_name, n), &method, joint_offset_s);
+    let header = journal_header(
+        &args,
+        &frames,
+        (&template_name, n),
+        &method,
+        joint_offset_s,
+        recording.intrinsics(),
+    );
     let resuming = args.resume && journal_path.exists();
     // The log against the frames, before anything is written (a resumed run was checked when
     // it started).
