@@ -147,6 +147,27 @@ proptest! {
         prop_assert_eq!(serde_json::to_string(&k).unwrap(), json);
     }
 
+    /// Reversing the columns: pixel `u` of one camera and `width − 1 − u` of the other see
+    /// one ray (to rounding), projection agrees, and the direction flips.
+    #[test]
+    fn reversed_columns_see_the_same_rays(
+        k in valid_intrinsics(),
+        (fu, fv, z) in (0.0..1.0f64, 0.0..1.0f64, 0.5..8.0f64),
+    ) {
+        let r = k.columns_reversed();
+        prop_assert_ne!(r.mirroring, k.mirroring);
+        prop_assert_eq!(r.columns_reversed().mirroring, k.mirroring);
+        let w = f64::from(k.width);
+        let (u, v) = (fu * (w - 1.0), fv * (f64::from(k.height) - 1.0));
+        let (p, q) = (k.unproject(u, v, z), r.unproject(w - 1.0 - u, v, z));
+        // Lengths scale with the pixel offsets and the depth over the focal length.
+        let scale = z * (w + (k.cx - u).abs()) / k.fx.min(k.fy);
+        prop_assert!((p - q).norm() <= 1e-12 * scale.max(1.0), "{:?} {:?}", p, q);
+        let ([pu, pv], [qu, qv]) = (k.project(&p), r.project(&p));
+        prop_assert!((pu + qu - (w - 1.0)).abs() <= 1e-9 * (w + k.cx.abs()), "{} {}", pu, qu);
+        prop_assert!((pv - qv).abs() == 0.0);
+    }
+
     #[test]
     fn the_reader_accepts_exactly_what_validates(k in any_intrinsics()) {
         let json = k.to_json();
