@@ -960,8 +960,8 @@ impl Prepared {
 /// (pixels; ``width``/``height`` optional, and then must match the image; ``mirrored``
 /// optional, ``False`` for an image as the lens forms it, not mirrored as the Kinect SDK's)
 /// or the path of a symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or a ``(20, 3)``
-/// array in camera space, metres. Returns vertices ``float64 (n, 3)`` (camera space, metres), faces
-/// ``int64 (m, 3)`` and per vertex its pixel id ``v * w + u`` (``int64 (n,)``).
+/// array in camera space, metres. Returns vertices ``float64 (n, 3)`` (camera space, metres),
+/// faces ``int64 (m, 3)`` and per vertex its pixel id ``v * w + u`` (``int64 (n,)``).
 ///
 /// Example::
 ///
