@@ -167,8 +167,8 @@ pub enum OniWriteError {
     /// back as a mirrored image (its pixels are unprojected as the Kinect SDK's), so the file
     /// would show the subject's left as their right.
     #[error(
-        "the intrinsics say \"mirrored\": false, but an .oni file keeps no image direction and \
-         is read back as a mirrored image"
+        "the intrinsics say \"mirrored\": false, but symcorr reads an .oni file as a mirrored \
+         image (the file written here records no mirroring property)"
     )]
     Direct,
     /// An image too large for one record (its bytes overflow the u32 payload size, or a side
