@@ -218,6 +218,14 @@ pub fn jitter_sigma_m(z_m: f64, inferred: bool) -> f64 {
     cm / 100.0
 }
 
+/// Moves `p` by Gaussian jitter of [`jitter_sigma_m`] per coordinate (three draws from `rng`).
+fn jitter(p: &mut Point3<f64>, inferred: bool, rng: &mut ChaCha8Rng) {
+    let sigma = jitter_sigma_m(p.z, inferred);
+    for x in p.coords.iter_mut() {
+        *x += sigma * standard_normal(rng);
+    }
+}
+
 fn kerr(e: symcorr_kinect::KinectError) -> SynthError {
     SynthError::Invalid(e.to_string())
 }
@@ -438,10 +446,7 @@ pub fn write_recording(
             let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
             rng.set_stream(f as u64);
             for (p, &c) in s.positions.iter_mut().zip(&s.confidence) {
-                let sigma = jitter_sigma_m(p.z, c < 1.0);
-                for x in p.coords.iter_mut() {
-                    *x += sigma * standard_normal(&mut rng);
-                }
+                jitter(p, c < 1.0, &mut rng);
             }
             // The face points jitter as a tracked joint does (their own stream: the joints'
             // noise stays what it was). Read against the jittered joints: the reported turn.
@@ -449,10 +454,7 @@ pub fn write_recording(
             rng.set_stream(FACE_STREAM + f as u64);
             let mut jittered = face;
             for p in std::iter::once(&mut jittered.nose).chain(jittered.ears.iter_mut()) {
-                let sigma = jitter_sigma_m(p.z, false);
-                for x in p.coords.iter_mut() {
-                    *x += sigma * standard_normal(&mut rng);
-                }
+                jitter(p, false, &mut rng);
             }
             head_turns[f] = head_turn_from_face(&s, &jittered);
         }
