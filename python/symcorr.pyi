@@ -169,7 +169,7 @@ def match(
 
 def scan(
     depth: npt.NDArray[np.uint16],
-    intrinsics: Union[Mapping[str, Union[float, bool]], Path],
+    intrinsics: Union[Mapping[str, Union[float, bool, Sequence[float]]], Path],
     joints: JointsLike,
     *,
     discontinuity: float = 0.05,
@@ -185,7 +185,7 @@ def track(
     frames: Optional[Iterable[int]] = None,
     joint_offset: Union[float, Literal["auto"], None] = None,
     check_log: bool = True,
-    intrinsics: Union[Mapping[str, Union[float, bool]], Path, None] = None,
+    intrinsics: Union[Mapping[str, Union[float, bool, Sequence[float]]], Path, None] = None,
 ) -> FrameIterator:
     """The frames of a recording matched one by one, as ``symcorr track``: the joint log read
     at each frame's time + ``joint_offset`` seconds (``None``: 0; ``"auto"``: estimated from the

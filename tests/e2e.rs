@@ -1815,6 +1815,7 @@ fn track_reads_a_recording_whose_depth_is_not_mirrored() {
     // The same folder with the key left out reads the images as mirrored: refused.
     symcorr_kinect::Intrinsics {
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
         ..kd
     }
     .write(direct.join("intrinsics.json"))

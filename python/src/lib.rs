@@ -958,8 +958,9 @@ impl Prepared {
 /// body, as ``symcorr scan --depth`` does: floor and background removed with the skeleton, the
 /// components near the bones kept. ``intrinsics`` is a dict with ``fx``, ``fy``, ``cx``, ``cy``
 /// (pixels; ``width``/``height`` optional, and then must match the image; ``mirrored``
-/// optional, ``False`` for an image as the lens forms it, not mirrored as the Kinect SDK's)
-/// or the path of a symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or a ``(20, 3)``
+/// optional, ``False`` for an image as the lens forms it, not mirrored as the Kinect SDK's;
+/// ``distortion`` optional, OpenCV's ``distCoeffs``: 4, 5 or 8 numbers ``k1, k2, p1, p2[, k3[,
+/// k4, k5, k6]]``) or the path of a symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or a ``(20, 3)``
 /// array in camera space, metres. Returns vertices ``float64 (n, 3)`` (camera space, metres),
 /// faces ``int64 (m, 3)`` and per vertex its pixel id ``v * w + u`` (``int64 (n,)``).
 ///
@@ -1062,8 +1063,16 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, width: u32, height: u32) -> PyResult<In
                 .map_err(|_| value_err(format!("intrinsics: {key:?} must be a number")))
         };
         // As the JSON form: an unknown key (a misspelt "mirrored") is refused, not ignored.
-        const KEYS: [&str; 8] = [
-            "format", "width", "height", "fx", "fy", "cx", "cy", "mirrored",
+        const KEYS: [&str; 9] = [
+            "format",
+            "width",
+            "height",
+            "fx",
+            "fy",
+            "cx",
+            "cy",
+            "mirrored",
+            "distortion",
         ];
         for key in d.keys() {
             let name: String = key
@@ -1103,6 +1112,17 @@ fn intrinsics_in(obj: &Bound<'_, PyAny>, width: u32, height: u32) -> PyResult<In
                     Ok(false) => symcorr_kinect::Mirroring::Direct,
                     Err(_) => return Err(value_err("intrinsics: \"mirrored\" must be a bool")),
                 },
+            },
+            distortion: match get("distortion")? {
+                None => None,
+                Some(c) => {
+                    let c: Vec<f64> = c.extract().map_err(|_| {
+                        value_err("intrinsics: \"distortion\" must be a sequence of numbers")
+                    })?;
+                    let d = symcorr_kinect::Distortion::from_opencv(&c)
+                        .map_err(|e| value_err(format!("intrinsics: {e}")))?;
+                    Some(d)
+                }
             },
         }
     } else {

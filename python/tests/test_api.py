@@ -219,6 +219,32 @@ def test_scan_reads_an_image_that_is_not_mirrored():
     np.testing.assert_array_equal(v, v2)
 
 
+def test_scan_undoes_a_lens_distortion():
+    # OpenCV's model (k1, k2, p1, p2, k3): every vertex lies on the ray the lens bends onto its
+    # pixel, checked with the forward formula here (the library inverts it by Newton's method).
+    depth = symcorr.read_depth(SCAN / "depth.png")
+    joints = symcorr.read_joints(SCAN / "joints.json")
+    k = json.loads((SCAN / "intrinsics.json").read_text())
+    k1, k2, p1, p2, k3 = 0.09, -0.27, 0.002, -0.001, 0.09
+    lens = {n: k[n] for n in ["fx", "fy", "cx", "cy"]}
+    v, _, px = symcorr.scan(depth, {**lens, "distortion": [k1, k2, p1, p2, k3]}, joints)
+    w = depth.shape[1]
+    # The stored image is mirrored: its a = (u - cx)/fx is +x/z, its b = (v - cy)/fy is -y/z.
+    a, b = v[:, 0] / v[:, 2], -v[:, 1] / v[:, 2]
+    r2 = a * a + b * b
+    radial = 1 + k1 * r2 + k2 * r2**2 + k3 * r2**3
+    ad = a * radial + 2 * p1 * a * b + p2 * (r2 + 2 * a * a)
+    bd = b * radial + p1 * (r2 + 2 * b * b) + 2 * p2 * a * b
+    np.testing.assert_allclose(k["cx"] + k["fx"] * ad, px % w, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(k["cy"] + k["fy"] * bd, px // w, rtol=0, atol=1e-8)
+    plain, _, _ = symcorr.scan(depth, lens, joints)
+    assert len(plain) > 0 and not np.allclose(plain[:100], v[:100])
+    with pytest.raises(ValueError, match="6 coefficients"):
+        symcorr.scan(depth, {**lens, "distortion": [0.1] * 6}, joints)
+    with pytest.raises(ValueError, match="folds"):
+        symcorr.scan(depth, {**lens, "distortion": [-0.9, 0, 0, 0]}, joints)
+
+
 def test_track_equals_the_command_line(cli, tmp_path):
     template = symcorr.Body(*body("s0_rest"))
     frames = list(symcorr.track(RECORDING, RECORDING / "joints.json", template,

@@ -85,6 +85,7 @@ pub struct OffsetEstimate {
 /// let cam = Intrinsics {
 ///     width: 64, height: 48, fx: 60.0, fy: 60.0, cx: 32.0, cy: 24.0,
 ///     mirroring: Mirroring::Mirrored,
+///     distortion: None,
 /// };
 /// let hand = |t: f64| Point3::new(0.5 * (2.0 * t).sin(), 0.0, 2.0);
 /// let frame = |t: f64| {
@@ -281,6 +282,7 @@ mod tests {
         cx: 40.0,
         cy: 30.0,
         mirroring: crate::Mirroring::Mirrored,
+        distortion: None,
     };
 
     /// Two hands swinging at different rates in front of a wall 3.5 m away, a torso between them;

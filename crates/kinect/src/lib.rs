@@ -84,7 +84,7 @@ pub mod scan;
 pub mod sdk_text;
 pub mod source;
 
-pub use camera::{Intrinsics, Mirroring};
+pub use camera::{Distortion, Intrinsics, Mirroring, PixelRays};
 pub use depth::{read_depth_png16, write_depth_png16, DepthFrame};
 pub use error::KinectError;
 pub use joints::{
@@ -96,7 +96,9 @@ pub use recording::{
     LimbPair, OneEuroFilter, Recording, SkeletonFilter, SkipReason, TimedSkeleton,
 };
 pub use replay::{BoneLengthReport, FrameSelect};
-pub use scan::{fuse_depth_frames, scan_mesh, ComponentFilter, ScanMesh, ScanOptions};
+pub use scan::{
+    fuse_depth_frames, scan_mesh, scan_mesh_with_rays, ComponentFilter, ScanMesh, ScanOptions,
+};
 pub use source::DepthSource;
 
 use std::path::Path;

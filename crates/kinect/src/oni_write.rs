@@ -171,6 +171,13 @@ pub enum OniWriteError {
          image (the file written here records no mirroring property)"
     )]
     Direct,
+    /// Intrinsics with a lens [`Distortion`](crate::Distortion): an .oni file keeps a field of
+    /// view, not a lens model, so its frames would be read back as a pinhole camera's.
+    #[error(
+        "the intrinsics have a lens distortion model, but an .oni file keeps only a field of \
+         view: its frames would be read back as a pinhole camera's"
+    )]
+    Distorted,
     /// An image too large for one record (its bytes overflow the u32 payload size, or a side
     /// overflows the u16 of the cropping property).
     #[error("a {width}x{height} depth frame does not fit in an .oni record")]
@@ -229,6 +236,9 @@ impl Plan {
             .map_err(|e| OniWriteError::Intrinsics(e.to_string()))?;
         if k.mirroring == crate::Mirroring::Direct {
             return Err(OniWriteError::Direct);
+        }
+        if k.distortion.is_some() {
+            return Err(OniWriteError::Distorted);
         }
         let (w, h) = (f64::from(k.width), f64::from(k.height));
         if k.cx != w / 2.0 || k.cy != h / 2.0 {
@@ -751,10 +761,18 @@ mod tests {
         );
         let direct = Intrinsics {
             mirroring: crate::Mirroring::Direct,
+            distortion: None,
             ..k(4, 3)
         };
         let e = oni_bytes(&direct, &[5, 6], &fs).unwrap_err();
         assert!(matches!(e, OniWriteError::Direct), "{e}");
+        let lens = crate::Distortion::from_opencv(&[0.01, 0.0, 0.0, 0.0]).ok();
+        let distorted = Intrinsics {
+            distortion: lens,
+            ..k(4, 3)
+        };
+        let e = oni_bytes(&distorted, &[5, 6], &fs).unwrap_err();
+        assert!(matches!(e, OniWriteError::Distorted), "{e}");
         let mut bad = k(4, 3);
         bad.fx = f64::NAN;
         let e = oni_bytes(&bad, &[5, 6], &fs).unwrap_err();

@@ -27,6 +27,7 @@
 //! let k = Intrinsics {
 //!     width: 4, height: 3, fx: 5.0, fy: 5.0, cx: 1.5, cy: 1.0,
 //!     mirroring: Mirroring::Mirrored,
+//!     distortion: None,
 //! };
 //! k.write(dir.path().join("intrinsics.json")).unwrap();
 //! std::fs::create_dir(dir.path().join("depth")).unwrap();

@@ -27,7 +27,7 @@
 //! related back to the depth image. [`fuse_depth_frames`] merges a few frames of a static subject
 //! into one (per-pixel median) before meshing, which removes most of the sensor's flicker.
 
-use crate::camera::{Intrinsics, Mirroring};
+use crate::camera::{Intrinsics, Mirroring, PixelRays};
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
 use crate::geom::{median, normalize};
@@ -323,6 +323,17 @@ pub fn depth_to_points(
     max_depth_m: f64,
 ) -> Result<Vec<Option<Point3<f64>>>, KinectError> {
     k.validate()?;
+    check_frame_size(frame, k)?;
+    Ok(points_through(
+        frame,
+        &k.pixel_rays(),
+        min_depth_m,
+        max_depth_m,
+    ))
+}
+
+/// [`KinectError::DepthSize`] unless `frame` has the size of `k` (and its pixels fill it).
+fn check_frame_size(frame: &DepthFrame, k: &Intrinsics) -> Result<(), KinectError> {
     if frame.width != k.width
         || frame.height != k.height
         || frame.data_mm.len() != frame.width as usize * frame.height as usize
@@ -334,17 +345,28 @@ pub fn depth_to_points(
             expected: format!("{}x{} (the intrinsics)", k.width, k.height),
         });
     }
-    let w = frame.width as usize;
-    Ok(frame
+    Ok(())
+}
+
+/// [`depth_to_points`] with the camera's rays at hand (the frame's size checked).
+fn points_through(
+    frame: &DepthFrame,
+    rays: &PixelRays,
+    min_depth_m: f64,
+    max_depth_m: f64,
+) -> Vec<Option<Point3<f64>>> {
+    let w = frame.width.max(1);
+    frame
         .data_mm
         .iter()
-        .enumerate()
-        .map(|(i, &d)| {
+        .zip(0u32..)
+        .map(|(&d, i)| {
             let z = f64::from(d) / 1000.0;
             (d > 0 && z >= min_depth_m && z <= max_depth_m)
-                .then(|| k.unproject((i % w) as f64, (i / w) as f64, z))
+                .then(|| rays.point(i % w, i / w, z))
+                .flatten()
         })
-        .collect())
+        .collect()
 }
 
 /// Per-pixel median of several depth frames of a static subject (zeros ignored; a pixel valid
@@ -507,6 +529,7 @@ pub fn depth_unit_hint(depth_ratio: Option<f64>) -> String {
 /// let k = Intrinsics {
 ///     width: 8, height: 6, fx: 7.0, fy: 7.0, cx: 3.5, cy: 2.5,
 ///     mirroring: Mirroring::Mirrored,
+///     distortion: None,
 /// };
 /// // A wall 2 m away (2000 mm); joints 2 m away lie on it, joints "2000 m" away do not.
 /// let frame = DepthFrame::new(8, 6, vec![2000; 48]).unwrap();
@@ -592,7 +615,25 @@ pub fn scan_mesh(
     opts: &ScanOptions,
 ) -> Result<ScanMesh, KinectError> {
     opts.validate()?;
-    let mut points = depth_to_points(frame, k, opts.min_depth_m, opts.max_depth_m)?;
+    k.validate()?;
+    check_frame_size(frame, k)?;
+    scan_mesh_with_rays(frame, &k.pixel_rays(), skeleton, opts)
+}
+
+/// [`scan_mesh`] with the camera's rays computed beforehand ([`Intrinsics::pixel_rays`]): for
+/// many frames of a camera with a lens model, which would otherwise find every pixel's ray
+/// again for each frame. Same errors.
+pub fn scan_mesh_with_rays(
+    frame: &DepthFrame,
+    rays: &PixelRays,
+    skeleton: Option<&Skeleton>,
+    opts: &ScanOptions,
+) -> Result<ScanMesh, KinectError> {
+    opts.validate()?;
+    let k = rays.intrinsics();
+    k.validate()?;
+    check_frame_size(frame, k)?;
+    let mut points = points_through(frame, rays, opts.min_depth_m, opts.max_depth_m);
     let mut report = ScanReport {
         valid_pixels: points.iter().filter(|p| p.is_some()).count(),
         ..ScanReport::default()

@@ -15,6 +15,7 @@ fn intrinsics_json_form_is_exact_and_round_trips() {
         cx: 319.5,
         cy: 239.5,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     };
     let text = serde_json::to_string(&k).unwrap();
     assert_eq!(
@@ -95,6 +96,7 @@ fn unproject_inverts_project() {
         cx: 257.3,
         cy: 208.2,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     };
     for i in 0..50 {
         let t = i as f64;
@@ -251,4 +253,183 @@ fn implausible_intrinsics_are_refused_naming_the_value() {
         ),
         "{msg}"
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lens distortion against OpenCV (fixtures/kinect/distortion_reference.json, written by
+// tools/reference/make_distortion_reference.py with cv2.projectPoints / cv2.undistortPoints).
+
+/// The reference cases: OpenCV's camera (x right, y down, z forward) is Kinect camera space
+/// with x and y negated, and OpenCV's image is the image as the lens forms it — a
+/// [`Mirroring::Direct`](symcorr_kinect::Mirroring) image.
+fn opencv_cases() -> Vec<(String, Intrinsics, serde_json::Value)> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/kinect/distortion_reference.json"
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            let f = |key: &str| c[key].as_f64().unwrap();
+            let coefficients: Vec<f64> = c["distortion"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let k = Intrinsics {
+                width: c["width"].as_u64().unwrap() as u32,
+                height: c["height"].as_u64().unwrap() as u32,
+                fx: f("fx"),
+                fy: f("fy"),
+                cx: f("cx"),
+                cy: f("cy"),
+                mirroring: symcorr_kinect::Mirroring::Direct,
+                distortion: Some(symcorr_kinect::Distortion::from_opencv(&coefficients).unwrap()),
+            };
+            (c["name"].as_str().unwrap().to_string(), k, c.clone())
+        })
+        .collect()
+}
+
+fn pair(v: &serde_json::Value) -> [f64; 2] {
+    [v[0].as_f64().unwrap(), v[1].as_f64().unwrap()]
+}
+
+#[test]
+fn distorted_projection_matches_opencv() {
+    let cases = opencv_cases();
+    assert_eq!(cases.len(), 3);
+    for (name, k, case) in cases {
+        k.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
+        let entries = case["project"].as_array().unwrap();
+        assert!(entries.len() >= 100, "{name}");
+        let mut worst: f64 = 0.0;
+        for e in entries {
+            let p = &e["point"];
+            let cv = [0, 1, 2].map(|i| p[i].as_f64().unwrap());
+            let [u, v] = k.project(&Point3::new(-cv[0], -cv[1], cv[2]));
+            let [ru, rv] = pair(&e["pixel"]);
+            worst = worst.max((u - ru).abs()).max((v - rv).abs());
+        }
+        assert!(worst < 1e-9, "{name}: projection {worst} px from OpenCV's");
+    }
+}
+
+#[test]
+fn distorted_unprojection_matches_opencv_and_the_mirrored_image() {
+    for (name, k, case) in opencv_cases() {
+        let mirrored = k.columns_reversed();
+        mirrored
+            .validate()
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let rays = k.pixel_rays();
+        let last = f64::from(k.width) - 1.0;
+        let mut worst: f64 = 0.0;
+        for e in case["unproject"].as_array().unwrap() {
+            let [u, v] = pair(&e["pixel"]);
+            let [rx, ry] = pair(&e["ray"]);
+            let z = 2.5;
+            let p = k.unproject(u, v, z);
+            worst = worst.max((-p.x / z - rx).abs()).max((-p.y / z - ry).abs());
+            assert_eq!(p.z, z);
+            // The same pixel of the image with its columns reversed: the same ray.
+            let q = mirrored.unproject(last - u, v, z);
+            assert!((p - q).norm() < 1e-8, "{name} ({u}, {v}): {p} vs {q}");
+            let [mu, mv] = mirrored.project(&p);
+            assert!(
+                (mu - (last - u)).abs() < 1e-6 && (mv - v).abs() < 1e-6,
+                "{name}"
+            );
+            // The ray table gives the same point at a whole pixel.
+            if (u.fract(), v.fract()) == (0.0, 0.0) {
+                let t = rays.point(u as u32, v as u32, z).unwrap();
+                assert!((t - p).norm() < 1e-6, "{name} ({u}, {v})");
+            }
+        }
+        assert!(worst < 1e-9, "{name}: rays {worst} from OpenCV's");
+    }
+}
+
+#[test]
+fn a_lens_model_that_folds_inside_the_image_is_refused() {
+    let pinhole = Intrinsics {
+        width: 640,
+        height: 480,
+        fx: 400.0,
+        fy: 400.0,
+        cx: 320.0,
+        cy: 240.0,
+        mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
+    };
+    // r·(1 − 0.6 r²) stops growing at r = 0.745, where it shows 0.497: the image's corner,
+    // at 1.0, is beyond what the lens shows.
+    let fold = symcorr_kinect::Distortion::from_opencv(&[-0.6, 0.0, 0.0, 0.0]).unwrap();
+    let k = Intrinsics {
+        distortion: Some(fold),
+        ..pinhole
+    };
+    let e = k.validate().unwrap_err().to_string();
+    assert!(e.contains("folds") && e.contains("corner"), "{e}");
+    // The same lens on a narrower camera (its corner at 0.4) describes the whole image.
+    let narrow = Intrinsics {
+        fx: 1000.0,
+        fy: 1000.0,
+        ..k
+    };
+    narrow.validate().unwrap();
+    let p = narrow.unproject(0.0, 0.0, 2.0);
+    let [u, v] = narrow.project(&p);
+    assert!(u.abs() < 1e-9 && v.abs() < 1e-9, "{u} {v}");
+    // A pinhole camera projects as it always has, bit for bit.
+    let q = Point3::new(0.31, -0.17, 2.3);
+    let [u, v] = pinhole.project(&q);
+    assert_eq!(
+        (u, v),
+        (320.0 + 400.0 * 0.31 / 2.3, 240.0 - 400.0 * -0.17 / 2.3)
+    );
+}
+
+#[test]
+fn distortion_json_takes_opencvs_vectors() {
+    let base = r#"{"format":"symcorr.intrinsics/1","width":512,"height":424,"fx":365.5,"fy":365.5,"cx":254.9,"cy":205.4"#;
+    let read = |tail: &str| Intrinsics::from_json_str(&format!("{base}{tail}}}"), "k.json");
+    let k5 = read(r#","distortion":[0.0905,-0.2701,0.0,0.0,0.0922]"#).unwrap();
+    let d = k5.distortion.unwrap();
+    assert_eq!(d.radial, [0.0905, -0.2701, 0.0922, 0.0, 0.0, 0.0]);
+    assert_eq!(d.tangential, [0.0, 0.0]);
+    assert!(k5
+        .to_json()
+        .ends_with(r#""distortion":[0.0905,-0.2701,0.0,0.0,0.0922]}"#));
+    let k4 = read(r#","distortion":[0.01,-0.02,0.001,-0.002]"#).unwrap();
+    assert_eq!(k4.distortion.unwrap().tangential, [0.001, -0.002]);
+    assert!(k4
+        .to_json()
+        .ends_with(r#""distortion":[0.01,-0.02,0.001,-0.002]}"#));
+    let k8 = read(r#","distortion":[0.5,-0.01,0.0,0.0,-0.006,0.83,0.12,-0.03],"mirrored":false"#)
+        .unwrap();
+    assert_eq!(k8.distortion.unwrap().radial[3], 0.83);
+    assert_eq!(
+        Intrinsics::from_json_str(&k8.to_json(), "k.json").unwrap(),
+        k8
+    );
+    assert_eq!(read("").unwrap().distortion, None);
+    for (tail, says) in [
+        (
+            r#","distortion":[0.1,0.2,0.0,0.0,0.1,0.0]"#,
+            "6 coefficients",
+        ),
+        (r#","distortion":null"#, "invalid type: null"),
+        (r#","distortion":[0.1,"x",0.0,0.0]"#, "invalid type"),
+        (r#","distortion":[-0.9,0.0,0.0,0.0]"#, "folds"),
+    ] {
+        let e = read(tail).unwrap_err();
+        assert!(matches!(e, KinectError::Json { .. }), "{e}");
+        assert!(e.to_string().contains(says), "{tail}: {e}");
+    }
 }

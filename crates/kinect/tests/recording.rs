@@ -25,6 +25,7 @@ fn intrinsics() -> Intrinsics {
         cx: 3.5,
         cy: 2.5,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     }
 }
 

@@ -5,7 +5,9 @@
 
 use proptest::prelude::*;
 use symcorr_kinect::camera::{FOCAL_RANGE_PX, MAX_IMAGE_SIDE};
-use symcorr_kinect::{parse_depth_times, Intrinsics, KinectError, Mirroring, Recording};
+use symcorr_kinect::{
+    parse_depth_times, Distortion, Intrinsics, KinectError, Mirroring, Recording,
+};
 
 // ---------------------------------------------------------------------------------------------
 // intrinsics.json
@@ -39,21 +41,69 @@ fn side() -> impl Strategy<Value = u32> {
     prop_oneof![Just(1), Just(MAX_IMAGE_SIDE), 1..=MAX_IMAGE_SIDE]
 }
 
-/// Intrinsics that validate.
+/// Intrinsics that validate: a pinhole camera, or one with a lens model scaled to the image
+/// ([`lens_for`]).
 fn valid_intrinsics() -> impl Strategy<Value = Intrinsics> {
-    (side(), side(), focal(), focal()).prop_flat_map(|(width, height, fx, fy)| {
-        (principal(width), principal(height), mirroring()).prop_map(move |(cx, cy, mirroring)| {
-            Intrinsics {
-                width,
-                height,
-                fx,
-                fy,
-                cx,
-                cy,
-                mirroring,
-            }
+    (side(), side(), focal(), focal())
+        .prop_flat_map(|(width, height, fx, fy)| {
+            (principal(width), principal(height), mirroring()).prop_map(
+                move |(cx, cy, mirroring)| Intrinsics {
+                    width,
+                    height,
+                    fx,
+                    fy,
+                    cx,
+                    cy,
+                    mirroring,
+                    distortion: None,
+                },
+            )
         })
-    })
+        .prop_flat_map(|k| {
+            prop_oneof![Just(None), lens_for(&k).prop_map(Some)]
+                .prop_map(move |distortion| Intrinsics { distortion, ..k })
+        })
+        .prop_filter("the lens model describes the image", |k| {
+            k.validate().is_ok()
+        })
+}
+
+/// A lens model of the strength depth cameras have on an image whose farthest corner lies at
+/// the normalised radius `c`: each radial term moves that corner by at most a tenth of its
+/// radius, the tangential terms by at most a hundredth.
+fn lens_for(k: &Intrinsics) -> impl Strategy<Value = Distortion> {
+    let (w, h) = (f64::from(k.width), f64::from(k.height));
+    let c = (k.cx.abs().max((w - k.cx).abs()) / k.fx)
+        .hypot(k.cy.abs().max((h - k.cy).abs()) / k.fy)
+        .max(1e-3);
+    let term = move |power: i32| (-0.1..=0.1f64).prop_map(move |t| t / c.powi(power));
+    (
+        [term(2), term(4), term(6), term(2), term(4), term(6)],
+        [(-0.01..=0.01f64), (-0.01..=0.01f64)],
+    )
+        .prop_map(move |(radial, [p1, p2])| Distortion {
+            radial,
+            tangential: [p1 / c, p2 / c],
+        })
+}
+
+/// Any lens model, non-finite coefficients included.
+fn any_lens() -> impl Strategy<Value = Option<Distortion>> {
+    prop_oneof![
+        Just(None),
+        (
+            [
+                any_value(),
+                any_value(),
+                any_value(),
+                any_value(),
+                any_value(),
+                any_value()
+            ],
+            [any_value(), any_value()]
+        )
+            .prop_map(|(radial, tangential)| Some(Distortion { radial, tangential })),
+    ]
 }
 
 /// Either way round.
@@ -84,33 +134,42 @@ fn any_intrinsics() -> impl Strategy<Value = Intrinsics> {
         any_value(),
         any_value(),
         mirroring(),
+        any_lens(),
     )
-        .prop_map(|(width, height, fx, fy, cx, cy, mirroring)| Intrinsics {
-            width,
-            height,
-            fx,
-            fy,
-            cx,
-            cy,
-            mirroring,
-        })
+        .prop_map(
+            |(width, height, fx, fy, cx, cy, mirroring, distortion)| Intrinsics {
+                width,
+                height,
+                fx,
+                fy,
+                cx,
+                cy,
+                mirroring,
+                distortion,
+            },
+        )
 }
 
 /// The bits of every value, so that equality is exact (and -0.0 is not 0.0).
-fn bits(k: &Intrinsics) -> (u32, u32, [u64; 4], Mirroring) {
+fn bits(k: &Intrinsics) -> (u32, u32, [u64; 4], Mirroring, Option<[u64; 8]>) {
     (
         k.width,
         k.height,
         [k.fx, k.fy, k.cx, k.cy].map(f64::to_bits),
         k.mirroring,
+        k.distortion.map(|d| {
+            let [k1, k2, k3, k4, k5, k6] = d.radial;
+            [k1, k2, k3, k4, k5, k6, d.tangential[0], d.tangential[1]].map(f64::to_bits)
+        }),
     )
 }
 
 /// Text that looks like an intrinsics file: its keys and an unknown one, numbers, format tags,
 /// booleans, `null`, `[]`.
 const INTRINSICS_LIKE: &str = concat!(
-    "\\{ ?(\"(format|width|height|fx|fy|cx|cy|cz|mirrored)\" ?: ?",
-    "(-?[0-9]{1,6}(\\.[0-9]{1,3})?(e-?[0-9]{1,3})?|\"symcorr\\.intrinsics/[0-9]\"|null|true|false|\\[\\])",
+    "\\{ ?(\"(format|width|height|fx|fy|cx|cy|cz|mirrored|distortion)\" ?: ?",
+    "(-?[0-9]{1,6}(\\.[0-9]{1,3})?(e-?[0-9]{1,3})?|\"symcorr\\.intrinsics/[0-9]\"|null|true|false|\\[\\]",
+    "|\\[(-?0\\.[0-9]{1,3}(e-?[0-9])?, ?){3,7}-?0\\.[0-9]{1,3}\\])",
     " ?,?){0,9}\\}"
 );
 
@@ -216,6 +275,7 @@ fn read_parses_the_file_with_from_json_str() {
         cx: -4.0,
         cy: 9.0,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     };
     k.write(&p).unwrap();
     assert_eq!(std::fs::read_to_string(&p).unwrap(), k.to_json());
@@ -501,6 +561,7 @@ fn recording_open_reports_the_parsers_errors_on_its_times_file() {
         cx: 1.0,
         cy: 1.0,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     }
     .write(dir.join("intrinsics.json"))
     .unwrap();

@@ -286,6 +286,7 @@ fn small_k() -> Intrinsics {
         cx: 160.0,
         cy: 120.0,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     }
 }
 
@@ -403,6 +404,7 @@ fn a_direct_image_scans_as_the_surface_its_mirror_shows() {
     // The flipped image read as mirrored is the mirror image: its points at −x.
     let as_mirrored = Intrinsics {
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
         ..kd
     };
     let wrong = scan_mesh(&flipped, &as_mirrored, None, &ScanOptions::default()).unwrap();
@@ -426,6 +428,60 @@ fn a_direct_image_scans_as_the_surface_its_mirror_shows() {
         b.iter().any(|p| p[0].abs() > 0.1),
         "a scene that is not flat in x"
     );
+}
+
+/// Distance from `p` to the nearest surface of [`render`]'s scene: the sphere, the blob, the
+/// floor (y = −1) and the wall (z = 4).
+fn off_scene(p: &Point3<f64>) -> f64 {
+    [
+        (distance(p, &C.into()) - R).abs(),
+        (distance(p, &BLOB.into()) - 0.05).abs(),
+        (p.y + 1.0).abs(),
+        (p.z - 4.0).abs(),
+    ]
+    .into_iter()
+    .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_distorted_image_scans_onto_the_surfaces_the_lens_saw() {
+    // A wide lens with barrel distortion (about 9 % at the image's corners) and decentring.
+    let lens = symcorr_kinect::Distortion::from_opencv(&[-0.25, 0.07, 0.001, -0.0005]).unwrap();
+    let k = Intrinsics {
+        distortion: Some(lens),
+        ..small_k()
+    };
+    k.validate().unwrap();
+    let frame = render(&k);
+    let keep_floor = ScanOptions {
+        remove_floor: false,
+        components: symcorr_kinect::ComponentFilter::All,
+        ..ScanOptions::default()
+    };
+    let scan = scan_mesh(&frame, &k, None, &keep_floor).unwrap();
+    assert!(scan.mesh.num_vertices() > 320 * 240 / 2);
+    for (i, p) in scan.mesh.positions.iter().enumerate() {
+        let p = Point3::from(*p);
+        // Depths are whole millimetres; a ray's point is off its surface by at most that
+        // over the cosine of the grazing floor, far from the camera.
+        assert!(off_scene(&p) < 0.01, "vertex {i} at {p:?}");
+        // Back onto its pixel (the scan's rays are single precision: 10⁻⁷ of a ray).
+        let [u, v] = k.project(&p);
+        let id = scan.pixel_ids[i];
+        assert!(
+            (u - f64::from(id % k.width)).abs() < 1e-4
+                && (v - f64::from(id / k.width)).abs() < 1e-4
+        );
+    }
+    // Read as a pinhole camera, the floor towards the image's corners is centimetres off.
+    let pinhole = scan_mesh(&frame, &small_k(), None, &keep_floor).unwrap();
+    let worst = pinhole
+        .mesh
+        .positions
+        .iter()
+        .map(|p| off_scene(&Point3::from(*p)))
+        .fold(0.0, f64::max);
+    assert!(worst > 0.05, "{worst}");
 }
 
 #[test]

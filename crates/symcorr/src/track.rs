@@ -72,8 +72,8 @@ use std::time::Instant;
 use symcorr_attach::{HeatMesh, PoorFitPolicy};
 use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
 use symcorr_kinect::{
-    limb_swap_evidence, scan_mesh, DepthFrame, DepthSource, Intrinsics, JointTrack, LimbPair,
-    ScanMesh, ScanOptions, SkeletonFilter, SkipReason,
+    limb_swap_evidence, scan_mesh_with_rays, DepthFrame, DepthSource, Intrinsics, JointTrack,
+    LimbPair, PixelRays, ScanMesh, ScanOptions, SkeletonFilter, SkipReason,
 };
 use symcorr_skeleton::Skeleton;
 
@@ -241,7 +241,8 @@ pub struct Observer<'a> {
     /// The template and its articulated tables: each frame's search index is built against
     /// them here ([`ArticulatedTables::target_against`]), not on the fitter's thread.
     template: (&'a PreparedMesh, Arc<ArticulatedTables>),
-    intrinsics: Intrinsics,
+    /// The camera's pixel rays, found once (with a lens model, a table).
+    rays: PixelRays,
     joints: JointTrack,
     options: TrackOptions,
     filter: Option<SkeletonFilter>,
@@ -300,7 +301,7 @@ impl<'a> Tracker<'a> {
             observer: Observer {
                 pipeline: pipeline.clone(),
                 template: (template, Arc::clone(&template_tables)),
-                intrinsics,
+                rays: intrinsics.pixel_rays(),
                 joints,
                 filter: options.smoothing.map(SkeletonFilter::new),
                 options: options.clone(),
@@ -576,7 +577,7 @@ impl Observer<'_> {
             skeleton = f.filter(time_s, &skeleton);
         }
         let t = Instant::now();
-        let scan = scan_mesh(depth, &self.intrinsics, Some(&skeleton), &self.options.scan)
+        let scan = scan_mesh_with_rays(depth, &self.rays, Some(&skeleton), &self.options.scan)
             .map_err(|e| e.to_string())?;
         let t_scan = t.elapsed().as_secs_f64();
         // Continuity is judged against what was used, the corrected and smoothed joints.

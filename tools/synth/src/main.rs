@@ -209,6 +209,16 @@ enum Cmd {
         /// instead of mirrored as the Kinect SDK's.
         #[arg(long)]
         unmirrored: bool,
+        /// A lens distortion (OpenCV's `distCoeffs`: k1,k2,p1,p2[,k3[,k4,k5,k6]]), applied by
+        /// the virtual camera and written to intrinsics.json.
+        #[arg(
+            long,
+            value_name = "K1,K2,P1,P2[,K3[,K4,K5,K6]]",
+            value_delimiter = ',',
+            allow_negative_numbers = true,
+            conflicts_with = "oni"
+        )]
+        distortion: Option<Vec<f64>>,
     },
     /// Write a recording folder's depth frames, times and intrinsics as an OpenNI2 recording
     /// (.oni) that OpenNI2's file player plays (`symcorr track` reads either).
@@ -488,10 +498,20 @@ fn run(cli: Cli) -> Result<()> {
             out,
             oni,
             unmirrored,
+            distortion,
         } => {
             let mut intrinsics = kinect_v1_intrinsics(width, height)?;
             if unmirrored {
                 intrinsics.mirroring = symcorr_kinect::Mirroring::Direct;
+            }
+            if let Some(c) = distortion {
+                intrinsics.distortion = Some(
+                    symcorr_kinect::Distortion::from_opencv(&c)
+                        .map_err(|e| SynthError::Invalid(format!("--distortion: {e}")))?,
+                );
+                intrinsics
+                    .validate()
+                    .map_err(|e| SynthError::Invalid(format!("--distortion: {e}")))?;
             }
             let camera = Camera {
                 intrinsics,

@@ -206,6 +206,7 @@ fn a_smaller_image_is_the_native_one_scaled_down() {
         cx: 4.0 * k.cx + 2.0,
         cy: 4.0 * k.cy + 2.0,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     };
     let (a, b) = (
         k.unproject(37.0, 81.0, 1.0),

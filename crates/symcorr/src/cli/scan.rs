@@ -236,6 +236,7 @@ fn stream_intrinsics(
         cx: w / 2.0,
         cy: h / 2.0,
         mirroring: symcorr_kinect::Mirroring::Mirrored,
+        distortion: None,
     }
 }
 
@@ -340,6 +341,7 @@ mod tests {
             cx: 80.0,
             cy: 60.0,
             mirroring: symcorr_kinect::Mirroring::Mirrored,
+            distortion: None,
         }
     }
 
