@@ -79,7 +79,8 @@ pub enum Mirroring {
 /// ```
 ///
 /// (OpenCV's `projectPoints`; the Azure Kinect SDK's `K4A_CALIBRATION_LENS_DISTORTION_MODEL_
-/// BROWN_CONRADY`, which its devices report, is the same with its `codx = cody = 0`). The
+/// BROWN_CONRADY`, which its devices report, is the same when its centre of distortion
+/// `codx`, `cody` is zero; no other centre is modelled). The
 /// coefficients are those of the image as stored: reversing its columns negates `p2`
 /// ([`Intrinsics::columns_reversed`]). Thin-prism and tilted-sensor terms (OpenCV's 12- and
 /// 14-coefficient forms) are not modelled.
@@ -104,6 +105,10 @@ pub struct Distortion {
 /// this, in normalised coordinates (10⁻⁷ px at a focal length of 1000 px; the step that gets
 /// there usually lands far closer, the method converging quadratically).
 const UNDISTORT_TOLERANCE: f64 = 1e-10;
+
+/// Largest share of the image's corner radius by which [`Intrinsics::validate`] accepts the
+/// tangential terms to move it (`3·max(|p1|, |p2|)·r`; depth cameras' lenses: under 1 %).
+pub const MAX_TANGENTIAL_SHARE: f64 = 0.1;
 
 /// At most this many Newton steps in [`Distortion::undistort`] (from the distorted point it
 /// takes 3–6 on the lenses of depth cameras).
@@ -207,31 +212,51 @@ impl Distortion {
     /// [`Distortion::undistort`] with Newton's method started at `start` (a neighbouring
     /// pixel's point: two or three steps instead of six or more for a strong lens).
     pub(crate) fn undistort_from(&self, ad: f64, bd: f64, start: [f64; 2]) -> Option<[f64; 2]> {
-        let [mut a, mut b] = start;
+        // Newton's method, each step halved until it brings the distorted point nearer (a
+        // full step almost always does; halving keeps a strong lens from overshooting).
+        let residual = |[a, b]: [f64; 2]| {
+            self.distort_with_jacobian(a, b).map(|([fa, fb], j)| {
+                let e = [fa - ad, fb - bd];
+                (e, e[0].hypot(e[1]), j)
+            })
+        };
+        let mut x = start;
+        let (mut e, mut norm, mut j) = residual(x)?;
         for _ in 0..UNDISTORT_MAX_STEPS {
-            let ([fa, fb], [j00, j01, j10, j11]) = self.distort_with_jacobian(a, b)?;
-            let (ea, eb) = (fa - ad, fb - bd);
+            let [j00, j01, j10, j11] = j;
             let det = j00 * j11 - j01 * j10;
-            if ea.abs().max(eb.abs()) <= UNDISTORT_TOLERANCE {
+            if e[0].abs().max(e[1].abs()) <= UNDISTORT_TOLERANCE {
                 // A root where the model folds is not the point the lens shows there.
-                return (det > 0.0).then_some([a, b]);
+                return (det > 0.0).then_some(x);
             }
             if det == 0.0 || !det.is_finite() {
                 return None;
             }
-            a -= (j11 * ea - j01 * eb) / det;
-            b -= (j00 * eb - j10 * ea) / det;
-            if !(a.is_finite() && b.is_finite()) {
-                return None;
+            let step = [
+                (j11 * e[0] - j01 * e[1]) / det,
+                (j00 * e[1] - j10 * e[0]) / det,
+            ];
+            let mut t = 1.0;
+            loop {
+                let next = [x[0] - t * step[0], x[1] - t * step[1]];
+                match residual(next) {
+                    Some((ne, nn, nj)) if nn < norm => {
+                        (x, e, norm, j) = (next, ne, nn, nj);
+                        break;
+                    }
+                    _ if t > 1e-6 => t *= 0.5,
+                    _ => return None,
+                }
             }
         }
         None
     }
 
-    /// Checks that the model describes the whole `width`×`height` image of `k`: the radial
-    /// map `r ↦ r·R(r²)` increases from the centre until it is past every corner of the image
-    /// (it does not fold inside the image), and every pixel on the image's border, every
-    /// eighth, undistorts ([`Distortion::undistort`]).
+    /// Checks that the model describes the whole `width`×`height` image of `k`: the tangential
+    /// terms are small ([`MAX_TANGENTIAL_SHARE`]), the radial map `r ↦ r·R(r²)` increases
+    /// from the centre until it is past every corner of the image (it does not fold inside the
+    /// image), and every pixel on the image's border, every eighth, undistorts
+    /// ([`Distortion::undistort`]).
     fn check_covers(&self, k: &Intrinsics) -> Result<(), String> {
         let (w, h) = (f64::from(k.width) - 1.0, f64::from(k.height) - 1.0);
         let normalised = |u: f64, v: f64| ((u - k.cx) / k.fx, (v - k.cy) / k.fy);
@@ -245,6 +270,17 @@ impl Distortion {
             })
             .fold(0.0, f64::max);
         let p = self.tangential[0].abs().max(self.tangential[1].abs());
+        // Decentring moves a lens's image by a fraction of a percent; terms that move the
+        // corner by a tenth of its radius are no calibration (a coefficient in another unit).
+        if 3.0 * p * corner > MAX_TANGENTIAL_SHARE {
+            return Err(format!(
+                "distortion {:?}: the tangential coefficients p1, p2 move the image's corner by \
+                 up to {:.0} % of its radius (at most {:.0} % accepted)",
+                self.to_opencv(),
+                300.0 * p * corner,
+                100.0 * MAX_TANGENTIAL_SHARE
+            ));
+        }
         let reach = corner + 3.0 * p * corner * corner + 1e-9;
         let (mut r, step) = (0.0f64, 1e-3);
         let mut previous = 0.0;
@@ -482,7 +518,8 @@ impl Intrinsics {
     /// `1..=`[`MAX_IMAGE_SIDE`], focal lengths finite and in [`FOCAL_RANGE_PX`], and the
     /// principal point finite and inside the image or at most half its size outside it; a
     /// [`Distortion`]'s coefficients finite and its model one that describes the whole image
-    /// (its radial map does not fold inside the image's corners, and the border's pixels
+    /// (its radial map does not fold inside the image's corners, its tangential terms move the
+    /// corner by at most [`MAX_TANGENTIAL_SHARE`] of its radius, and the border's pixels
     /// undistort).
     ///
     /// Errors: [`KinectError::Intrinsics`], naming the value and what was expected.

@@ -16,7 +16,11 @@
 //! the sensor's left and +y up, so a position `(x, y, z)` becomes `(−x, −y, z) / 1000` metres: a
 //! turn by half a turn about the optical axis, not a mirror, so the subject's left stays their
 //! left. The SDK's depth images are not mirrored: a recording folder made from them keeps them as
-//! they are with `"mirrored": false` in its intrinsics ([`crate::Mirroring::Direct`]).
+//! they are with `"mirrored": false` in its intrinsics ([`crate::Mirroring::Direct`]), and the
+//! device's depth calibration (`k4a_calibration_intrinsic_parameters_t`) gives
+//! `"distortion": [k1, k2, p1, p2, k3, k4, k5, k6]` ([`crate::Distortion`]; the SDK's
+//! Brown–Conrady model is OpenCV's when its centre of distortion `codx`, `cody` is zero, and
+//! symcorr models no other).
 //!
 //! A frame's time is its `timestamp_usec` (the device clock, in µs; the depth frames' times of a
 //! recording folder made from the same capture are on that clock). The joints map onto the

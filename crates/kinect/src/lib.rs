@@ -51,7 +51,8 @@
 //!   `time_s = frame / 30`; SDK text dumps' untracked `0 0 0` joints are interpolated.
 //! * One projection convention ([`Intrinsics::project`]): the Kinect SDK v1's
 //!   `u = cx + fx·x/z`, `v = cy − fy·y/z` (its mirrored depth image), or `u = cx − fx·x/z` for
-//!   an image as the lens forms it ([`Mirroring::Direct`]: Azure Kinect, RealSense);
+//!   an image as the lens forms it ([`Mirroring::Direct`]: Azure Kinect, RealSense), through
+//!   OpenCV's lens model when the intrinsics have one ([`Distortion`]);
 //!   [`Intrinsics::kinect_v1`] is the nominal 571.26 px focal length at 640×480.
 //! * Every failure is a typed [`KinectError`] naming the file and the line (text formats) or
 //!   frame (JSON); nothing panics on bad input (fuzzed: `crates/kinect/fuzz`). Writes are atomic.

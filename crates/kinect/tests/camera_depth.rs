@@ -427,6 +427,8 @@ fn distortion_json_takes_opencvs_vectors() {
         (r#","distortion":null"#, "invalid type: null"),
         (r#","distortion":[0.1,"x",0.0,0.0]"#, "invalid type"),
         (r#","distortion":[-0.9,0.0,0.0,0.0]"#, "folds"),
+        // Decentring of 0.08 moves the corner by a fifth of its radius: another unit, not a lens.
+        (r#","distortion":[0.09,-0.27,0.08,0.0,0.09]"#, "tangential"),
     ] {
         let e = read(tail).unwrap_err();
         assert!(matches!(e, KinectError::Json { .. }), "{e}");
