@@ -1777,6 +1777,58 @@ fn track_head_options_are_checked_recorded_and_kept_on_resume() {
 /// image's columns reversed and `cx → width − 1 − cx` gives the same frames and poses. Without
 /// the key the log check refuses it, naming the key; `--intrinsics` supplies them instead.
 #[test]
+fn track_scans_through_the_lens_its_intrinsics_give() {
+    // The fixture read through a barrel lens (`--intrinsics`): every vertex of the scans
+    // `track` writes lies on a pixel's ray through that lens, not through a pinhole.
+    let dir = tempfile::tempdir().unwrap();
+    let rec = fixtures().join("../recording");
+    let k = symcorr_kinect::Intrinsics::read(rec.join("intrinsics.json")).unwrap();
+    let lens = symcorr_kinect::Distortion::from_opencv(&[-0.15, 0.03, 0.0, 0.0]).unwrap();
+    let kl = symcorr_kinect::Intrinsics {
+        distortion: Some(lens),
+        ..k
+    };
+    let path = dir.path().join("lens.json");
+    kl.write(&path).unwrap();
+    let out = dir.path().join("out");
+    let o = run(bin()
+        .arg("track")
+        .arg(&rec)
+        .args(["--joint-offset", "0.04", "--frames", "20..22", "--scans"])
+        .arg("--intrinsics")
+        .arg(&path)
+        .arg("--joints")
+        .arg(rec.join("joints.json"))
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let scan = symcorr_mesh::io::read(out.join("scans/000020.ply"))
+        .unwrap()
+        .mesh;
+    assert!(scan.num_vertices() > 1000);
+    // Off a whole pixel: the PLY's single-precision coordinates allow 10⁻⁴ px.
+    let off_pixel = |k: &symcorr_kinect::Intrinsics, p: &[f64; 3]| {
+        let [u, v] = k.project(&nalgebra::Point3::from(*p));
+        (u - u.round()).abs().max((v - v.round()).abs())
+    };
+    let through_lens = scan
+        .positions
+        .iter()
+        .map(|p| off_pixel(&kl, p))
+        .fold(0.0, f64::max);
+    assert!(
+        through_lens < 1e-3,
+        "{through_lens} px off the lens's pixels"
+    );
+    let pinhole = scan
+        .positions
+        .iter()
+        .filter(|p| off_pixel(&k, p) > 0.05)
+        .count();
+    assert!(pinhole > scan.num_vertices() / 2, "{pinhole}");
+}
+
+#[test]
 fn track_reads_a_recording_whose_depth_is_not_mirrored() {
     let dir = tempfile::tempdir().unwrap();
     let rec = fixtures().join("../recording");
