@@ -110,6 +110,16 @@ const UNDISTORT_TOLERANCE: f64 = 1e-10;
 /// tangential terms to move it (`3·max(|p1|, |p2|)·r`; depth cameras' lenses: under 1 %).
 pub const MAX_TANGENTIAL_SHARE: f64 = 0.1;
 
+/// Largest magnitude [`Intrinsics::validate`] accepts for a radial coefficient. Depth cameras'
+/// calibrations have them below 10 (the Azure Kinect's rational model: under 1); a model with
+/// larger ones bends rays sharply close to the image's centre, where the check that it does
+/// not fold samples too coarsely to be trusted.
+pub const MAX_RADIAL_COEFFICIENT: f64 = 1000.0;
+
+/// At most this many samples of the radial map in [`Intrinsics::validate`] (a lens that has
+/// not reached the image's corner by then shows too little of the image).
+const MAX_RADIAL_SAMPLES: usize = 200_000;
+
 /// At most this many Newton steps in [`Distortion::undistort`] (from the distorted point it
 /// takes 3–6 on the lenses of depth cameras).
 const UNDISTORT_MAX_STEPS: usize = 50;
@@ -122,7 +132,9 @@ impl Distortion {
     pub fn from_opencv(coefficients: &[f64]) -> Result<Distortion, String> {
         if ![4, 5, 8].contains(&coefficients.len()) {
             return Err(format!(
-                "distortion has {} coefficients: expected 4, 5 or 8 in OpenCV's order                  (k1, k2, p1, p2[, k3[, k4, k5, k6]]); thin-prism and tilted models are                  not supported",
+                "distortion has {} coefficients: expected 4, 5 or 8 in OpenCV's order \
+                 (k1, k2, p1, p2[, k3[, k4, k5, k6]]); thin-prism and tilted models are \
+                 not supported",
                 coefficients.len()
             ));
         }
@@ -252,8 +264,9 @@ impl Distortion {
         None
     }
 
-    /// Checks that the model describes the whole `width`×`height` image of `k`: the tangential
-    /// terms are small ([`MAX_TANGENTIAL_SHARE`]), the radial map `r ↦ r·R(r²)` increases
+    /// Checks that the model describes the whole `width`×`height` image of `k`: the radial
+    /// coefficients are at most [`MAX_RADIAL_COEFFICIENT`], the tangential terms are small
+    /// ([`MAX_TANGENTIAL_SHARE`]), the radial map `r ↦ r·R(r²)` increases
     /// from the centre until it is past every corner of the image (it does not fold inside the
     /// image), and every pixel on the image's border, every eighth, undistorts
     /// ([`Distortion::undistort`]).
@@ -269,6 +282,19 @@ impl Distortion {
                 a.hypot(b)
             })
             .fold(0.0, f64::max);
+        if let Some((i, k)) = self
+            .radial
+            .iter()
+            .enumerate()
+            .find(|(_, k)| k.abs() > MAX_RADIAL_COEFFICIENT)
+        {
+            return Err(format!(
+                "distortion {:?}: k{} = {k:?} is no lens calibration (at most \
+                 {MAX_RADIAL_COEFFICIENT} in magnitude accepted)",
+                self.to_opencv(),
+                i + 1
+            ));
+        }
         let p = self.tangential[0].abs().max(self.tangential[1].abs());
         // Decentring moves a lens's image by a fraction of a percent; terms that move the
         // corner by a tenth of its radius are no calibration (a coefficient in another unit).
@@ -282,11 +308,13 @@ impl Distortion {
             ));
         }
         let reach = corner + 3.0 * p * corner * corner + 1e-9;
-        let (mut r, step) = (0.0f64, 1e-3);
-        let mut previous = 0.0;
-        loop {
+        // Sampled at a two-thousandth of the corner's radius (at most 10⁻³): with radial
+        // coefficients of at most MAX_RADIAL_COEFFICIENT a fold spans several samples.
+        let step = (corner / 2000.0).clamp(1e-7, 1e-3);
+        let (mut r, mut previous) = (0.0f64, 0.0);
+        for taken in 0.. {
             r += step;
-            if r > 100.0 {
+            if taken >= MAX_RADIAL_SAMPLES {
                 return Err(format!(
                     "distortion {:?}: the lens model shows no point beyond the normalised \
                      radius {previous:.3}, inside the image (its corner is at {corner:.3})",
@@ -295,14 +323,17 @@ impl Distortion {
             }
             let Some((f, _)) = self.radial_factor(r * r) else {
                 return Err(format!(
-                    "distortion {:?}: the radial factor's denominator vanishes at the                      normalised radius {r:.3}, inside the image (its corner is at {corner:.3})",
+                    "distortion {:?}: the radial factor's denominator vanishes at the \
+                     normalised radius {r:.3}, inside the image (its corner is at {corner:.3})",
                     self.to_opencv()
                 ));
             };
             let g = r * f;
             if g.is_nan() || g <= previous {
                 return Err(format!(
-                    "distortion {:?}: the lens model folds at the normalised radius {r:.3}                      (it shows no point beyond {previous:.3}), inside the image (its corner                      is at {corner:.3}): not a calibration of this image",
+                    "distortion {:?}: the lens model folds at the normalised radius {r:.3} \
+                     (it shows no point beyond {previous:.3}), inside the image (its corner \
+                     is at {corner:.3}): not a calibration of this image",
                     self.to_opencv()
                 ));
             }
@@ -324,7 +355,8 @@ impl Distortion {
             let (a, b) = normalised(u, v);
             if self.undistort(a, b).is_none() {
                 return Err(format!(
-                    "distortion {:?}: pixel ({u}, {v}) does not undistort (Newton's method                      finds no point the lens shows there): not a calibration of this image",
+                    "distortion {:?}: pixel ({u}, {v}) does not undistort (Newton's method \
+                     finds no point the lens shows there): not a calibration of this image",
                     self.to_opencv()
                 ));
             }
@@ -517,8 +549,9 @@ impl Intrinsics {
     /// Checks that the intrinsics describe a plausible depth camera: width and height in
     /// `1..=`[`MAX_IMAGE_SIDE`], focal lengths finite and in [`FOCAL_RANGE_PX`], and the
     /// principal point finite and inside the image or at most half its size outside it; a
-    /// [`Distortion`]'s coefficients finite and its model one that describes the whole image
-    /// (its radial map does not fold inside the image's corners, its tangential terms move the
+    /// [`Distortion`]'s coefficients finite, its radial ones at most [`MAX_RADIAL_COEFFICIENT`],
+    /// and its model one that describes the whole image (its radial map does not fold inside
+    /// the image's corners, its tangential terms move the
     /// corner by at most [`MAX_TANGENTIAL_SHARE`] of its radius, and the border's pixels
     /// undistort).
     ///

@@ -429,6 +429,11 @@ fn distortion_json_takes_opencvs_vectors() {
         (r#","distortion":[-0.9,0.0,0.0,0.0]"#, "folds"),
         // Decentring of 0.08 moves the corner by a fifth of its radius: another unit, not a lens.
         (r#","distortion":[0.09,-0.27,0.08,0.0,0.09]"#, "tangential"),
+        // Found by fuzzing: coefficients of 10¹⁹ fold the model within a pixel of the centre.
+        (
+            r#","distortion":[2.0,0.0,0.001,-0.0003,6.7e19,6.7e19,6666.0,6.7e19]"#,
+            "no lens",
+        ),
     ] {
         let e = read(tail).unwrap_err();
         assert!(matches!(e, KinectError::Json { .. }), "{e}");
