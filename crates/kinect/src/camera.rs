@@ -216,7 +216,7 @@ impl Distortion {
     /// `(a_d, b_d)` on [`Distortion::distort`]. `None` where it does not converge or reaches a
     /// point where the model folds (its Jacobian's determinant is not positive) — a point
     /// outside the range the model describes. [`Intrinsics::validate`] checks that every
-    /// pixel of the image has its point.
+    /// pixel on the image's border has its point.
     pub fn undistort(&self, ad: f64, bd: f64) -> Option<[f64; 2]> {
         self.undistort_from(ad, bd, [ad, bd])
     }
@@ -268,8 +268,7 @@ impl Distortion {
     /// coefficients are at most [`MAX_RADIAL_COEFFICIENT`], the tangential terms are small
     /// ([`MAX_TANGENTIAL_SHARE`]), the radial map `r ↦ r·R(r²)` increases
     /// from the centre until it is past every corner of the image (it does not fold inside the
-    /// image), and every pixel on the image's border, every eighth, undistorts
-    /// ([`Distortion::undistort`]).
+    /// image), and every pixel on the image's border undistorts ([`Distortion::undistort`]).
     fn check_covers(&self, k: &Intrinsics) -> Result<(), String> {
         let (w, h) = (f64::from(k.width) - 1.0, f64::from(k.height) - 1.0);
         let normalised = |u: f64, v: f64| ((u - k.cx) / k.fx, (v - k.cy) / k.fy);
@@ -343,14 +342,8 @@ impl Distortion {
             previous = g;
         }
         let border = (0..k.width)
-            .step_by(8)
             .flat_map(|u| [(f64::from(u), 0.0), (f64::from(u), h)])
-            .chain(
-                (0..k.height)
-                    .step_by(8)
-                    .flat_map(|v| [(0.0, f64::from(v)), (w, f64::from(v))]),
-            )
-            .chain([(w, 0.0), (w, h)]);
+            .chain((0..k.height).flat_map(|v| [(0.0, f64::from(v)), (w, f64::from(v))]));
         for (u, v) in border {
             let (a, b) = normalised(u, v);
             if self.undistort(a, b).is_none() {
@@ -552,8 +545,8 @@ impl Intrinsics {
     /// [`Distortion`]'s coefficients finite, its radial ones at most [`MAX_RADIAL_COEFFICIENT`],
     /// and its model one that describes the whole image (its radial map does not fold inside
     /// the image's corners, its tangential terms move the
-    /// corner by at most [`MAX_TANGENTIAL_SHARE`] of its radius, and the border's pixels
-    /// undistort).
+    /// corner by at most [`MAX_TANGENTIAL_SHARE`] of its radius, and every pixel of the
+    /// border undistorts).
     ///
     /// Errors: [`KinectError::Intrinsics`], naming the value and what was expected.
     ///
@@ -639,9 +632,11 @@ impl Intrinsics {
     }
 
     /// The camera-space point (metres) seen at pixel `(u, v)` with depth `depth_m` (its z).
-    /// With a [`Distortion`], Newton's method finds the ray ([`Distortion::undistort`]); every
-    /// pixel of an image whose intrinsics validate has one, and a point outside the image where
-    /// the lens model ends gets non-finite coordinates.
+    /// With a [`Distortion`], Newton's method finds the ray ([`Distortion::undistort`]); a
+    /// point where it finds none gets non-finite coordinates. Validated intrinsics have a ray at
+    /// every pixel of the image's border (each checked) and a radial map that does not fold
+    /// inside it; the interior's pixels are not checked one by one ([`PixelRays`] reads a pixel
+    /// without a ray as no reading).
     pub fn unproject(&self, u: f64, v: f64, depth_m: f64) -> Point3<f64> {
         let Some(d) = &self.distortion else {
             let du = match self.mirroring {
@@ -829,8 +824,8 @@ impl PixelRays {
 
     /// The camera-space point seen at pixel `(u, v)` with depth `depth_m`: what
     /// [`Intrinsics::unproject`] gives there (to 10⁻⁷ of the depth with a lens model).
-    /// `None` outside the image, and with a lens model at a pixel without a ray (none for
-    /// intrinsics that validate).
+    /// `None` outside the image, and with a lens model at a pixel without a ray (validation
+    /// rules them out on the image's border).
     pub fn point(&self, u: u32, v: u32, depth_m: f64) -> Option<Point3<f64>> {
         let k = &self.intrinsics;
         if u >= k.width || v >= k.height {

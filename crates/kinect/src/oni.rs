@@ -12,7 +12,10 @@
 //! * **Intrinsics** — from the depth stream's video mode and field of view as OpenNI2 reports
 //!   them ([`Intrinsics::from_field_of_view`]: `fx = width / (2·tan(hfov/2))`, principal point
 //!   at the image centre); a recording without a field of view (OpenNI2's Dummy device) gets
-//!   the nominal Kinect v1 focal length scaled to its width.
+//!   the nominal Kinect v1 focal length scaled to its width. The image's direction from the
+//!   stream's recorded mirroring property (`xnMirror`, [`crate::oni_index::DepthStreamIndex`]):
+//!   on, or not recorded, mirrored as the Kinect SDK's; off, as the lens forms it
+//!   ([`Mirroring::Direct`]).
 //! * **Depth images** — OpenNI2's own file player ([`FilePlayback`], manual playback), read
 //!   forward: frame `i` is the next frame the player hands over whose timestamp is frame `i`'s.
 //!   Asking for an earlier frame than the last one read reopens the file and reads forward from
@@ -36,10 +39,10 @@
 //! # let _ = depth; Ok(()) }
 //! ```
 
-use crate::camera::Intrinsics;
+use crate::camera::{Intrinsics, Mirroring};
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
-use crate::oni_index::{depth_frame_times_in, OniIndexError};
+use crate::oni_index::{depth_stream_index_in, DepthStreamIndex, OniIndexError};
 use crate::openni2::{FilePlayback, StampedDepth, STATUS_TIME_OUT};
 use std::path::{Path, PathBuf};
 
@@ -79,7 +82,8 @@ impl OniRecording {
     /// increase); [`KinectError::OpenNi`] from OpenNI2.
     pub fn open(path: impl AsRef<Path>) -> Result<OniRecording, KinectError> {
         let path = path.as_ref().to_path_buf();
-        let stamps_us = index_depth_frames(&path)?;
+        let index = index_depth_stream(&path)?;
+        let stamps_us = index.times_us;
         let playback = FilePlayback::open(&path)?;
         let mode = playback.stream().video_mode()?;
         let (width, height) = match (u32::try_from(mode.width), u32::try_from(mode.height)) {
@@ -95,7 +99,15 @@ impl OniRecording {
             .stream()
             .field_of_view()
             .map(|(h, v)| (f64::from(h), f64::from(v)));
-        let intrinsics = Intrinsics::from_field_of_view(width, height, fov);
+        // OpenNI's mirroring on is the Kinect SDK's mirrored image; a recording that does not
+        // say (a Kinect through the SDK's driver, whose image is mirrored) is taken as one.
+        let intrinsics = Intrinsics {
+            mirroring: match index.mirrored {
+                Some(false) => Mirroring::Direct,
+                Some(true) | None => Mirroring::Mirrored,
+            },
+            ..Intrinsics::from_field_of_view(width, height, fov)
+        };
         intrinsics.validate()?;
         Ok(OniRecording {
             times_s: stamps_us.iter().map(|&t| t as f64 / 1e6).collect(),
@@ -249,12 +261,12 @@ fn rec_err(path: &Path, message: String) -> KinectError {
     }
 }
 
-/// The timestamps (µs) of the depth frames of an `.oni` file ([`crate::oni_index`]), errors
-/// naming the file.
-fn index_depth_frames(path: &Path) -> Result<Vec<u64>, KinectError> {
+/// The timestamps (µs) of the depth frames of an `.oni` file and its depth stream's mirroring
+/// ([`crate::oni_index`]), errors naming the file.
+fn index_depth_stream(path: &Path) -> Result<DepthStreamIndex, KinectError> {
     let file_name = path.display().to_string();
     let file = std::fs::File::open(path).map_err(|e| KinectError::io(&file_name, e))?;
-    depth_frame_times_in(file).map_err(|e| match e {
+    depth_stream_index_in(file).map_err(|e| match e {
         OniIndexError::Io(source) => KinectError::io(&file_name, source),
         e => rec_err(path, e.to_string()),
     })
@@ -275,16 +287,16 @@ mod tests {
         bytes.extend(new_data(2, 33_000, 2));
         bytes.extend(end());
         std::fs::write(&p, &bytes).unwrap();
-        assert_eq!(index_depth_frames(&p).unwrap(), vec![0, 33_000]);
+        assert_eq!(index_depth_stream(&p).unwrap().times_us, vec![0, 33_000]);
 
         std::fs::write(&p, b"PK\x03\x04 not an oni").unwrap();
-        let e = index_depth_frames(&p).unwrap_err();
+        let e = index_depth_stream(&p).unwrap_err();
         assert!(matches!(e, KinectError::Recording { .. }), "{e}");
         let e = e.to_string();
         assert!(e.starts_with(&p.display().to_string()), "{e}");
         assert!(e.contains("not an OpenNI recording"), "{e}");
 
-        let e = index_depth_frames(&dir.path().join("missing.oni")).unwrap_err();
+        let e = index_depth_stream(&dir.path().join("missing.oni")).unwrap_err();
         assert!(matches!(e, KinectError::Io { .. }), "{e}");
     }
 }

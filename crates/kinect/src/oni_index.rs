@@ -38,6 +38,7 @@ const RECORD_NODE_ADDED_1_0_0_5: u32 = 0x0C;
 pub(crate) const RECORD_NODE_ADDED: u32 = 0x0D;
 pub(crate) const RECORD_NEW_DATA: u32 = 0x0A;
 pub(crate) const RECORD_END: u32 = 0x0B;
+pub(crate) const RECORD_INT_PROPERTY: u32 = 0x03;
 /// The node type of a depth stream in a `NODE_ADDED` record.
 pub(crate) const NODE_TYPE_DEPTH: u32 = 2;
 /// The file header: `NI10`, version (u8, u8, u16, u32), max timestamp u64, max node id u32.
@@ -85,10 +86,23 @@ pub enum OniIndexError {
     Io(#[from] io::Error),
 }
 
+/// What the file says of its depth stream: the frames' timestamps and the stream's mirroring.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DepthStreamIndex {
+    /// Every depth frame's timestamp, µs, strictly increasing, at least one.
+    pub times_us: Vec<u64>,
+    /// The stream's mirroring property (OpenNI's `ONI_STREAM_PROPERTY_MIRRORING`, recorded as
+    /// the integer property `xnMirror`) as it stood at the first frame: `Some(true)` for an
+    /// image shown as in a mirror (the Kinect SDK's), `Some(false)` for the image as the lens
+    /// forms it, `None` when the recording does not say (OpenNI2's Dummy and Kinect-SDK
+    /// drivers record none).
+    pub mirrored: Option<bool>,
+}
+
 /// The timestamps (µs, strictly increasing, at least one) of the depth frames of an `.oni` file
 /// held in memory (see the [module docs](self)).
 pub fn depth_frame_times(bytes: &[u8]) -> Result<Vec<u64>, OniIndexError> {
-    walk(&mut SliceInput(bytes))
+    walk(&mut SliceInput(bytes)).map(|i| i.times_us)
 }
 
 /// [`depth_frame_times`] of the recording that `reader` holds from its byte 0 to its end (a
@@ -96,9 +110,29 @@ pub fn depth_frame_times(bytes: &[u8]) -> Result<Vec<u64>, OniIndexError> {
 /// through a buffer, seeking over the payloads, so a large recording is never read whole.
 /// The reader's position afterwards is unspecified.
 pub fn depth_frame_times_in<R: Read + Seek>(reader: R) -> Result<Vec<u64>, OniIndexError> {
+    depth_stream_index_in(reader).map(|i| i.times_us)
+}
+
+/// [`depth_frame_times_in`] with the depth stream's recorded mirroring
+/// ([`DepthStreamIndex::mirrored`]); same errors.
+pub fn depth_stream_index_in<R: Read + Seek>(reader: R) -> Result<DepthStreamIndex, OniIndexError> {
     let mut r = BufReader::new(reader);
     let len = r.seek(SeekFrom::End(0))?;
     walk(&mut ReaderInput { r, at: len, len })
+}
+
+/// [`depth_stream_index_in`] of an `.oni` file held in memory.
+///
+/// ```
+/// use symcorr_kinect::oni_index::depth_stream_index;
+/// use symcorr_kinect::{oni_write::oni_bytes, DepthFrame, Intrinsics, Mirroring};
+/// let k = Intrinsics { mirroring: Mirroring::Direct, ..Intrinsics::from_field_of_view(4, 3, None) };
+/// let frame = DepthFrame::new(4, 3, vec![1000; 12]).unwrap();
+/// let index = depth_stream_index(&oni_bytes(&k, &[0], &[frame]).unwrap()).unwrap();
+/// assert_eq!((index.times_us, index.mirrored), (vec![0], Some(false)));
+/// ```
+pub fn depth_stream_index(bytes: &[u8]) -> Result<DepthStreamIndex, OniIndexError> {
+    walk(&mut SliceInput(bytes))
 }
 
 /// Random access to the input: its length, and exact reads at a position.
@@ -164,8 +198,11 @@ fn u32_at(buf: &[u8], k: usize) -> u32 {
     u32::from_le_bytes(w)
 }
 
+/// The name of the integer property OpenNI2's recorder writes a stream's mirroring as.
+pub(crate) const MIRROR_PROPERTY: &str = "xnMirror";
+
 /// Walks the records (see the module docs for the layout).
-fn walk(input: &mut impl Input) -> Result<Vec<u64>, OniIndexError> {
+fn walk(input: &mut impl Input) -> Result<DepthStreamIndex, OniIndexError> {
     let len = input.len();
     if len < FILE_HEADER_BYTES {
         return Err(OniIndexError::NotOni);
@@ -183,6 +220,7 @@ fn walk(input: &mut impl Input) -> Result<Vec<u64>, OniIndexError> {
     };
     let mut depth_node: Option<u32> = None;
     let mut stamps: Vec<u64> = Vec::new();
+    let mut mirrored: Option<bool> = None;
     let mut pos = FILE_HEADER_BYTES;
     let mut header = [0u8; RECORD_HEADER_BYTES as usize];
     let header = &mut header[..header_bytes as usize];
@@ -219,6 +257,28 @@ fn walk(input: &mut impl Input) -> Result<Vec<u64>, OniIndexError> {
                     }
                 }
             }
+            // `INT_PROPERTY` fields: the name (u32 length with its NUL, bytes), then the
+            // value's size (u32, 8) and the value (u64). The mirroring in effect at the first
+            // frame is the stream's.
+            RECORD_INT_PROPERTY if Some(node) == depth_node && stamps.is_empty() => {
+                let name = MIRROR_PROPERTY.as_bytes();
+                let n = name.len() + 1; // with its NUL
+                if field_bytes == (4 + n + 12) as u64 {
+                    let mut f = [0u8; 4 + MIRROR_PROPERTY.len() + 1 + 12];
+                    input.read_at(field_start, &mut f)?;
+                    let value = f
+                        .get(8 + n..16 + n)
+                        .and_then(|v| <[u8; 8]>::try_from(v).ok());
+                    if u32_at(&f, 0) as usize == n
+                        && f.get(4..4 + name.len()) == Some(name)
+                        && f.get(4 + n..8 + n) == Some(&8u32.to_le_bytes()[..])
+                    {
+                        if let Some(v) = value {
+                            mirrored = Some(u64::from_le_bytes(v) != 0);
+                        }
+                    }
+                }
+            }
             RECORD_NEW_DATA if Some(node) == depth_node && field_bytes >= 12 => {
                 let mut ts = [0u8; 8];
                 input.read_at(field_start, &mut ts)?;
@@ -244,7 +304,10 @@ fn walk(input: &mut impl Input) -> Result<Vec<u64>, OniIndexError> {
     if stamps.is_empty() {
         return Err(OniIndexError::NoDepthFrames);
     }
-    Ok(stamps)
+    Ok(DepthStreamIndex {
+        times_us: stamps,
+        mirrored,
+    })
 }
 
 /// Builds `.oni` files record by record, for the tests here and in [`crate::oni`].

@@ -19,7 +19,9 @@
 //!    at the frames ahead), `xnSupportedMapOutputModes{Count,}` and `xnMapOutputMode` (width,
 //!    height, fps: the `VIDEO_MODE`, from which the player derives the stride),
 //!    `xnSupportedPixelFormats`, `xnPixelFormat` 4 (16-bit greyscale: `DEPTH_1_MM` for a depth
-//!    node), `oniPixelFormat` 100 (`DEPTH_1_MM`), **`xnCropping`** (disabled, the full image) and
+//!    node), `oniPixelFormat` 100 (`DEPTH_1_MM`), `xnMirror` (OpenNI's mirroring: 1 for the
+//!    Kinect SDK's mirrored image, 0 for one as the lens forms it, [`crate::Mirroring`]),
+//!    **`xnCropping`** (disabled, the full image) and
 //!    `xnFOV` (horizontal and vertical field of view, two f64, radians);
 //! 4. `NODE_STATE_READY`, `NODE_DATA_BEGIN` (frame count, last timestamp);
 //! 5. one `NEW_DATA` record per frame: timestamp (µs, u64), frame number (1, 2, …), and the
@@ -69,7 +71,8 @@ use crate::camera::Intrinsics;
 use crate::depth::DepthFrame;
 use crate::error::KinectError;
 use crate::oni_index::{
-    NODE_TYPE_DEPTH, RECORD_END, RECORD_MAGIC, RECORD_NEW_DATA, RECORD_NODE_ADDED,
+    MIRROR_PROPERTY, NODE_TYPE_DEPTH, RECORD_END, RECORD_INT_PROPERTY, RECORD_MAGIC,
+    RECORD_NEW_DATA, RECORD_NODE_ADDED,
 };
 use crate::recording::Recording;
 use std::io::{self, Write};
@@ -84,7 +87,6 @@ pub const PIXEL_FORMAT_DEPTH_1_MM: u64 = 100;
 /// `MAX_VALUE` written for the depth stream: the whole u16 range (module docs).
 pub const MAX_DEPTH_MM: u64 = u16::MAX as u64;
 
-const RECORD_INT_PROPERTY: u32 = 0x03;
 const RECORD_GENERAL_PROPERTY: u32 = 0x06;
 const RECORD_NODE_REMOVED: u32 = 0x07;
 const RECORD_NODE_DATA_BEGIN: u32 = 0x08;
@@ -163,14 +165,6 @@ pub enum OniWriteError {
         /// Image height, pixels.
         height: u32,
     },
-    /// Intrinsics of a [`Mirroring::Direct`](crate::Mirroring) image: an .oni recording is read
-    /// back as a mirrored image (its pixels are unprojected as the Kinect SDK's), so the file
-    /// would show the subject's left as their right.
-    #[error(
-        "the intrinsics say \"mirrored\": false, but symcorr reads an .oni file as a mirrored \
-         image (the file written here records no mirroring property)"
-    )]
-    Direct,
     /// Intrinsics with a lens [`Distortion`](crate::Distortion): an .oni file keeps a field of
     /// view, not a lens model, so its frames would be read back as a pinhole camera's.
     #[error(
@@ -223,6 +217,8 @@ struct Plan {
     fps: u32,
     /// Horizontal and vertical field of view, radians.
     fov: (f64, f64),
+    /// The image is mirrored (the Kinect SDK's; `xnMirror` 1) or as the lens forms it (0).
+    mirrored: bool,
     times_us: Vec<u64>,
     /// The bytes before the first frame record (header, node, properties, data begin).
     head: Vec<u8>,
@@ -234,9 +230,6 @@ impl Plan {
     fn new(k: &Intrinsics, times_us: &[u64]) -> Result<Plan, OniWriteError> {
         k.validate()
             .map_err(|e| OniWriteError::Intrinsics(e.to_string()))?;
-        if k.mirroring == crate::Mirroring::Direct {
-            return Err(OniWriteError::Direct);
-        }
         if k.distortion.is_some() {
             return Err(OniWriteError::Distorted);
         }
@@ -287,6 +280,7 @@ impl Plan {
             height: k.height,
             fps,
             fov,
+            mirrored: k.mirroring == crate::Mirroring::Mirrored,
             times_us: times_us.to_vec(),
             head: Vec::new(),
             frame_bytes,
@@ -357,6 +351,7 @@ impl Plan {
         general_property(&mut out, "xnSupportedPixelFormats", &8u32.to_le_bytes());
         int_property(&mut out, "xnPixelFormat", XN_PIXEL_FORMAT_GRAYSCALE_16);
         int_property(&mut out, "oniPixelFormat", PIXEL_FORMAT_DEPTH_1_MM);
+        int_property(&mut out, MIRROR_PROPERTY, u64::from(self.mirrored));
         // XnCropping: enabled (u32), x and y offset, width and height (u16). Checked to fit.
         let mut cropping = 0u32.to_le_bytes().to_vec();
         for v in [0, 0, self.width as u16, self.height as u16] {
@@ -759,13 +754,17 @@ mod tests {
             e.to_string().contains("not the image centre (2, 1.5)"),
             "{e}"
         );
+        // The image's direction is written (xnMirror) and read back.
         let direct = Intrinsics {
             mirroring: crate::Mirroring::Direct,
             distortion: None,
             ..k(4, 3)
         };
-        let e = oni_bytes(&direct, &[5, 6], &fs).unwrap_err();
-        assert!(matches!(e, OniWriteError::Direct), "{e}");
+        for (k, mirrored) in [(direct, false), (k(4, 3), true)] {
+            let b = oni_bytes(&k, &[5, 6], &fs).unwrap();
+            let index = crate::oni_index::depth_stream_index(&b).unwrap();
+            assert_eq!(index.mirrored, Some(mirrored));
+        }
         let lens = crate::Distortion::from_opencv(&[0.01, 0.0, 0.0, 0.0]).ok();
         let distorted = Intrinsics {
             distortion: lens,

@@ -410,6 +410,15 @@ impl DepthStream<'_> {
         ))
     }
 
+    /// The stream's mirroring (`ONI_STREAM_PROPERTY_MIRRORING`), if the driver reports it:
+    /// `Some(true)` for an image shown as in a mirror, the Kinect SDK's (the Kinect drivers
+    /// always report it), `Some(false)` for the image as the lens forms it. The Dummy device
+    /// reports none.
+    pub fn mirroring(&self) -> Option<bool> {
+        self.get_int(sys::ONI_STREAM_PROPERTY_MIRRORING)
+            .map(|v| v != 0)
+    }
+
     /// Starts streaming.
     pub fn start(&mut self) -> Result<(), KinectError> {
         // SAFETY: valid stream handle.

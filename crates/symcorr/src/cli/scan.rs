@@ -206,37 +206,26 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Intrinsics of an OpenNI2 stream: explicit ones, else from the stream's field of view, else
-/// the nominal Kinect v1 focal length scaled to the frame width.
+/// Intrinsics of an OpenNI2 stream: explicit ones, else from the stream's field of view
+/// ([`Intrinsics::from_field_of_view`]: without one, the nominal Kinect v1 focal length scaled
+/// to the frame width) and its mirroring property (not reported: mirrored, as a Kinect's).
 #[cfg_attr(not(feature = "openni2"), allow(dead_code))]
 fn stream_intrinsics(
     explicit: Option<Intrinsics>,
     frame: &DepthFrame,
     fov: Option<(f32, f32)>,
+    mirrored: Option<bool>,
 ) -> Intrinsics {
     if let Some(k) = explicit {
         return k;
     }
-    let (w, h) = (f64::from(frame.width), f64::from(frame.height));
-    let (fx, fy) = match fov {
-        Some((hf, vf)) if hf > 0.0 && vf > 0.0 => (
-            0.5 * w / (f64::from(hf) / 2.0).tan(),
-            0.5 * h / (f64::from(vf) / 2.0).tan(),
-        ),
-        _ => {
-            let k = Intrinsics::kinect_v1();
-            (k.fx * w / 640.0, k.fy * w / 640.0)
-        }
-    };
+    let fov = fov.map(|(h, v)| (f64::from(h), f64::from(v)));
     Intrinsics {
-        width: frame.width,
-        height: frame.height,
-        fx,
-        fy,
-        cx: w / 2.0,
-        cy: h / 2.0,
-        mirroring: symcorr_kinect::Mirroring::Mirrored,
-        distortion: None,
+        mirroring: match mirrored {
+            Some(false) => symcorr_kinect::Mirroring::Direct,
+            Some(true) | None => symcorr_kinect::Mirroring::Mirrored,
+        },
+        ..Intrinsics::from_field_of_view(frame.width, frame.height, fov)
     }
 }
 
@@ -280,6 +269,7 @@ fn openni_frames(
     };
     let mut stream = device.depth_stream().map_err(err)?;
     let fov = stream.field_of_view();
+    let mirroring = stream.mirroring();
     stream.start().map_err(err)?;
     let first = stream.read_frame(5000).map_err(err)?;
     let t0 = first.timestamp_us;
@@ -301,7 +291,7 @@ fn openni_frames(
     while frames.len() < a.fuse {
         frames.push(stream.read_frame(5000).map_err(err)?.depth);
     }
-    let k = stream_intrinsics(explicit, &frames[0], fov);
+    let k = stream_intrinsics(explicit, &frames[0], fov, mirroring);
     Ok((frames, k))
 }
 
@@ -516,9 +506,18 @@ mod tests {
     #[test]
     fn fov_gives_the_pinhole_focal_length() {
         let f = DepthFrame::new(640, 480, vec![0; 640 * 480]).unwrap();
-        let k = stream_intrinsics(None, &f, Some((58.5f32.to_radians(), 45.6f32.to_radians())));
+        let k = stream_intrinsics(
+            None,
+            &f,
+            Some((58.5f32.to_radians(), 45.6f32.to_radians())),
+            None,
+        );
         assert!((k.fx - 571.26).abs() < 1.0, "{}", k.fx);
-        let nominal = stream_intrinsics(None, &f, None);
+        let nominal = stream_intrinsics(None, &f, None, None);
         assert_eq!(nominal, Intrinsics::kinect_v1());
+        // A stream whose mirroring is off is read as the lens forms it.
+        let direct = stream_intrinsics(None, &f, None, Some(false));
+        assert_eq!(direct.mirroring, symcorr_kinect::Mirroring::Direct);
+        assert_eq!(stream_intrinsics(None, &f, None, Some(true)), nominal);
     }
 }
