@@ -97,10 +97,11 @@ impl DepthSource {
         }
     }
 
-    /// Replaces the camera's intrinsics with `k` — a calibration of the camera, or the image's
-    /// direction ([`Mirroring`](crate::Mirroring)) of an `.oni` stream, which is read as
-    /// mirrored with its principal point at the centre and its focal length from the field of
-    /// view. Frames are then unprojected with `k`.
+    /// Replaces the camera's intrinsics with `k` — a calibration of the camera (an `.oni`
+    /// stream is read with its principal point at the centre, its focal length from the field
+    /// of view and its recorded mirroring), or the image's direction
+    /// ([`Mirroring`](crate::Mirroring)) of a stream that recorded none. Frames are then
+    /// unprojected with `k`.
     ///
     /// Errors: [`KinectError::Intrinsics`] when `k` does not validate or describes another
     /// image size than the recording's frames (nothing is replaced then).

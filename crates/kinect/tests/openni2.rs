@@ -129,6 +129,8 @@ fn written_oni_plays_every_frame(path: &std::path::Path) {
     );
     let (hf, vf) = playback.stream().field_of_view().unwrap();
     assert!((f64::from(hf) - 1.02).abs() < 1e-6 && (f64::from(vf) - 0.80).abs() < 1e-6);
+    // The recorded mirroring (xnMirror) is the stream's property for OpenNI2's player too.
+    assert_eq!(playback.stream().mirroring(), Some(true));
     for (i, (t, f)) in times.iter().zip(&frames).enumerate() {
         let got = playback.read_frame(2000).unwrap();
         assert_eq!(got.timestamp_us, *t, "frame {i}");
@@ -162,4 +164,24 @@ fn written_oni_plays_every_frame(path: &std::path::Path) {
     for i in [0, 1, 4, 2, 5] {
         assert!(rec.frame(i).unwrap() == frames[i], "frame {i}");
     }
+    assert_eq!(
+        rec.intrinsics().mirroring,
+        symcorr_kinect::Mirroring::Mirrored
+    );
+    drop(rec);
+
+    // A camera whose image is not mirrored: written so, played so, read so.
+    let direct = Intrinsics {
+        mirroring: symcorr_kinect::Mirroring::Direct,
+        ..k
+    };
+    write_oni(path, &direct, &times, |i| Ok(frames[i].clone())).unwrap();
+    let playback = FilePlayback::open(path).unwrap();
+    assert_eq!(playback.stream().mirroring(), Some(false));
+    drop(playback);
+    let rec = OniRecording::open(path).unwrap();
+    assert_eq!(
+        rec.intrinsics().mirroring,
+        symcorr_kinect::Mirroring::Direct
+    );
 }

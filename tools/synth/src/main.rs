@@ -202,7 +202,7 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
         /// Also write the depth frames as an OpenNI2 recording (.oni) at this path.
-        #[arg(long, value_name = "FILE", conflicts_with = "unmirrored")]
+        #[arg(long, value_name = "FILE")]
         oni: Option<PathBuf>,
         /// Write the depth images as the lens forms them (`"mirrored": false` in
         /// intrinsics.json), as the Azure Kinect and Orbbec SDKs and RealSense deliver them,

@@ -54,8 +54,8 @@ pub struct TrackArgs {
     #[arg(long)]
     pub joints: PathBuf,
     /// The depth camera's intrinsics (symcorr.intrinsics/1), replacing the recording's: a
-    /// calibration, or `"mirrored": false` for an .oni file of a camera whose depth is not
-    /// mirrored (an .oni is read as mirrored, its focal length from its field of view).
+    /// calibration (an .oni file gives a field of view and its recorded mirroring only), or
+    /// `"mirrored": false` for an .oni file whose stream recorded no mirroring property.
     #[arg(long, value_name = "K.json")]
     pub intrinsics: Option<PathBuf>,
     /// Output folder.
