@@ -424,6 +424,52 @@ mod tests {
         bytes
     }
 
+    /// An `INT_PROPERTY` record as OpenNI2's recorder writes one: name with its NUL, value size
+    /// 8, value.
+    fn int_property(node: u32, name: &str, value: u64) -> Vec<u8> {
+        let mut f = (name.len() as u32 + 1).to_le_bytes().to_vec();
+        f.extend(name.as_bytes());
+        f.push(0);
+        f.extend(8u32.to_le_bytes());
+        f.extend(value.to_le_bytes());
+        record(super::RECORD_INT_PROPERTY, node, &f, &[])
+    }
+
+    #[test]
+    fn the_depth_streams_mirroring_is_the_one_recorded_before_its_first_frame() {
+        let with = |records: &[Vec<u8>]| {
+            let mut bytes = file_header();
+            bytes.extend(node_added(1, "Image", 3));
+            bytes.extend(node_added(2, "Depth", NODE_TYPE_DEPTH));
+            for r in records {
+                bytes.extend(r);
+            }
+            let slice = depth_stream_index(&bytes).unwrap();
+            assert_eq!(depth_stream_index_in(Cursor::new(&bytes)).unwrap(), slice);
+            slice.mirrored
+        };
+        let frame = |t| new_data(2, t, 1);
+        assert_eq!(with(&[frame(0)]), None);
+        assert_eq!(
+            with(&[int_property(2, "xnMirror", 0), frame(0)]),
+            Some(false)
+        );
+        assert_eq!(
+            with(&[int_property(2, "xnMirror", 1), frame(0)]),
+            Some(true)
+        );
+        // The last value before the first frame; later changes, other nodes' and other
+        // properties are not the stream's.
+        let (off, on) = (
+            int_property(2, "xnMirror", 0),
+            int_property(2, "xnMirror", 1),
+        );
+        assert_eq!(with(&[on.clone(), off.clone(), frame(0)]), Some(false));
+        assert_eq!(with(&[frame(0), off.clone(), frame(5)]), None);
+        assert_eq!(with(&[int_property(1, "xnMirror", 0), frame(0)]), None);
+        assert_eq!(with(&[int_property(2, "xnMirrorX", 0), frame(0)]), None);
+    }
+
     #[test]
     fn the_index_keeps_the_depth_nodes_frames_up_to_the_end_record() {
         let bytes = sample();
