@@ -614,7 +614,7 @@ pub fn scan_mesh(
     skeleton: Option<&Skeleton>,
     opts: &ScanOptions,
 ) -> Result<ScanMesh, KinectError> {
-    opts.validate()?;
+    // Checked before the rays are found: a lens's table has a ray per pixel of `k`.
     k.validate()?;
     check_frame_size(frame, k)?;
     scan_mesh_with_rays(frame, &k.pixel_rays(), skeleton, opts)
