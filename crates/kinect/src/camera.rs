@@ -78,12 +78,11 @@ pub enum Mirroring {
 /// b_d = b·R + p1·(r² + 2b²) + 2·p2·a·b          / (1 + k4·r² + k5·r⁴ + k6·r⁶)
 /// ```
 ///
-/// (OpenCV's `projectPoints`; the Azure Kinect SDK's `K4A_CALIBRATION_LENS_DISTORTION_MODEL_
-/// BROWN_CONRADY`, which its devices report, is the same when its centre of distortion
-/// `codx`, `cody` is zero; no other centre is modelled). The
-/// coefficients are those of the image as stored: reversing its columns negates `p2`
-/// ([`Intrinsics::columns_reversed`]). Thin-prism and tilted-sensor terms (OpenCV's 12- and
-/// 14-coefficient forms) are not modelled.
+/// (OpenCV's `projectPoints`; the model the Azure Kinect SDK's devices report,
+/// `K4A_CALIBRATION_LENS_DISTORTION_MODEL_BROWN_CONRADY`, is the same when its centre of
+/// distortion `codx`, `cody` is zero; no other centre is modelled). The coefficients are those
+/// of the image as stored: reversing its columns negates `p2` ([`Intrinsics::columns_reversed`]).
+/// Thin-prism and tilted-sensor terms (OpenCV's 12- and 14-coefficient forms) are not modelled.
 ///
 /// ```
 /// use symcorr_kinect::Distortion;
@@ -266,9 +265,9 @@ impl Distortion {
 
     /// Checks that the model describes the whole `width`×`height` image of `k`: the radial
     /// coefficients are at most [`MAX_RADIAL_COEFFICIENT`], the tangential terms are small
-    /// ([`MAX_TANGENTIAL_SHARE`]), the radial map `r ↦ r·R(r²)` increases
-    /// from the centre until it is past every corner of the image (it does not fold inside the
-    /// image), and every pixel on the image's border undistorts ([`Distortion::undistort`]).
+    /// ([`MAX_TANGENTIAL_SHARE`]), the radial map `r ↦ r·R(r²)` increases from the centre until
+    /// it is past every corner of the image (it does not fold inside the image), and every
+    /// pixel on the image's border undistorts ([`Distortion::undistort`]).
     fn check_covers(&self, k: &Intrinsics) -> Result<(), String> {
         let (w, h) = (f64::from(k.width) - 1.0, f64::from(k.height) - 1.0);
         let normalised = |u: f64, v: f64| ((u - k.cx) / k.fx, (v - k.cy) / k.fy);
@@ -544,9 +543,8 @@ impl Intrinsics {
     /// principal point finite and inside the image or at most half its size outside it; a
     /// [`Distortion`]'s coefficients finite, its radial ones at most [`MAX_RADIAL_COEFFICIENT`],
     /// and its model one that describes the whole image (its radial map does not fold inside
-    /// the image's corners, its tangential terms move the
-    /// corner by at most [`MAX_TANGENTIAL_SHARE`] of its radius, and every pixel of the
-    /// border undistorts).
+    /// the image's corners, its tangential terms move the corner by at most
+    /// [`MAX_TANGENTIAL_SHARE`] of its radius, and every pixel of the border undistorts).
     ///
     /// Errors: [`KinectError::Intrinsics`], naming the value and what was expected.
     ///
@@ -850,7 +848,8 @@ impl PixelRays {
 
 impl Intrinsics {
     /// Every pixel's ray ([`PixelRays`]): for a lens model a table of `width × height` rays
-    /// (8 bytes a pixel), computed here (about 35 ms at 640×480); for a pinhole camera nothing.
+    /// (8 bytes a pixel), computed here (about 30 ms at 640×480); for a pinhole camera nothing.
+    /// For intrinsics that validate (the table is `width × height`).
     pub fn pixel_rays(&self) -> PixelRays {
         let table = self.distortion.map(|lens| {
             let (w, h) = (self.width as usize, self.height as usize);
