@@ -960,9 +960,10 @@ impl Prepared {
 /// (pixels; ``width``/``height`` optional, and then must match the image; ``mirrored``
 /// optional, ``False`` for an image as the lens forms it, not mirrored as the Kinect SDK's;
 /// ``distortion`` optional, OpenCV's ``distCoeffs``: 4, 5 or 8 numbers ``k1, k2, p1, p2[, k3[,
-/// k4, k5, k6]]``) or the path of a symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or a ``(20, 3)``
-/// array in camera space, metres. Returns vertices ``float64 (n, 3)`` (camera space, metres),
-/// faces ``int64 (m, 3)`` and per vertex its pixel id ``v * w + u`` (``int64 (n,)``).
+/// k4, k5, k6]]``) or the path of a symcorr.intrinsics/1 file; ``joints`` a dict name → xyz or
+/// a ``(20, 3)`` array in camera space, metres. Returns vertices ``float64 (n, 3)`` (camera
+/// space, metres), faces ``int64 (m, 3)`` and per vertex its pixel id ``v * w + u``
+/// (``int64 (n,)``).
 ///
 /// Example::
 ///

@@ -126,7 +126,10 @@ pub fn depth_stream_index_in<R: Read + Seek>(reader: R) -> Result<DepthStreamInd
 /// ```
 /// use symcorr_kinect::oni_index::depth_stream_index;
 /// use symcorr_kinect::{oni_write::oni_bytes, DepthFrame, Intrinsics, Mirroring};
-/// let k = Intrinsics { mirroring: Mirroring::Direct, ..Intrinsics::from_field_of_view(4, 3, None) };
+/// let k = Intrinsics {
+///     mirroring: Mirroring::Direct,
+///     ..Intrinsics::from_field_of_view(4, 3, None)
+/// };
 /// let frame = DepthFrame::new(4, 3, vec![1000; 12]).unwrap();
 /// let index = depth_stream_index(&oni_bytes(&k, &[0], &[frame]).unwrap()).unwrap();
 /// assert_eq!((index.times_us, index.mirrored), (vec![0], Some(false)));
