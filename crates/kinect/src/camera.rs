@@ -69,6 +69,25 @@ pub enum Mirroring {
     Direct,
 }
 
+impl Mirroring {
+    /// The direction of an OpenNI stream whose mirroring property (`xnMirror` in a recording,
+    /// `ONI_STREAM_PROPERTY_MIRRORING` on a device) is `mirrored`: on is the Kinect SDK's
+    /// mirrored image, off the image as the lens forms it; a stream that reports none (a
+    /// Kinect through the SDK's driver, whose image is mirrored) is taken as mirrored.
+    ///
+    /// ```
+    /// use symcorr_kinect::Mirroring;
+    /// assert_eq!(Mirroring::from_openni(Some(false)), Mirroring::Direct);
+    /// assert_eq!(Mirroring::from_openni(None), Mirroring::Mirrored);
+    /// ```
+    pub fn from_openni(mirrored: Option<bool>) -> Mirroring {
+        match mirrored {
+            Some(false) => Mirroring::Direct,
+            Some(true) | None => Mirroring::Mirrored,
+        }
+    }
+}
+
 /// Lens distortion in OpenCV's camera model (the "rational" model; Brown–Conrady, OpenCV's
 /// and ROS's `plumb_bob`, is `k4 = k5 = k6 = 0`). A normalised, undistorted image point
 /// `(a, b)` (module docs) with `r² = a² + b²` is seen at
@@ -647,9 +666,16 @@ impl Intrinsics {
                 depth_m,
             );
         };
-        let [a, b] = d
+        let ray = d
             .undistort((u - self.cx) / self.fx, (v - self.cy) / self.fy)
             .unwrap_or([f64::NAN; 2]);
+        self.point_on_ray(ray, depth_m)
+    }
+
+    /// The camera-space point at depth `depth_m` on the ray of the stored image's normalised,
+    /// undistorted coordinates `[a, b]` (module docs): `a` runs with +x in a mirrored image,
+    /// against it in a direct one; `b` runs against +y.
+    fn point_on_ray(&self, [a, b]: [f64; 2], depth_m: f64) -> Point3<f64> {
         let x = match self.mirroring {
             Mirroring::Mirrored => a,
             Mirroring::Direct => -a,
@@ -832,17 +858,10 @@ impl PixelRays {
         let Some(table) = &self.table else {
             return Some(k.unproject(f64::from(u), f64::from(v), depth_m));
         };
-        let [a, b] = table
+        let ray = table
             .get(v as usize * k.width as usize + u as usize)?
             .map(f64::from);
-        if a.is_nan() {
-            return None;
-        }
-        let x = match k.mirroring {
-            Mirroring::Mirrored => a,
-            Mirroring::Direct => -a,
-        };
-        Some(Point3::new(x * depth_m, -b * depth_m, depth_m))
+        (!ray[0].is_nan()).then(|| k.point_on_ray(ray, depth_m))
     }
 }
 

@@ -99,13 +99,8 @@ impl OniRecording {
             .stream()
             .field_of_view()
             .map(|(h, v)| (f64::from(h), f64::from(v)));
-        // OpenNI's mirroring on is the Kinect SDK's mirrored image; a recording that does not
-        // say (a Kinect through the SDK's driver, whose image is mirrored) is taken as one.
         let intrinsics = Intrinsics {
-            mirroring: match index.mirrored {
-                Some(false) => Mirroring::Direct,
-                Some(true) | None => Mirroring::Mirrored,
-            },
+            mirroring: Mirroring::from_openni(index.mirrored),
             ..Intrinsics::from_field_of_view(width, height, fov)
         };
         intrinsics.validate()?;

@@ -615,9 +615,10 @@ pub fn scan_mesh(
     opts: &ScanOptions,
 ) -> Result<ScanMesh, KinectError> {
     // Checked before the rays are found: a lens's table has a ray per pixel of `k`.
+    opts.validate()?;
     k.validate()?;
     check_frame_size(frame, k)?;
-    scan_mesh_with_rays(frame, &k.pixel_rays(), skeleton, opts)
+    scan_checked(frame, &k.pixel_rays(), skeleton, opts)
 }
 
 /// [`scan_mesh`] with the camera's rays computed beforehand ([`Intrinsics::pixel_rays`]): for
@@ -630,9 +631,19 @@ pub fn scan_mesh_with_rays(
     opts: &ScanOptions,
 ) -> Result<ScanMesh, KinectError> {
     opts.validate()?;
+    rays.intrinsics().validate()?;
+    check_frame_size(frame, rays.intrinsics())?;
+    scan_checked(frame, rays, skeleton, opts)
+}
+
+/// [`scan_mesh_with_rays`] once its options, intrinsics and frame size are checked.
+fn scan_checked(
+    frame: &DepthFrame,
+    rays: &PixelRays,
+    skeleton: Option<&Skeleton>,
+    opts: &ScanOptions,
+) -> Result<ScanMesh, KinectError> {
     let k = rays.intrinsics();
-    k.validate()?;
-    check_frame_size(frame, k)?;
     let mut points = points_through(frame, rays, opts.min_depth_m, opts.max_depth_m);
     let mut report = ScanReport {
         valid_pixels: points.iter().filter(|p| p.is_some()).count(),

@@ -221,10 +221,7 @@ fn stream_intrinsics(
     }
     let fov = fov.map(|(h, v)| (f64::from(h), f64::from(v)));
     Intrinsics {
-        mirroring: match mirrored {
-            Some(false) => symcorr_kinect::Mirroring::Direct,
-            Some(true) | None => symcorr_kinect::Mirroring::Mirrored,
-        },
+        mirroring: symcorr_kinect::Mirroring::from_openni(mirrored),
         ..Intrinsics::from_field_of_view(frame.width, frame.height, fov)
     }
 }
