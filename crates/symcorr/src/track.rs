@@ -27,8 +27,10 @@
 //! 5. **Match** the template onto it with the pipeline's method — **warm-started** from the
 //!    previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by the
 //!    joints' motion, what the joints cannot say, a bone's roll and the head's twist, carried
-//!    over; fewer ICP rounds), and started afresh from the skeletons after a skipped frame or
-//!    when a joint jumped more than [`TrackOptions::max_warm_jump_m`]. The match refuses a pair
+//!    over; fewer ICP rounds, each bone's step over-relaxed,
+//!    [`symcorr_correspond::ArticulatedOptions::warm_relaxation`]), and started afresh from the
+//!    skeletons after a skipped frame or when a joint jumped more than
+//!    [`TrackOptions::max_warm_jump_m`]. The match refuses a pair
 //!    whose target point is nearer another part of the posed template
 //!    ([`TrackOptions::reciprocal_radius`]: the far cheek of a head posed turned too little
 //!    would take the near one), and a warm-started frame drops a match that moved more than

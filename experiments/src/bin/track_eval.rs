@@ -19,7 +19,9 @@
 //! jumps per template segment. `--breakdown` adds, under each frame's line, one line per segment
 //! with flips or jumps: their counts and how far the posed segment sits from the scan points
 //! showing its vertices (median, and the rigid motion between the two: a turned or a shifted
-//! fit).
+//! fit). `--projective` scores each match at the pixel its posed template vertex projects to
+//! instead of at its scan vertex: the fit's own accuracy and jumps, without the final map's
+//! choice among the scan's noisy points.
 
 use clap::Parser;
 use std::path::PathBuf;
@@ -100,6 +102,18 @@ struct Args {
     /// pairs (default: the method's; 0 turns them off).
     #[arg(long)]
     target_to_template: Option<f64>,
+    /// Over-relaxation of the ICP rounds from a warm start: each bone's step taken this many
+    /// times (default: the method's; 1: as fitted).
+    #[arg(long)]
+    warm_relaxation: Option<f64>,
+    /// One-euro filter of the joints: minimum cutoff (Hz), beta (per m/s) and derivative
+    /// cutoff (Hz), `MIN,BETA,D` (default: the tracker's).
+    #[arg(long, value_delimiter = ',')]
+    euro: Option<Vec<f64>>,
+    /// Score each matched template vertex at the pixel its posed position projects to (the
+    /// fit's own accuracy, without the final map's choice of scan vertex).
+    #[arg(long)]
+    projective: bool,
     /// Per frame, also print the flips and jumps per template segment and how far that
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
@@ -162,6 +176,9 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
             ..symcorr_correspond::TargetPairs::default()
         });
     }
+    if let Some(r) = args.warm_relaxation {
+        a.warm_relaxation = r;
+    }
     let pipeline = Pipeline::new(options);
     let template = pipeline.prepare(mesh, &sk)?;
     let index: Vec<usize> = template.labels().iter().map(|l| l.index()).collect();
@@ -170,7 +187,14 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         joint_offset_s: args.joint_offset,
         fix_swaps: !args.no_swap_fix,
         warm_start: !args.cold,
-        smoothing: (!args.no_smoothing).then(symcorr_kinect::OneEuroFilter::default),
+        smoothing: match (&args.euro, args.no_smoothing) {
+            (_, true) => None,
+            (Some(e), false) => match e.as_slice() {
+                &[min, beta, d] => Some(symcorr_kinect::OneEuroFilter::new(min, beta, d)?),
+                _ => return Err("--euro takes three numbers: MIN,BETA,D".into()),
+            },
+            (None, false) => Some(symcorr_kinect::OneEuroFilter::default()),
+        },
         reciprocal_radius: args
             .reciprocal_radius
             .map_or(Some(symcorr::track::RECIPROCAL_RADIUS), |r| {
@@ -227,11 +251,27 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                 matched_frames += 1;
                 let mut pairs = Vec::new();
                 let mut off = 0;
+                let k = *rec.intrinsics();
                 for (v, &s) in m.target_of.iter().enumerate() {
                     if s < 0 {
                         continue;
                     }
-                    let pixel = m.scan.pixel_ids[s as usize] as usize;
+                    let mut pixel = m.scan.pixel_ids[s as usize] as usize;
+                    if let (true, Some(posed)) = (args.projective, &m.posed) {
+                        let p = posed[v];
+                        let [u, w] = k.project(&nalgebra::Point3::new(
+                            f64::from(p[0]),
+                            f64::from(p[1]),
+                            f64::from(p[2]),
+                        ));
+                        let (u, w) = (u.round(), w.round());
+                        pixel = if u >= 0.0 && w >= 0.0 && u < k.width as f64 && w < k.height as f64
+                        {
+                            w as usize * k.width as usize + u as usize
+                        } else {
+                            usize::MAX
+                        };
+                    }
                     match truth.data_mm.get(pixel).copied().unwrap_or(0) {
                         0 => off += 1,
                         b => pairs.push((v as u32, u32::from(b) - 1)),

@@ -219,6 +219,15 @@ enum Cmd {
             conflicts_with = "oni"
         )]
         distortion: Option<Vec<f64>>,
+        /// Another camera's intrinsics (`symcorr.intrinsics/1`: an Azure Kinect depth mode, a
+        /// Kinect v2, a RealSense), rendered through and written to intrinsics.json; they
+        /// replace `--width`, `--height`, `--unmirrored` and `--distortion`.
+        #[arg(
+            long,
+            value_name = "K.json",
+            conflicts_with_all = ["width", "height", "unmirrored", "distortion"]
+        )]
+        intrinsics: Option<PathBuf>,
     },
     /// Write a recording folder's depth frames, times and intrinsics as an OpenNI2 recording
     /// (.oni) that OpenNI2's file player plays (`symcorr track` reads either).
@@ -316,6 +325,30 @@ fn write_oni(dir: &Path, out: &Path) -> Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+/// The recording's camera from the Kinect-v1 options: its field of view at `width × height`,
+/// mirrored unless `unmirrored`, through `distortion` (OpenCV's `distCoeffs`) when given.
+fn recording_intrinsics(
+    width: u32,
+    height: u32,
+    unmirrored: bool,
+    distortion: Option<Vec<f64>>,
+) -> Result<symcorr_kinect::Intrinsics> {
+    let mut intrinsics = kinect_v1_intrinsics(width, height)?;
+    if unmirrored {
+        intrinsics.mirroring = symcorr_kinect::Mirroring::Direct;
+    }
+    if let Some(c) = distortion {
+        intrinsics.distortion = Some(
+            symcorr_kinect::Distortion::from_opencv(&c)
+                .map_err(|e| SynthError::Invalid(format!("--distortion: {e}")))?,
+        );
+        intrinsics
+            .validate()
+            .map_err(|e| SynthError::Invalid(format!("--distortion: {e}")))?;
+    }
+    Ok(intrinsics)
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -499,20 +532,13 @@ fn run(cli: Cli) -> Result<()> {
             oni,
             unmirrored,
             distortion,
+            intrinsics,
         } => {
-            let mut intrinsics = kinect_v1_intrinsics(width, height)?;
-            if unmirrored {
-                intrinsics.mirroring = symcorr_kinect::Mirroring::Direct;
-            }
-            if let Some(c) = distortion {
-                intrinsics.distortion = Some(
-                    symcorr_kinect::Distortion::from_opencv(&c)
-                        .map_err(|e| SynthError::Invalid(format!("--distortion: {e}")))?,
-                );
-                intrinsics
-                    .validate()
-                    .map_err(|e| SynthError::Invalid(format!("--distortion: {e}")))?;
-            }
+            let intrinsics = match intrinsics {
+                Some(path) => symcorr_kinect::Intrinsics::read(&path)
+                    .map_err(|e| SynthError::Invalid(format!("--intrinsics: {e}")))?,
+                None => recording_intrinsics(width, height, unmirrored, distortion)?,
+            };
             let camera = Camera {
                 intrinsics,
                 ..view.camera()?

@@ -448,3 +448,64 @@ fn the_azure_kinect_log_holds_the_same_joints() {
         }
     }
 }
+
+/// `recording --intrinsics K.json` renders through another camera's intrinsics (here a Kinect
+/// v2's depth camera: 512×424, its own focal length and principal point, radial distortion)
+/// and writes them as the recording's; it refuses them with the Kinect-v1 options that they
+/// replace, and names the option when the file is not valid intrinsics. Nothing is written on
+/// refusal.
+#[test]
+fn a_recording_renders_through_the_intrinsics_it_is_given() {
+    let out = tempfile::tempdir().unwrap();
+    let k_path = out.path().join("kinect_v2.json");
+    std::fs::write(
+        &k_path,
+        r#"{"format": "symcorr.intrinsics/1", "width": 512, "height": 424, "fx": 365.5,
+            "fy": 365.5, "cx": 254.9, "cy": 205.4, "distortion": [0.09, -0.27, 0, 0, 0.09]}"#,
+    )
+    .unwrap();
+    let synth = |args: &[&str], rec: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_symcorr-synth"))
+            .args(["recording", "--frames", "2", "--realism", "ideal"])
+            .args(args)
+            .arg("--out")
+            .arg(rec)
+            .output()
+            .unwrap()
+    };
+    let rec = out.path().join("rec");
+    let o = synth(&["--intrinsics", k_path.to_str().unwrap()], &rec);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let given = Intrinsics::read(&k_path).unwrap();
+    assert_eq!(
+        Intrinsics::read(rec.join("intrinsics.json")).unwrap(),
+        given
+    );
+    let depth = read_depth_png16(rec.join("depth/000000.png")).unwrap();
+    assert_eq!((depth.width, depth.height), (512, 424));
+    // The body stands 2.6 m away: every reading lies in front of the wall behind it, and the
+    // camera's focal length sets the body's size in the image (1.7 m at 2.6 m: about 240 rows).
+    let rows: Vec<usize> = (0..424)
+        .filter(|&v| (0..512).any(|u| (1..3000).contains(&depth.data_mm[v * 512 + u])))
+        .collect();
+    let height = rows.last().unwrap() - rows.first().unwrap();
+    assert!((200..280).contains(&height), "the body spans {height} rows");
+    // Refused: with --width, and a file that is not intrinsics; nothing is written.
+    for (args, code, says) in [
+        (
+            vec!["--intrinsics", k_path.to_str().unwrap(), "--width", "320"],
+            2,
+            "--width",
+        ),
+        (vec!["--intrinsics", "Cargo.toml"], 1, "--intrinsics"),
+    ] {
+        let bad = out.path().join("bad");
+        let o = synth(&args, &bad);
+        assert_eq!(o.status.code(), Some(code), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(says),
+            "{args:?}"
+        );
+        assert!(!bad.exists(), "{args:?}");
+    }
+}

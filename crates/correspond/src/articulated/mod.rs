@@ -195,6 +195,13 @@ pub struct ArticulatedOptions {
     /// those of [`ArticulatedOptions::nonrigid_rounds`] do. Measured:
     /// `docs/decisions/2026-12-04-track-heat-clusters-and-warm-rounds.md`.
     pub warm_nonrigid_rounds: usize,
+    /// Over-relaxation of the ICP rounds from a warm start: each bone's fitted step is taken
+    /// this many times (1: as fitted; within (0, 2), else the match is refused: at 2 a step
+    /// the pairs pin at once would swing back and forth). Those few rounds had not converged
+    /// (each moved the template about 0.6 as far as the one before); a subject 3.2 m from a
+    /// Kinect v1, whose depth is coarser, kept the rounds' error as jumping matches.
+    /// ([`DEFAULT_WARM_RELAXATION`]: `docs/decisions/2026-12-06-warm-over-relaxation.md`.)
+    pub warm_relaxation: f64,
     /// Reciprocal check (`None`: off): a pair (template vertex `v` → target vertex `q`) holds
     /// only when the posed template vertex nearest `q` (same features, among those the
     /// target's viewpoint shows) lies within this distance of `v` on the template at rest.
@@ -278,6 +285,7 @@ impl Default for ArticulatedOptions {
             warm_iterations: 4,
             warm_gate_start: 0.05,
             warm_nonrigid_rounds: 2,
+            warm_relaxation: DEFAULT_WARM_RELAXATION,
             reciprocal_radius: None,
             guess_hidden: true,
             head_twist_prior: Some(DEFAULT_HEAD_TWIST_PRIOR),
@@ -300,7 +308,8 @@ pub enum ArticulatedStart<'a> {
     /// [`bone_transforms`]' hinge twist, composed with `transforms[b]`).
     /// What the joints cannot say (a bone's roll, the head's twist) carries over from the
     /// earlier fit instead of being searched again; [`ArticulatedOptions::warm_iterations`]
-    /// ICP rounds from [`ArticulatedOptions::warm_gate_start`] follow.
+    /// ICP rounds from [`ArticulatedOptions::warm_gate_start`] follow, each bone's steps
+    /// over-relaxed by [`ArticulatedOptions::warm_relaxation`].
     Warm {
         /// The earlier fit's final bone transforms ([`ArticulatedMatches::transforms`]).
         transforms: &'a BoneTransforms,
@@ -349,6 +358,9 @@ impl Default for TargetPairs {
         }
     }
 }
+
+/// Default [`ArticulatedOptions::warm_relaxation`].
+pub const DEFAULT_WARM_RELAXATION: f64 = 1.5;
 
 /// Default [`ArticulatedOptions::head_neck_anchor`].
 pub const DEFAULT_HEAD_NECK_ANCHOR: f64 = 0.3;
@@ -476,7 +488,8 @@ impl ViewHold {
 ///
 /// Errors: [`CorrespondError::EmptyMesh`] for a mesh without vertices,
 /// [`CorrespondError::LengthMismatch`] when the tables of a side (or the template's weights)
-/// disagree in length.
+/// disagree in length, [`CorrespondError::InvalidOptions`] for an
+/// [`ArticulatedOptions::warm_relaxation`] outside (0, 2).
 pub fn articulated_match(
     template: &ArticulatedInputs<'_>,
     weights: &BoneWeights,
@@ -508,6 +521,7 @@ pub fn articulated_match_indexed(
     start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, CorrespondError> {
     validate(template, weights, target)?;
+    validate_options(options)?;
     if index.built_for != IndexKey::of(template, target, options) {
         return Err(CorrespondError::IndexMismatch);
     }
@@ -526,12 +540,14 @@ pub fn articulated_match_indexed(
             gate_start: options.gate_start,
             occlusion: icp::OcclusionTest::EveryRound,
             target_points: options.target_to_template.map_or(0, |t| t.points),
+            relaxation: 1.0,
         },
         ArticulatedStart::Warm { .. } => icp::Rounds {
             iterations: options.warm_iterations,
             gate_start: options.warm_gate_start,
             occlusion: icp::OcclusionTest::Once,
             target_points: options.target_to_template.map_or(0, |t| t.warm_points),
+            relaxation: options.warm_relaxation,
         },
     };
     let (mut posed, mut posed_normals, near) = icp::articulated_icp(
@@ -580,6 +596,19 @@ pub fn articulated_match_indexed(
         transforms,
         timings,
     })
+}
+
+/// Checks the options whose domain the rounds rely on: [`ArticulatedOptions::warm_relaxation`]
+/// within (0, 2), where an over-relaxed step still converges.
+fn validate_options(options: &ArticulatedOptions) -> Result<(), CorrespondError> {
+    let a = options.warm_relaxation;
+    if a > 0.0 && a < 2.0 {
+        Ok(())
+    } else {
+        Err(CorrespondError::InvalidOptions(format!(
+            "warm_relaxation must lie in (0, 2) (1: each step as fitted), not {a}"
+        )))
+    }
 }
 
 /// Checks that both meshes have vertices, that each side's tables have one entry per vertex,
