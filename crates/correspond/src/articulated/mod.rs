@@ -499,6 +499,8 @@ pub fn articulated_match(
     start: ArticulatedStart<'_>,
 ) -> Result<ArticulatedMatches, CorrespondError> {
     validate(template, weights, target)?;
+    // Before the index is built for nothing.
+    validate_options(options)?;
     let index = ArticulatedIndex::new(template, target, graph, options)?;
     let mut out = articulated_match_indexed(template, weights, target, &index, options, start)?;
     out.timings.splice(0..0, index.timings.iter().copied());
