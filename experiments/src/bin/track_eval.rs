@@ -251,28 +251,29 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                 matched_frames += 1;
                 let mut pairs = Vec::new();
                 let mut off = 0;
-                let k = *rec.intrinsics();
+                let k = rec.intrinsics();
                 for (v, &s) in m.target_of.iter().enumerate() {
                     if s < 0 {
                         continue;
                     }
-                    let mut pixel = m.scan.pixel_ids[s as usize] as usize;
-                    if let (true, Some(posed)) = (args.projective, &m.posed) {
-                        let p = posed[v];
-                        let [u, w] = k.project(&nalgebra::Point3::new(
-                            f64::from(p[0]),
-                            f64::from(p[1]),
-                            f64::from(p[2]),
-                        ));
-                        let (u, w) = (u.round(), w.round());
-                        pixel = if u >= 0.0 && w >= 0.0 && u < k.width as f64 && w < k.height as f64
-                        {
-                            w as usize * k.width as usize + u as usize
-                        } else {
-                            usize::MAX
-                        };
-                    }
-                    match truth.data_mm.get(pixel).copied().unwrap_or(0) {
+                    // The body vertex seen at the scan vertex's pixel, or with `--projective`
+                    // at the pixel the posed template vertex projects to.
+                    let shown = match (args.projective, &m.posed) {
+                        (true, Some(posed)) => {
+                            let [u, w] =
+                                k.project(&nalgebra::Point3::from(posed[v].map(f64::from)));
+                            let (u, w) = (u.round(), w.round());
+                            // NaN fails the test; `as` saturates what lies beyond the image.
+                            (u >= 0.0 && w >= 0.0)
+                                .then(|| truth.at(u as u32, w as u32))
+                                .flatten()
+                        }
+                        _ => truth
+                            .data_mm
+                            .get(m.scan.pixel_ids[s as usize] as usize)
+                            .copied(),
+                    };
+                    match shown.unwrap_or(0) {
                         0 => off += 1,
                         b => pairs.push((v as u32, u32::from(b) - 1)),
                     }
