@@ -66,8 +66,8 @@ pub use articulated::{
     articulated_match, articulated_match_indexed, bone_transforms, outward_normals, skin,
     ArticulatedIndex, ArticulatedInputs, ArticulatedMatches, ArticulatedOptions, ArticulatedStart,
     BoneTransforms, TargetPairs, ViewHold, DEFAULT_HEAD_NECK_ANCHOR, DEFAULT_HEAD_TURN_PRIOR,
-    DEFAULT_HEAD_TWIST_PRIOR, DEFAULT_HEAD_WARM_TWIST, DEFAULT_ICP_POINTS, DEFAULT_WARM_RELAXATION,
-    MAX_HEAD_TWIST_DEG, TWISTS, WARM_TWISTS,
+    DEFAULT_HEAD_TWIST_DOUBT, DEFAULT_HEAD_TWIST_PRIOR, DEFAULT_HEAD_WARM_TWIST,
+    DEFAULT_ICP_POINTS, DEFAULT_WARM_RELAXATION, MAX_HEAD_TWIST_DEG, TWISTS, WARM_TWISTS,
 };
 pub use paper::{
     assign_confidence, base_profile, candidates, explain_point, farthest_point_sample,

@@ -252,6 +252,18 @@ pub struct ArticulatedOptions {
     /// one frame of the fixture's).
     /// (0.85, [`DEFAULT_HEAD_WARM_TWIST`]: `docs/decisions/2026-12-05-head-warm-twist.md`.)
     pub head_warm_twist: Option<f64>,
+    /// Head twist doubt (`None`: off): on a target seen from a viewpoint, fitted from the
+    /// skeletons, the head is also started at ±15° and ±30° about its bone after the ICP rounds
+    /// and each start refined scan → template on the head's own points, as the warm twist
+    /// search does; the fit does not move, but when a turned start explains those points
+    /// better by `t` standard errors of their paired differences, each vertex's confidence
+    /// is divided by `1 + w·t / scale` (`w` its skinning weight on the head bone, `scale` this
+    /// value). A single view barely pins a head's twist, the head holds a third of the
+    /// template's vertices, and a head turned against the chest keeps the chest's twist.
+    /// Table 1's best 10 % over the mean on `bodies20_kinect` 0.687 → 0.638, tracker joints
+    /// 0.721 → 0.724. (16, [`DEFAULT_HEAD_TWIST_DOUBT`]:
+    /// `docs/decisions/2026-12-06-cold-head-twist-scan-to-template.md`.)
+    pub head_twist_doubt: Option<f64>,
     /// Target → template pairs in every ICP round ([`TargetPairs`]; `None`: off): the target
     /// paired with the template the other way round. A sensor's view is surface the template
     /// must explain wherever it lies, while a template point pairs with the nearest view point
@@ -291,6 +303,7 @@ impl Default for ArticulatedOptions {
             head_twist_prior: Some(DEFAULT_HEAD_TWIST_PRIOR),
             head_turn_prior: Some(DEFAULT_HEAD_TURN_PRIOR),
             head_warm_twist: Some(DEFAULT_HEAD_WARM_TWIST),
+            head_twist_doubt: Some(DEFAULT_HEAD_TWIST_DOUBT),
             target_to_template: Some(TargetPairs::default()),
         }
     }
@@ -326,6 +339,10 @@ pub const DEFAULT_HEAD_TURN_PRIOR: f64 = 0.3;
 
 /// Default [`ArticulatedOptions::head_warm_twist`].
 pub const DEFAULT_HEAD_WARM_TWIST: f64 = 0.85;
+
+/// The default [`ArticulatedOptions::head_twist_doubt`]: the standard errors of evidence for
+/// a turned head at which a head vertex's confidence halves.
+pub const DEFAULT_HEAD_TWIST_DOUBT: f64 = 16.0;
 
 /// The target → template pairs of the ICP rounds ([`ArticulatedOptions::target_to_template`]):
 /// a scattered sample of about `points` target vertices (`warm_points` from a warm start,
@@ -366,6 +383,11 @@ pub const DEFAULT_WARM_RELAXATION: f64 = 1.5;
 pub const DEFAULT_HEAD_NECK_ANCHOR: f64 = 0.3;
 
 impl ArticulatedOptions {
+    /// [`ArticulatedOptions::head_twist_doubt`] when it is on (a positive scale).
+    fn head_doubt_scale(&self) -> Option<f64> {
+        self.head_twist_doubt.filter(|&s| s > 0.0)
+    }
+
     /// The weight of bone `b`'s anchor at `joint` (one of its two joints) per unit of the
     /// bone's pair weight: [`ArticulatedOptions::joint_anchor`], times
     /// [`ArticulatedOptions::head_neck_anchor`] for the head bone's parent joint.
@@ -579,6 +601,23 @@ pub fn articulated_match_indexed(
                 transforms::skin(template.positions, template.normals, weights, &transforms);
         }
     }
+    // From the skeletons on a view, how much a turned head would explain the scan's head
+    // points better: the head's matches are doubted by as much (the fit stays).
+    let head_doubt = match (start, options.head_doubt_scale()) {
+        (ArticulatedStart::Skeletons, Some(_)) if reported_turn(&al).is_none() => {
+            match twist::OwnPoints::new(&al, head_bone()) {
+                Some(own) => twist::twist_doubt(
+                    &al,
+                    &own,
+                    transforms[own.bone],
+                    head_limit.as_ref(),
+                    &twist::WARM_TWISTS,
+                )?,
+                None => 0.0,
+            }
+        }
+        _ => 0.0,
+    };
     timings.push(("articulated_icp", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
@@ -587,7 +626,7 @@ pub fn articulated_match_indexed(
     timings.push(("nonrigid", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let map = final_map(&al, &posed, &posed_normals, &near, &skinned)?;
+    let map = final_map(&al, &posed, &posed_normals, &near, &skinned, head_doubt)?;
     timings.push(("map", t.elapsed().as_secs_f64()));
     Ok(ArticulatedMatches {
         pairs: map.pairs,
@@ -1234,6 +1273,17 @@ fn feature(x: &Point3<f64>, n: &Vector3<f64>, beta: f64) -> [f64; 6] {
     [x.x, x.y, x.z, m.x, m.y, m.z]
 }
 
+/// Vertex `v`'s skinning weight on the head bone.
+fn head_weight(weights: &BoneWeights, v: usize) -> f64 {
+    let head = head_bone();
+    weights
+        .row(v)
+        .iter()
+        .filter(|&&(b, _)| b == head)
+        .map(|&(_, w)| w)
+        .sum()
+}
+
 /// The neck → head bone's index in [`BONES`].
 fn head_bone() -> usize {
     let head = Bone::new(Joint::ShoulderCenter, Joint::Head);
@@ -1362,6 +1412,7 @@ fn final_map(
     posed_normals: &[Vector3<f64>],
     hints: &[(u32, f64)],
     skinned: &[Point3<f64>],
+    head_doubt: f64,
 ) -> Result<FinalMap, CorrespondError> {
     let gate = al.options.gate_end * al.unit_len;
     let visible = al.visibility(posed, posed_normals);
@@ -1429,7 +1480,11 @@ fn final_map(
             .map(|v| {
                 let r = confidence::blend(al.weights, v, &residuals);
                 let g = (skinned[v] - skeletal[v]).norm();
-                1.0 / ((1.0 + r / rs) * (1.0 + g / gs))
+                let doubt = al
+                    .options
+                    .head_doubt_scale()
+                    .map_or(0.0, |scale| head_weight(al.weights, v) * head_doubt / scale);
+                1.0 / ((1.0 + r / rs) * (1.0 + g / gs) * (1.0 + doubt))
             })
             .collect()
     } else {

@@ -204,6 +204,26 @@ impl OwnPoints {
         })
     }
 
+    /// Each own point's squared distance to the bone posed by `pose` (its nearest posed
+    /// vertex), at most `gate²`: the terms of [`OwnPoints::pairs`]' score, one per point.
+    fn squared_distances(
+        &self,
+        al: &Alignment<'_>,
+        pose: &IsometryMatrix3<f64>,
+        gate: f64,
+    ) -> Vec<f64> {
+        let back = pose.inverse();
+        self.target
+            .iter()
+            .map(|&q| {
+                let y = back * al.target_positions[q];
+                self.tree
+                    .nearest_within(&y.coords.into(), (u32::MAX, gate * gate))
+                    .map_or(gate * gate, |(_, d)| d)
+            })
+            .collect()
+    }
+
     /// Every own target point within `gate` of the bone posed by `pose` paired with its
     /// nearest posed template vertex, as (rest position, target position, weight 1), and the
     /// mean squared distance of all own points to the posed bone, each at most `gate²`
@@ -323,47 +343,13 @@ pub(super) fn twist_search(
         return Ok(initial);
     };
     let gate = options.gate_start * template.area.sqrt();
-    let fit =
-        |start: IsometryMatrix3<f64>| -> Result<(IsometryMatrix3<f64>, f64), CorrespondError> {
-            let mut tr = start;
-            let mut score = f64::INFINITY;
-            let mut hints = match &pairing {
-                Pairing::Own(own) => vec![u32::MAX; own.target.len()],
-                Pairing::Sample(_) => Vec::new(),
-            };
-            for step in 0..=TWIST_ICP_STEPS {
-                let (mut pairs, s) = match &pairing {
-                    Pairing::Own(own) => own.pairs(al, &tr, gate, &mut hints),
-                    Pairing::Sample(sample) => sample.pairs(al, &tr, gate)?,
-                };
-                score = s;
-                if step == TWIST_ICP_STEPS {
-                    break;
-                }
-                let held = pairs.len() as f64;
-                for j in [p, c] {
-                    pairs.push((
-                        template.joints.position(j),
-                        target.joints.position(j),
-                        options.anchor(b, j) * held,
-                    ));
-                }
-                match kabsch(&pairs) {
-                    Some(t) => tr = limit.map_or(t, |l| l.apply(t)),
-                    None => break,
-                }
-            }
-            Ok((tr, score))
-        };
+    let fit = |start| refit(al, &pairing, b, start, limit, gate);
     let mut best = fit(initial)?;
     let unturned = best.1;
     let axis = Unit::new_unchecked(axis);
     for &deg in twists.iter().filter(|&&d| d != 0.0) {
         // The start turned about the target bone's axis through its parent joint.
-        let r = *Rotation3::from_axis_angle(&axis, deg.to_radians()).matrix();
-        let t = r * (initial.translation.vector - pivot.coords) + pivot.coords;
-        let turned = isometry(r * initial.rotation.matrix(), t);
-        let candidate = fit(turned)?;
+        let candidate = fit(turned_about(&initial, &axis, &pivot, deg))?;
         if candidate.1 < best.1 {
             best = candidate;
         }
@@ -372,6 +358,121 @@ pub(super) fn twist_search(
         TwistScore::OwnPoints { gain, .. } if best.1 > gain * unturned => Ok(initial),
         _ => Ok(best.0),
     }
+}
+
+/// `start` refined by [`TWIST_ICP_STEPS`] rigid ICP steps of bone `b` paired as `pairing`
+/// says, each held within `limit`; the refined pose and its score.
+fn refit(
+    al: &Alignment<'_>,
+    pairing: &Pairing<'_>,
+    b: usize,
+    start: IsometryMatrix3<f64>,
+    limit: Option<&TwistLimit>,
+    gate: f64,
+) -> Result<(IsometryMatrix3<f64>, f64), CorrespondError> {
+    let (template, target, options) = (&al.template, &al.target, al.options);
+    let (p, c) = (BONES[b].parent, BONES[b].child);
+    let mut tr = start;
+    let mut score = f64::INFINITY;
+    let mut hints = match pairing {
+        Pairing::Own(own) => vec![u32::MAX; own.target.len()],
+        Pairing::Sample(_) => Vec::new(),
+    };
+    for step in 0..=TWIST_ICP_STEPS {
+        let (mut pairs, s) = match pairing {
+            Pairing::Own(own) => own.pairs(al, &tr, gate, &mut hints),
+            Pairing::Sample(sample) => sample.pairs(al, &tr, gate)?,
+        };
+        score = s;
+        if step == TWIST_ICP_STEPS {
+            break;
+        }
+        let held = pairs.len() as f64;
+        for j in [p, c] {
+            pairs.push((
+                template.joints.position(j),
+                target.joints.position(j),
+                options.anchor(b, j) * held,
+            ));
+        }
+        match kabsch(&pairs) {
+            Some(t) => tr = limit.map_or(t, |l| l.apply(t)),
+            None => break,
+        }
+    }
+    Ok((tr, score))
+}
+
+/// How strongly the scan says that bone `b`, fitted at `pose`, should be turned: the starts
+/// of [`twist_search`] (`pose` turned by each of `twists` about the target bone, refined
+/// scan → template on `own`'s points) against `pose` refined the same way, each compared
+/// point by point (the paired differences of the own points' squared distances, each at most
+/// the search gate²). The answer is the largest number of standard errors by which a turned
+/// start's mean difference lies below zero; 0 when none does, or when the bone has no
+/// length. The fit does not move.
+///
+/// A single view barely pins a head's twist: a wrong turn scores within a percent or two of
+/// the right one, so the search's pick is not kept from the skeletons
+/// (`docs/decisions/2026-12-06-cold-head-twist-scan-to-template.md`); how far a turned head
+/// explains the scan's head better, measured against the points' own scatter, says how much
+/// to doubt the fitted head's matches.
+pub(super) fn twist_doubt(
+    al: &Alignment<'_>,
+    own: &OwnPoints,
+    pose: IsometryMatrix3<f64>,
+    limit: Option<&TwistLimit>,
+    twists: &[f64],
+) -> Result<f64, CorrespondError> {
+    let b = own.bone;
+    let pivot = al.target.joints.position(BONES[b].parent);
+    let Some(axis) = unit(al.target.joints.position(BONES[b].child) - pivot) else {
+        return Ok(0.0);
+    };
+    let gate = al.options.gate_start * al.template.area.sqrt();
+    let pairing = Pairing::Own(own);
+    let (unturned, _) = refit(al, &pairing, b, pose, limit, gate)?;
+    let base = own.squared_distances(al, &unturned, gate);
+    let axis = Unit::new_unchecked(axis);
+    let mut doubt: f64 = 0.0;
+    for &deg in twists.iter().filter(|&&d| d != 0.0) {
+        let (turned, _) = refit(
+            al,
+            &pairing,
+            b,
+            turned_about(&pose, &axis, &pivot, deg),
+            limit,
+            gate,
+        )?;
+        let diffs: Vec<f64> = own
+            .squared_distances(al, &turned, gate)
+            .iter()
+            .zip(&base)
+            .map(|(t, u)| t - u)
+            .collect();
+        let n = diffs.len() as f64;
+        if n < 2.0 {
+            continue;
+        }
+        let mean = diffs.iter().sum::<f64>() / n;
+        let variance = diffs.iter().map(|d| (d - mean) * (d - mean)).sum::<f64>() / (n - 1.0);
+        let standard_error = (variance / n).sqrt();
+        if standard_error > 0.0 {
+            doubt = doubt.max(-mean / standard_error);
+        }
+    }
+    Ok(doubt)
+}
+
+/// `pose` turned by `deg` degrees about `axis` through `pivot` (target frame).
+fn turned_about(
+    pose: &IsometryMatrix3<f64>,
+    axis: &Unit<Vector3<f64>>,
+    pivot: &Point3<f64>,
+    deg: f64,
+) -> IsometryMatrix3<f64> {
+    let r = *Rotation3::from_axis_angle(axis, deg.to_radians()).matrix();
+    let t = r * (pose.translation.vector - pivot.coords) + pivot.coords;
+    isometry(r * pose.rotation.matrix(), t)
 }
 
 /// How [`twist_search`] pairs a pose of the bone: what its [`TwistScore`] needs, built once
