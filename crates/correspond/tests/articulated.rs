@@ -622,49 +622,42 @@ fn over_relaxed_warm_rounds_converge_further_in_as_many_rounds() {
 /// confidences only, and only of head vertices, only downwards.
 fn head_confidence_share(turn_deg: f64, scale: f64) -> (f64, f64) {
     let sk = t_pose(1.0);
-    let (mut mesh, _) = capsule_body(&sk, 0.012);
-    let att = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    let (plain, _) = capsule_body(&sk, 0.012);
     let head_bone = symcorr_skeleton::BONES
         .iter()
         .position(|b| b.parent == Joint::ShoulderCenter && b.child == Joint::Head)
         .unwrap();
-    let on_head = |v: usize| {
+    let head_weight = |att: &symcorr_attach::Attachment, v: usize| -> f64 {
         att.weights
-            .row(v)
-            .iter()
-            .any(|&(b, w)| b == head_bone && w > 0.5)
-    };
-    // A nose: the head's front pushed out towards +z, most at its middle.
-    let centre = sk.position(Joint::Head);
-    for v in 0..mesh.num_vertices() {
-        let x = Point3::from(mesh.positions[v]);
-        let d = x - centre;
-        if on_head(v) && d.z > 0.0 {
-            let bump = 0.06 * (-(d.x * d.x + d.y * d.y) / (2.0 * 0.03f64.powi(2))).exp();
-            mesh.positions[v][2] += bump;
-        }
-    }
-    let mesh = TriMesh::new(mesh.positions, mesh.triangles).unwrap();
-    let att = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
-    // The target: the same body, its head turned about the neck → head bone.
-    let axis = nalgebra::Unit::new_normalize(
-        sk.position(Joint::Head) - sk.position(Joint::ShoulderCenter),
-    );
-    let turn = nalgebra::Rotation3::from_axis_angle(&axis, turn_deg.to_radians());
-    let pivot = sk.position(Joint::ShoulderCenter);
-    let mut turned = mesh.positions.clone();
-    for (v, p) in turned.iter_mut().enumerate() {
-        let w: f64 = att
-            .weights
             .row(v)
             .iter()
             .filter(|&&(b, _)| b == head_bone)
             .map(|&(_, w)| w)
-            .sum();
+            .sum()
+    };
+    // A nose: the head's front pushed out towards +z, most at its middle.
+    let plain_att = attach(&plain, &sk, &AttachOptions::default()).unwrap();
+    let centre = sk.position(Joint::Head);
+    let mut positions = plain.positions.clone();
+    for (v, p) in positions.iter_mut().enumerate() {
+        let d = Point3::from(*p) - centre;
+        if head_weight(&plain_att, v) > 0.5 && d.z > 0.0 {
+            p[2] += 0.06 * (-(d.x * d.x + d.y * d.y) / (2.0 * 0.03f64.powi(2))).exp();
+        }
+    }
+    let mesh = TriMesh::new(positions, plain.triangles).unwrap();
+    let att = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    let on_head = |v: usize| head_weight(&att, v) > 0.5;
+    // The target: the same body, its head turned about the neck → head bone (the joints
+    // stay), each vertex by its weight on the head bone.
+    let pivot = sk.position(Joint::ShoulderCenter);
+    let axis = nalgebra::Unit::new_normalize(sk.position(Joint::Head) - pivot);
+    let mut turned = mesh.positions.clone();
+    for (v, p) in turned.iter_mut().enumerate() {
+        let w = head_weight(&att, v);
         if w > 0.0 {
-            let x = Point3::from(*p);
-            let r = nalgebra::Rotation3::from_axis_angle(&axis, w * turn.angle());
-            *p = (pivot + r * (x - pivot)).into();
+            let r = nalgebra::Rotation3::from_axis_angle(&axis, w * turn_deg.to_radians());
+            *p = (pivot + r * (Point3::from(*p) - pivot)).into();
         }
     }
     let body = TriMesh::new(turned, mesh.triangles.clone()).unwrap();
@@ -695,12 +688,7 @@ fn head_confidence_share(turn_deg: f64, scale: f64) -> (f64, f64) {
     let (mut head, mut rest, mut head_off, mut rest_off) = (vec![], vec![], vec![], vec![]);
     for (v, (p, q)) in off.pairs.iter().zip(&on.pairs).enumerate() {
         assert_eq!((p.template, p.target), (q.template, q.target));
-        if att
-            .weights
-            .row(v)
-            .iter()
-            .any(|&(b, w)| b == head_bone && w > 0.0)
-        {
+        if head_weight(&att, v) > 0.0 {
             assert!(
                 q.confidence <= p.confidence,
                 "vertex {v}: {} > {}",
