@@ -63,8 +63,10 @@
 //!    counterpart* when that pair holds at the final gate; confidence `1/(1 + d/gate)`, on a
 //!    target with a border (a scan) times `1/(1 + σ/0.001)` and `1/(1 + g/0.04)`: σ the RMS
 //!    point-to-plane residual of the vertex's bones, g how far the fit moved the vertex from
-//!    the pose of the skeletons alone (module `confidence`). It ranks the matches and decides
-//!    nothing. Without [`ArticulatedOptions::guess_hidden`] only the vertices that can have a
+//!    the pose of the skeletons alone (module `confidence`); fitted from the skeletons onto a
+//!    view, a head vertex's confidence also falls with the evidence that a turned head would
+//!    explain the scan's head points better ([`ArticulatedOptions::head_twist_doubt`]). It
+//!    ranks the matches and decides nothing. Without [`ArticulatedOptions::guess_hidden`] only the vertices that can have a
 //!    counterpart are searched (the others get confidence 0).
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
@@ -74,7 +76,8 @@
 //! `docs/decisions/2026-12-01-articulated-kdtrees.md`,
 //! `docs/decisions/2026-12-03-confidence-ranking.md`,
 //! `docs/decisions/2026-12-05-head-warm-twist.md`,
-//! `docs/decisions/2026-12-05-target-to-template-pairs.md`.
+//! `docs/decisions/2026-12-05-target-to-template-pairs.md`,
+//! `docs/decisions/2026-12-06-cold-head-twist-scan-to-template.md`.
 
 mod confidence;
 mod icp;
