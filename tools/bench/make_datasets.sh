@@ -11,6 +11,9 @@
 #   bodies20_kinect_noisy/   the same views, tracker joints (sigma 2.5 cm, 4.5 cm at hands and
 #                            feet, unseen joints inferred)
 #   bodies20_kinect_profile/ the same with profile views (|azimuth| 60-90 deg, both sides)
+#   heldout_kinect/          as bodies20_kinect with another second shape (female, muscular,
+#                            heavy) and other cameras (--scan-seed 777): a check on a body and
+#                            views the methods were not tuned on
 #   bodies50k/       4 poses x 2 shapes, Loop-subdivided once (53,514 vertices)
 #   bodies20_fine/   13,380-vertex templates, targets one Loop level finer (another triangulation)
 #   recording/       a 10 s synthetic Kinect recording (300 frames, 640x480, turn to profile and
@@ -47,7 +50,10 @@ kinect=(--shape "s0:" --shape "s1:male-young-minmuscle-maxweight=0.5" --poses "$
 "$synth" dataset --out "$out/bodies20_kinect" "${kinect[@]}" --scan-cameras frontal
 "$synth" dataset --out "$out/bodies20_kinect_noisy" "${kinect[@]}" --scan-cameras frontal --scan-joints tracker
 "$synth" dataset --out "$out/bodies20_kinect_profile" "${kinect[@]}" --scan-cameras profile
-for d in bodies20_kinect bodies20_kinect_noisy bodies20_kinect_profile; do
+"$synth" dataset --out "$out/heldout_kinect" --shape "s0:" \
+  --shape "s1:female-young-maxmuscle-maxweight=0.7" --poses "$kposes" --scans \
+  --scan-realism kinect-v1 --scan-seed 777 --scan-cameras frontal
+for d in bodies20_kinect bodies20_kinect_noisy bodies20_kinect_profile heldout_kinect; do
   echo "$out/$d: $(wc -l < "$out/$d/pairs.txt") scan pairs"
 done
 # Larger meshes ("50k <-> 50k"): the same bodies Loop-subdivided once (53,514 vertices),
