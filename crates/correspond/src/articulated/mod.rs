@@ -261,10 +261,11 @@ pub struct ArticulatedOptions {
     /// search does; the fit does not move, but when a turned start explains those points
     /// better by `t` standard errors of their paired differences, each vertex's confidence
     /// is divided by `1 + w·t / scale` (`w` its skinning weight on the head bone, `scale` this
-    /// value). A single view barely pins a head's twist, the head holds a third of the
-    /// template's vertices, and a head turned against the chest keeps the chest's twist.
-    /// Table 1's best 10 % over the mean on `bodies20_kinect` 0.687 → 0.638, tracker joints
-    /// 0.721 → 0.723. (16, [`DEFAULT_HEAD_TWIST_DOUBT`]:
+    /// value; a head that shows fewer than 200 points is not doubted). A single view barely
+    /// pins a head's twist, the head holds a third of the template's vertices, and a head
+    /// turned against the chest keeps the chest's twist. Table 1's best 10 % over the mean on
+    /// `bodies20_kinect` 0.687 → 0.638, tracker joints 0.721 → 0.723.
+    /// (16, [`DEFAULT_HEAD_TWIST_DOUBT`]:
     /// `docs/decisions/2026-12-06-cold-head-twist-scan-to-template.md`.)
     pub head_twist_doubt: Option<f64>,
     /// Target → template pairs in every ICP round ([`TargetPairs`]; `None`: off): the target
