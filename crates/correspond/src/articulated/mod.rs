@@ -66,8 +66,9 @@
 //!    the pose of the skeletons alone (module `confidence`); fitted from the skeletons onto a
 //!    view, a head vertex's confidence also falls with the evidence that a turned head would
 //!    explain the scan's head points better ([`ArticulatedOptions::head_twist_doubt`]). It
-//!    ranks the matches and decides nothing. Without [`ArticulatedOptions::guess_hidden`] only the vertices that can have a
-//!    counterpart are searched (the others get confidence 0).
+//!    ranks the matches and decides nothing. Without [`ArticulatedOptions::guess_hidden`]
+//!    only the vertices that can have a counterpart are searched (the others get
+//!    confidence 0).
 //!
 //! Left and right never mix: the pools are the skeleton filter (§3.2) as a hard constraint.
 //! Measured: `docs/decisions/2026-11-23-articulated-alignment.md`,
