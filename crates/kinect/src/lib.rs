@@ -93,8 +93,9 @@ pub use joints::{
 };
 pub use mapping::SkeletonKind;
 pub use recording::{
-    arms_swapped, legs_swapped, limb_swap_evidence, parse_depth_times, swap_evidence, JointTrack,
-    LimbPair, OneEuroFilter, Recording, SkeletonFilter, SkipReason, TimedSkeleton,
+    arms_swapped, legs_swapped, limb_swap_evidence, parse_depth_times, swap_evidence,
+    JointMoveFilter, JointTrack, LimbPair, OneEuroFilter, Recording, SkeletonFilter, SkipReason,
+    TimedSkeleton,
 };
 pub use replay::{BoneLengthReport, FrameSelect};
 pub use scan::{

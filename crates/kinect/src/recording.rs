@@ -48,7 +48,7 @@ use crate::depth::{read_depth_png16, DepthFrame};
 use crate::error::KinectError;
 use crate::geom::median;
 use crate::joints::{JointFrame, JointLog, KINECT_FPS};
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use std::path::{Path, PathBuf};
 use symcorr_skeleton::{Joint, Skeleton};
 
@@ -885,6 +885,100 @@ impl SkeletonFilter {
     }
 }
 
+/// A first-order low-pass, per joint coordinate, of how far a step moved a skeleton's joints:
+/// for a skeleton `given` and the same joints `moved` by that step (the attachment's refinement,
+/// which re-centres each joint in its limb's cross-section of one depth frame), the skeleton at
+/// `given` plus the low-passed moves. Each coordinate is a [`OneEuroFilter`] with `beta` 0, which
+/// Casiez et al. 2012 note is an exponential smoother of cutoff `min_cutoff_hz`.
+///
+/// Why: a tracker's joints, smoothed by [`SkeletonFilter`], follow the body; the refinement's
+/// moves are a bias of the tracker's joints against the limbs' centres plus the noise of circle
+/// fits on one frame's half-rings, 4–9 cm on a head 3.2 m from a Kinect v1. The bias changes as
+/// slowly as the body turns; the noise changes every frame. Smoothing the moves, not the
+/// joints, adds no lag to the body's motion
+/// (`docs/decisions/2026-12-06-refinement-moves-smoothed.md`).
+///
+/// ```
+/// use symcorr_kinect::JointMoveFilter;
+/// use symcorr_skeleton::Skeleton;
+/// let mut f = JointMoveFilter::DEFAULT;
+/// let given = Skeleton::from_arrays([[0.0, 1.0, 2.0]; 20]);
+/// let moved = Skeleton::from_arrays([[0.04, 1.0, 2.0]; 20]); // every joint moved 4 cm in x
+/// let first = f.filter(0.0, &given, &moved);
+/// assert_eq!(first, moved); // the first frame's moves pass through
+/// let back = f.filter(1.0 / 30.0, &given, &given); // the next frame's step moved nothing
+/// let x = back.positions[0].x;
+/// assert!(x > 0.02 && x < 0.04); // most of the 4 cm kept: one frame's moves are noisy
+/// f.reset();
+/// assert_eq!(f.filter(2.0, &given, &given), given);
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointMoveFilter {
+    filters: [[OneEuroFilter; 3]; Joint::COUNT],
+}
+
+impl JointMoveFilter {
+    /// Cutoff 1 Hz, the cutoff at rest of [`OneEuroFilter::KINECT_30HZ`]: at 30 frames/s each
+    /// frame's moves weigh 0.17.
+    pub const DEFAULT: JointMoveFilter = JointMoveFilter {
+        filters: [[OneEuroFilter {
+            min_cutoff_hz: 1.0,
+            beta: 0.0,
+            d_cutoff_hz: 1.0,
+            state: None,
+        }; 3]; Joint::COUNT],
+    };
+
+    /// A filter of cutoff `cutoff_hz` (finite and > 0).
+    ///
+    /// Errors: [`KinectError::FilterParameter`].
+    ///
+    /// ```
+    /// use symcorr_kinect::JointMoveFilter;
+    /// assert!(JointMoveFilter::new(2.0).is_ok());
+    /// assert!(JointMoveFilter::new(f64::NAN).is_err());
+    /// ```
+    pub fn new(cutoff_hz: f64) -> Result<JointMoveFilter, KinectError> {
+        let f = OneEuroFilter::new(cutoff_hz, 0.0, cutoff_hz)?;
+        Ok(JointMoveFilter {
+            filters: [[f; 3]; Joint::COUNT],
+        })
+    }
+
+    /// The cutoff frequency, Hz.
+    pub fn cutoff_hz(&self) -> f64 {
+        self.filters[0][0].min_cutoff_hz
+    }
+
+    /// Forgets the past (after a skipped frame): the next moves pass through.
+    pub fn reset(&mut self) {
+        for f in self.filters.iter_mut().flatten() {
+            f.reset();
+        }
+    }
+
+    /// `moved` with each joint at `given`'s plus the low-passed move `moved − given` at
+    /// `time_s` (a time not after the previous one's restarts the filter, like
+    /// [`OneEuroFilter::filter`]); confidences, flags and the head's turn are `moved`'s.
+    pub fn filter(&mut self, time_s: f64, given: &Skeleton, moved: &Skeleton) -> Skeleton {
+        let mut out = moved.clone();
+        for ((p, (g, m)), fs) in out
+            .positions
+            .iter_mut()
+            .zip(given.positions.iter().zip(&moved.positions))
+            .zip(self.filters.iter_mut())
+        {
+            let d = m - g;
+            *p = g + Vector3::new(
+                fs[0].filter(time_s, d.x),
+                fs[1].filter(time_s, d.y),
+                fs[2].filter(time_s, d.z),
+            );
+        }
+        out
+    }
+}
+
 /// A left/right pair of limbs whose joints a tracker may exchange.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LimbPair {
@@ -1018,11 +1112,36 @@ fn evidence(previous: &Skeleton, current: &Skeleton, left: impl Iterator<Item = 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_relative_eq;
 
     #[test]
     fn frame_file_names_have_six_digits() {
         assert_eq!(frame_file_name(0), "000000.png");
         assert_eq!(frame_file_name(42), "000042.png");
+    }
+
+    #[test]
+    fn joint_moves_are_smoothed_without_lagging_the_joints() {
+        // The joints walk 1 m/s in x; each frame's step moves them by a bias of 3 cm in z plus
+        // ±4 cm of noise alternating in y. The output follows the walk without lag, keeps the
+        // bias and damps the noise.
+        let mut f = JointMoveFilter::DEFAULT;
+        let (mut worst_y, mut worst_lag) = (0.0f64, 0.0f64);
+        for i in 0..90 {
+            let t = f64::from(i) / 30.0;
+            let given = Skeleton::from_arrays([[t, 1.0, 2.0]; Joint::COUNT]);
+            let noise = if i % 2 == 0 { 0.04 } else { -0.04 };
+            let moved = Skeleton::from_arrays([[t, 1.0 + noise, 2.03]; Joint::COUNT]);
+            let out = f.filter(t, &given, &moved);
+            let p = out.positions[Joint::Head.index()];
+            assert_relative_eq!(p.z, 2.03, epsilon = 1e-9);
+            if i >= 10 {
+                worst_y = worst_y.max((p.y - 1.0).abs());
+            }
+            worst_lag = worst_lag.max((p.x - t).abs());
+        }
+        assert!(worst_lag < 1e-12, "the walk lagged by {worst_lag} m");
+        assert!(worst_y < 0.01, "the noise kept {worst_y} m of its 0.04");
     }
 
     #[test]

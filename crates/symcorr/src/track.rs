@@ -23,7 +23,11 @@
 //!    behind the only surface the camera sees; the camera at the origin is its viewpoint, for
 //!    the occlusion test; bone heat on 1 cm clusters of the scan,
 //!    [`TrackOptions::scan_heat_mesh`]), with its search index against the template
-//!    ([`ArticulatedTables::target_against`]).
+//!    ([`ArticulatedTables::target_against`]). The attachment's refinement re-centres each
+//!    joint in its limb's cross-section of this one frame; the fit is anchored at the smoothed
+//!    joints plus those moves low-passed over time ([`TrackOptions::refinement_smoothing`]):
+//!    a circle fitted to one frame's half-ring of a head 3.2 m away moved the head joint by
+//!    4–9 cm, each frame another way.
 //! 5. **Match** the template onto it with the pipeline's method — **warm-started** from the
 //!    previous frame's fit ([`ArticulatedStart::Warm`]: its bone transforms moved by the
 //!    joints' motion, what the joints cannot say, a bone's roll and the head's twist, carried
@@ -74,8 +78,8 @@ use std::time::Instant;
 use symcorr_attach::{HeatMesh, PoorFitPolicy};
 use symcorr_kinect::recording::SWAP_EVIDENCE_THRESHOLD;
 use symcorr_kinect::{
-    limb_swap_evidence, scan_mesh_with_rays, DepthFrame, DepthSource, Intrinsics, JointTrack,
-    LimbPair, PixelRays, ScanMesh, ScanOptions, SkeletonFilter, SkipReason,
+    limb_swap_evidence, scan_mesh_with_rays, DepthFrame, DepthSource, Intrinsics, JointMoveFilter,
+    JointTrack, LimbPair, PixelRays, ScanMesh, ScanOptions, SkeletonFilter, SkipReason,
 };
 use symcorr_skeleton::Skeleton;
 
@@ -109,6 +113,10 @@ pub struct TrackOptions {
     pub max_match_shift_m: Option<f64>,
     /// The mesh each frame's bone heat is solved on ([`HeatMesh`]).
     pub scan_heat_mesh: HeatMesh,
+    /// Low-pass of the attachment's joint refinement over time (`None`: each frame's own
+    /// refinement): the fit is anchored at the smoothed joints plus the low-passed moves of the
+    /// refinement ([`JointMoveFilter`]), reset with the joint smoothing.
+    pub refinement_smoothing: Option<JointMoveFilter>,
 }
 
 impl Default for TrackOptions {
@@ -123,6 +131,7 @@ impl Default for TrackOptions {
             reciprocal_radius: Some(RECIPROCAL_RADIUS),
             max_match_shift_m: Some(MAX_MATCH_SHIFT_M),
             scan_heat_mesh: SCAN_HEAT_MESH,
+            refinement_smoothing: Some(JointMoveFilter::DEFAULT),
         }
     }
 }
@@ -248,6 +257,8 @@ pub struct Observer<'a> {
     joints: JointTrack,
     options: TrackOptions,
     filter: Option<SkeletonFilter>,
+    /// The low-pass of the refinement's joint moves ([`TrackOptions::refinement_smoothing`]).
+    refinement: Option<JointMoveFilter>,
     /// The previous observed frame's joints, as used (corrected and smoothed).
     previous: Option<Skeleton>,
 }
@@ -306,6 +317,7 @@ impl<'a> Tracker<'a> {
                 rays: intrinsics.pixel_rays(),
                 joints,
                 filter: options.smoothing.map(SkeletonFilter::new),
+                refinement: options.refinement_smoothing.clone(),
                 options: options.clone(),
                 previous: None,
             },
@@ -486,6 +498,9 @@ impl Observer<'_> {
         if let Some(f) = &mut self.filter {
             f.reset();
         }
+        if let Some(f) = &mut self.refinement {
+            f.reset();
+        }
     }
 
     /// The joints at `time_s` (depth stream clock), corrected and smoothed, and the scan of
@@ -503,7 +518,12 @@ impl Observer<'_> {
         let (corrections, skeleton, scan, t_scan) = self.joints_and_scan(time_s, depth)?;
         let t = Instant::now();
         let template = (self.template.0, &*self.template.1);
-        let (target, tables) = prepare_scan(&self.pipeline, template, &scan, &skeleton)?;
+        let (mut target, tables) = prepare_scan(&self.pipeline, template, &scan, &skeleton)?;
+        // The fit's anchors: the refinement's moves low-passed (its labels and bone heat keep
+        // this frame's own refinement).
+        if let Some(f) = &mut self.refinement {
+            target.attachment.joints = f.filter(time_s, &skeleton, &target.attachment.joints);
+        }
         let t_prepare = t.elapsed().as_secs_f64();
         let d = &target.attachment.diagnostics;
         let mut timings = vec![

@@ -114,6 +114,10 @@ struct Args {
     /// fit's own accuracy, without the final map's choice of scan vertex).
     #[arg(long)]
     projective: bool,
+    /// Cutoff (Hz) of the low-pass of the attachment's joint refinement over time (default: the
+    /// tracker's; 0 turns it off: each frame's own refinement)
+    #[arg(long)]
+    refinement_cutoff: Option<f64>,
     /// Per frame, also print the flips and jumps per template segment and how far that
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
@@ -214,6 +218,11 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
                     symcorr_attach::HeatMesh::Input
                 }
             }),
+        refinement_smoothing: match args.refinement_cutoff {
+            None => TrackOptions::default().refinement_smoothing,
+            Some(c) if c > 0.0 => Some(symcorr_kinect::JointMoveFilter::new(c)?),
+            Some(_) => None,
+        },
         ..TrackOptions::default()
     };
     let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);
