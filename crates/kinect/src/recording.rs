@@ -820,6 +820,15 @@ impl OneEuroFilter {
     }
 }
 
+/// `v` through one filter per coordinate at `time_s`.
+fn filter_xyz(fs: &mut [OneEuroFilter; 3], time_s: f64, v: Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        fs[0].filter(time_s, v.x),
+        fs[1].filter(time_s, v.y),
+        fs[2].filter(time_s, v.z),
+    )
+}
+
 /// One [`OneEuroFilter`] per joint coordinate of a skeleton (60 in all), and one for the head's
 /// turn ([`Skeleton::head_turn`], when the skeleton reports it), filtered as the arc the nose
 /// moves along ([`TURN_ARM_M`] × the turn, metres) so that the joints' parameters apply.
@@ -871,11 +880,7 @@ impl SkeletonFilter {
     pub fn filter(&mut self, time_s: f64, skeleton: &Skeleton) -> Skeleton {
         let mut out = skeleton.clone();
         for (p, fs) in out.positions.iter_mut().zip(self.filters.iter_mut()) {
-            *p = Point3::new(
-                fs[0].filter(time_s, p.x),
-                fs[1].filter(time_s, p.y),
-                fs[2].filter(time_s, p.z),
-            );
+            *p = Point3::from(filter_xyz(fs, time_s, p.coords));
         }
         match skeleton.head_turn {
             Some(t) => out.head_turn = Some(self.turn.filter(time_s, t * TURN_ARM_M) / TURN_ARM_M),
@@ -945,11 +950,6 @@ impl JointMoveFilter {
         })
     }
 
-    /// The cutoff frequency, Hz.
-    pub fn cutoff_hz(&self) -> f64 {
-        self.filters[0][0].min_cutoff_hz
-    }
-
     /// Forgets the past (after a skipped frame): the next moves pass through.
     pub fn reset(&mut self) {
         for f in self.filters.iter_mut().flatten() {
@@ -968,12 +968,7 @@ impl JointMoveFilter {
             .zip(given.positions.iter().zip(&moved.positions))
             .zip(self.filters.iter_mut())
         {
-            let d = m - g;
-            *p = g + Vector3::new(
-                fs[0].filter(time_s, d.x),
-                fs[1].filter(time_s, d.y),
-                fs[2].filter(time_s, d.z),
-            );
+            *p = g + filter_xyz(fs, time_s, m - g);
         }
         out
     }
