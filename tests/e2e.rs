@@ -976,8 +976,9 @@ fn track_streams_a_recording_and_resumes_after_an_interruption() {
 
 #[test]
 fn track_outputs_do_not_depend_on_the_thread_count() {
-    // The observer and the fitter each run their parallel work on a pool of `--threads`
-    // workers; how the work is split must not change a single byte of what is written.
+    // The observer and the fitter share `--threads` workers (with 3: one for the observer, two
+    // or all three for the fitter, frame by frame); how the work is split must not change a
+    // single byte of what is written.
     let dir = tempfile::tempdir().unwrap();
     let rec = sequence_recording(dir.path());
     let log = fixtures().join("../sequence/joints.json");

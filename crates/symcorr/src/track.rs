@@ -71,7 +71,7 @@ use crate::{
     keeps_turned_fit, ArticulatedStart, ArticulatedTables, BoneTransforms, Correspondence, Method,
     MethodReport, Pipeline, PipelineError, PreparedMesh, MIN_VIEW_HELD, TURN_RETRY_BELOW,
 };
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
 use std::sync::Arc;
 use std::time::Instant;
@@ -360,9 +360,12 @@ impl<'a> Tracker<'a> {
     /// reads and observes frame k + 1 while another matches frame k ([`Tracker::parts`]) — and
     /// hands every finished frame to `sink`, on this thread, in the order of `frames`. The
     /// outcomes are those of [`Tracker::frame`] one after the other; a frame the source cannot
-    /// read is skipped with the reason and resets the tracker. The observer's parallel work
-    /// runs on a rayon pool of its own, as many threads as the pool `run` is called from; the
-    /// fitter's on that pool.
+    /// read is skipped with the reason and resets the tracker. The threads of the pool `run`
+    /// is called from are shared between the two: the observer's parallel work runs on half of
+    /// them, the fitter's on the other half while the observer's frames take about as long as
+    /// its own, and on all of them while the observer's take less than
+    /// [`WIDE_FITTER_BELOW`] of its own (the observer then leaves its half idle; back to half
+    /// above [`NARROW_FITTER_ABOVE`]). The outcomes do not depend on the threads.
     ///
     /// `stop` is checked before each frame is read: once it is set no further frame is
     /// read, and the frames in flight (at most two) are finished and handed to `sink`. An error
@@ -396,6 +399,7 @@ impl<'a> Tracker<'a> {
         mut sink: impl FnMut(TrackedFrame) -> Result<(), E>,
     ) -> Result<usize, E> {
         let (observer, fitter) = self.parts();
+        let mut observed_seconds = SmoothedSeconds::default();
         let mut handed = 0;
         let mut failed: Option<E> = None;
         let mut hand = |f: TrackedFrame, failed: &mut Option<E>| {
@@ -406,25 +410,41 @@ impl<'a> Tracker<'a> {
                 }
             }
         };
-        // The observer's parallel work runs on a pool of its own, as large as the caller's: in
-        // one shared pool the fitter's parallel sections queued behind the observer's (bone
-        // heat, fit checks), and the fitter sets the rate (7.7 → 8.4–8.9 frames/s measured:
-        // docs/decisions/2026-12-04-track-throughput-5.md). Without one (the system refuses
-        // a thread), the observer shares the caller's pool as before.
+        // The observer's parallel work runs on a pool of its own: in one shared pool the
+        // fitter's parallel sections queued behind the observer's (bone heat, fit checks), and
+        // the fitter sets the rate (7.7 → 8.4–8.9 frames/s measured:
+        // docs/decisions/2026-12-04-track-throughput-5.md). Each half gets half the threads
+        // (docs/decisions/2026-12-06-track-threads-split.md). Without a pool (the system
+        // refuses a thread), a half shares the caller's pool.
+        let threads = rayon::current_num_threads();
         let observer_pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(rayon::current_num_threads())
+            .num_threads((threads / 2).max(1))
             .thread_name(|i| format!("symcorr-observer-{i}"))
             .build()
             .ok();
+        let mut fitter_pools = FitterPools::new(threads);
+        // The observer's smoothed seconds per frame (`f64` bits; NaN before its first frame),
+        // which the fitter's choice of pool reads.
+        let observer_seconds = AtomicU64::new(f64::NAN.to_bits());
         std::thread::scope(|scope| {
             // A frame read and observed (or refused by the observer), on its way to the fitter.
             type Observed = (usize, f64, Instant, Result<Observation, String>);
             let (to_fit, observed) = sync_channel::<Observed>(1);
             let (to_hand, finished) = channel::<TrackedFrame>();
+            let observer_seconds = &observer_seconds;
             scope.spawn(move || {
                 for (index, time_s, started, observation) in observed {
                     let outcome = match observation {
-                        Ok(o) => fitter.fit(o),
+                        Ok(o) => {
+                            let seconds = f64::from_bits(observer_seconds.load(Ordering::Relaxed));
+                            let t = Instant::now();
+                            let outcome = match fitter_pools.pick(seconds) {
+                                Some(pool) => pool.install(|| fitter.fit(o)),
+                                None => fitter.fit(o),
+                            };
+                            fitter_pools.fitted(t.elapsed().as_secs_f64());
+                            outcome
+                        }
                         Err(reason) => {
                             fitter.reset();
                             FrameOutcome::Skipped(reason)
@@ -457,6 +477,10 @@ impl<'a> Tracker<'a> {
                         Err(e.to_string())
                     }
                 };
+                observed_seconds.add(started.elapsed().as_secs_f64());
+                if let Some(s) = observed_seconds.get() {
+                    observer_seconds.store(s.to_bits(), Ordering::Relaxed);
+                }
                 if to_fit.send((i, time_s, started, observation)).is_err() {
                     break;
                 }
@@ -474,6 +498,106 @@ impl<'a> Tracker<'a> {
             Some(e) => Err(e),
             None => Ok(handed),
         }
+    }
+}
+
+/// [`Tracker::run`]'s fitter spreads its parallel work over every thread while the observer's
+/// frames take less than this share of its own (smoothed over about five frames): the
+/// observer then leaves its half of the threads idle most of the time. Measured 2026-12-06
+/// on 2 cores (one thread per half against two each, ten recordings): one thread each was
+/// faster by 13–19 % where the observer's frames took 0.85–0.98 of the fitter's (640×480 and
+/// 640×576 views of a body 2.6 m away), slower by 3–20 % where they took 0.04–0.61 (smaller
+/// images, a body 3.8 m away, frames matched twice), either way at 0.70 (3.2 m away);
+/// docs/decisions/2026-12-06-track-threads-split.md.
+pub const WIDE_FITTER_BELOW: f64 = 0.6;
+
+/// [`Tracker::run`]'s fitter, spread over every thread, goes back to its half once the
+/// observer's frames take more than this share of its own. Above [`WIDE_FITTER_BELOW`], so
+/// that a ratio near either does not switch every frame.
+pub const NARROW_FITTER_ABOVE: f64 = 0.7;
+
+/// Per-frame seconds, smoothed: an exponential average with weight 0.2 on the newest frame.
+#[derive(Debug, Clone, Copy, Default)]
+struct SmoothedSeconds(Option<f64>);
+
+impl SmoothedSeconds {
+    fn add(&mut self, seconds: f64) {
+        if seconds.is_finite() {
+            self.0 = Some(match self.0 {
+                Some(m) => m + 0.2 * (seconds - m),
+                None => seconds,
+            });
+        }
+    }
+
+    fn get(self) -> Option<f64> {
+        self.0
+    }
+}
+
+/// Is the fitter's next frame spread over every thread, given whether its last one was and
+/// the observer's smoothed seconds per frame over the fitter's ([`WIDE_FITTER_BELOW`],
+/// [`NARROW_FITTER_ABOVE`])? Without a ratio (NaN: no frame of either yet) it stays as it is.
+fn fitter_spread_wide(wide: bool, observer_over_fitter: f64) -> bool {
+    if observer_over_fitter.is_nan() {
+        wide
+    } else if wide {
+        observer_over_fitter <= NARROW_FITTER_ABOVE
+    } else {
+        observer_over_fitter < WIDE_FITTER_BELOW
+    }
+}
+
+/// The fitter's thread pools in [`Tracker::run`] and the choice between them, frame by frame.
+struct FitterPools {
+    /// The threads the observer's pool leaves (at least one).
+    half: Option<rayon::ThreadPool>,
+    /// Every thread (`None` when that is no more than `half`).
+    all: Option<rayon::ThreadPool>,
+    /// Whether the last frame ran on `all`. A run starts there: its first frames are fitted
+    /// from the skeletons, the fitter's longest.
+    wide: bool,
+    /// The fitter's smoothed seconds per frame.
+    seconds: SmoothedSeconds,
+}
+
+impl FitterPools {
+    /// The pools for `threads` threads in all.
+    fn new(threads: usize) -> FitterPools {
+        let pool = |n: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .thread_name(|i| format!("symcorr-fitter-{i}"))
+                .build()
+                .ok()
+        };
+        let half = (threads - threads / 2).max(1);
+        FitterPools {
+            half: pool(half),
+            all: (threads > half).then(|| pool(threads)).flatten(),
+            wide: true,
+            seconds: SmoothedSeconds::default(),
+        }
+    }
+
+    /// The pool for the next frame, given the observer's smoothed seconds per frame (NaN
+    /// before its first); `None`: the caller's pool.
+    fn pick(&mut self, observer_seconds: f64) -> Option<&rayon::ThreadPool> {
+        let ratio = self
+            .seconds
+            .get()
+            .map_or(f64::NAN, |f| observer_seconds / f);
+        self.wide = fitter_spread_wide(self.wide, ratio);
+        if self.wide && self.all.is_some() {
+            self.all.as_ref()
+        } else {
+            self.half.as_ref()
+        }
+    }
+
+    /// Records a frame's fit taking `seconds`.
+    fn fitted(&mut self, seconds: f64) {
+        self.seconds.add(seconds);
     }
 }
 
@@ -937,6 +1061,61 @@ fn swap_limbs(skeleton: &Skeleton, pair: LimbPair) -> Skeleton {
 mod tests {
     use super::*;
     use symcorr_skeleton::Joint;
+
+    #[test]
+    fn the_fitter_spreads_wide_while_the_observer_is_light_with_a_dead_band() {
+        // No ratio yet: stays as it is.
+        assert!(fitter_spread_wide(true, f64::NAN));
+        assert!(!fitter_spread_wide(false, f64::NAN));
+        // Wide stays wide up to the upper threshold, then goes back to its half.
+        assert!(fitter_spread_wide(true, 0.3));
+        assert!(fitter_spread_wide(true, NARROW_FITTER_ABOVE));
+        assert!(!fitter_spread_wide(true, 0.95));
+        // Half stays half down to the lower threshold: between the two nothing switches.
+        assert!(!fitter_spread_wide(false, 0.65));
+        assert!(!fitter_spread_wide(false, WIDE_FITTER_BELOW));
+        assert!(fitter_spread_wide(false, 0.2));
+        // An observer with no time at all (every frame refused at once) leaves the cores free.
+        assert!(fitter_spread_wide(false, 0.0));
+    }
+
+    #[test]
+    fn fitter_pools_follow_the_observer_to_frame_times() {
+        // Two threads: the observer's pool takes one, the fitter one or both.
+        let mut pools = FitterPools::new(2);
+        let size = |p: Option<&rayon::ThreadPool>| p.map(|p| p.current_num_threads());
+        // Before any frame: all of them (the first frames are fitted from the skeletons).
+        assert_eq!(size(pools.pick(f64::NAN)), Some(2));
+        pools.fitted(0.060);
+        // The observer's frames take as long as the fitter's: half.
+        assert_eq!(size(pools.pick(0.058)), Some(1));
+        // A light observer (0.02 s against 0.06): all again, once the average has moved.
+        let mut picked = Vec::new();
+        for _ in 0..10 {
+            pools.fitted(0.060);
+            picked.push(size(pools.pick(0.020)));
+        }
+        assert_eq!(picked.last(), Some(&Some(2)));
+        // One thread in all: one pool of one thread for both choices.
+        let mut one = FitterPools::new(1);
+        assert_eq!(size(one.pick(f64::NAN)), Some(1));
+        one.fitted(0.05);
+        assert_eq!(size(one.pick(0.01)), Some(1));
+    }
+
+    #[test]
+    fn smoothed_seconds_start_at_the_first_frame_and_skip_non_finite_ones() {
+        let mut s = SmoothedSeconds::default();
+        assert_eq!(s.get(), None);
+        s.add(f64::NAN);
+        assert_eq!(s.get(), None);
+        s.add(1.0);
+        assert_eq!(s.get(), Some(1.0));
+        s.add(2.0);
+        approx::assert_relative_eq!(s.get().unwrap(), 1.2, epsilon = 1e-12);
+        s.add(f64::INFINITY);
+        approx::assert_relative_eq!(s.get().unwrap(), 1.2, epsilon = 1e-12);
+    }
 
     #[test]
     fn a_lost_joint_is_borrowed_from_the_previous_frame_moved_with_the_body() {

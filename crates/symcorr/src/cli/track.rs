@@ -115,8 +115,8 @@ pub struct TrackArgs {
         allow_hyphen_values = true
     )]
     pub head_warm_twist: f64,
-    /// Worker threads of each half, the observer and the matcher (default: every core;
-    /// they share the cores).
+    /// Worker threads in all (default: every core): half for the observer, the others for
+    /// the matcher, which takes them all while the observer's frames are light.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
     /// Continue an interrupted run in DIR after its last complete frame.
