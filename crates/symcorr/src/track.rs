@@ -1089,13 +1089,20 @@ mod tests {
         pools.fitted(0.060);
         // The observer's frames take as long as the fitter's: half.
         assert_eq!(size(pools.pick(0.058)), Some(1));
-        // A light observer (0.02 s against 0.06): all again, once the average has moved.
-        let mut picked = Vec::new();
-        for _ in 0..10 {
-            pools.fitted(0.060);
-            picked.push(size(pools.pick(0.020)));
-        }
-        assert_eq!(picked.last(), Some(&Some(2)));
+        // 0.039 s against 0.06 (0.65) lies between the thresholds: still half.
+        assert_eq!(size(pools.pick(0.039)), Some(1));
+        // A light observer (0.02 s against 0.06): all again.
+        assert_eq!(size(pools.pick(0.020)), Some(2));
+        // The fitter's own frames grow shorter (its average falls towards 0.025 s) while the
+        // observer's stay at 0.02: past 0.7 of its own, back to half.
+        let picked: Vec<_> = (0..20)
+            .map(|_| {
+                pools.fitted(0.025);
+                size(pools.pick(0.020))
+            })
+            .collect();
+        assert_eq!(picked.first(), Some(&Some(2)));
+        assert_eq!(picked.last(), Some(&Some(1)));
         // One thread in all: one pool of one thread for both choices.
         let mut one = FitterPools::new(1);
         assert_eq!(size(one.pick(f64::NAN)), Some(1));
