@@ -3,6 +3,7 @@
 // folder (`$CARGO_TARGET_DIR` or ./target, debug profile: `cargo build -p symcorr` first), then
 // for each view waits for the page to say it is ready, takes screenshots into
 // tests/browser/out/screens/ and checks what is drawn, what a click picks and the console.
+// Every glTF file those commands wrote also goes through the Khronos glTF validator.
 //
 // Run: `npm ci && node --test` in this folder (`.ci/run` does).
 
@@ -15,6 +16,7 @@ import path from 'node:path';
 import zlib from 'node:zlib';
 import { fileURLToPath, pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
+import gltfValidator from 'gltf-validator';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const repo = path.resolve(here, '../..');
@@ -52,7 +54,8 @@ before(async () => {
   pages.pair = path.join(out, 'demo', 'view.html');
   // A labels page.
   const mesh = path.join(bodies, 'meshes', 's1_walk-10.ply');
-  symcorr('label', mesh, '--joints', path.join(bodies, 'joints', 's1_walk-10.json'), '--out', path.join(out, 'labels.json'));
+  symcorr('label', mesh, '--joints', path.join(bodies, 'joints', 's1_walk-10.json'), '--out', path.join(out, 'labels.json'),
+    '--glb', path.join(out, 'labels.glb'));
   pages.labels = path.join(out, 'labels.html');
   symcorr('view', path.join(out, 'labels.json'), mesh, '--out', pages.labels);
   // A track page of the first frames of the synthetic recording.
@@ -385,4 +388,29 @@ test('pair view of a partial scan: template points the scan does not show are gr
   assert.deepEqual(errors, []);
   assert.deepEqual(requests, []);
   await page.close();
+});
+
+// Every .glb the commands above wrote: the demo's four meshes (matches and segments of both
+// bodies), the labelled mesh and the track's animated template (morph targets with a
+// per-frame animation). Blender and three.js read what the validator passes.
+test('every glTF file the commands wrote passes the Khronos validator', async () => {
+  const files = [];
+  const walk = (dir) => {
+    for (const e of fs.readdirSync(dir, { withFileTypes: true })) {
+      const p = path.join(dir, e.name);
+      if (e.isDirectory()) walk(p);
+      else if (/\.(glb|gltf)$/.test(e.name)) files.push(p);
+    }
+  };
+  walk(out);
+  const names = files.map((f) => path.relative(out, f)).sort();
+  for (const want of ['labels.glb', path.join('track', 'template_track.glb'), path.join('demo', 'template_matches.glb')]) {
+    assert.ok(names.includes(want), `${want} among ${names.join(', ')}`);
+  }
+  for (const f of files) {
+    const report = await gltfValidator.validateBytes(new Uint8Array(fs.readFileSync(f)));
+    const { numErrors, numWarnings, messages } = report.issues;
+    console.log(`${path.relative(repo, f)}: ${numErrors} errors, ${numWarnings} warnings, ${messages.length} messages`);
+    assert.equal(numErrors + numWarnings, 0, `${f}: ${JSON.stringify(messages)}`);
+  }
 });

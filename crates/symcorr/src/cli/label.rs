@@ -30,10 +30,12 @@ pub struct LabelArgs {
     /// json, kinect-text, ntu or k4abt.
     #[arg(long, value_name = "FORMAT")]
     pub joints_format: Option<String>,
-    /// Also write the mesh coloured by segment as PLY.
+    /// Also write the mesh coloured by segment as PLY (the extension decides: a path ending
+    /// in .glb, .gltf, .obj or .off is written in that format).
     #[arg(long)]
     pub ply: Option<PathBuf>,
-    /// Also write the mesh coloured by segment as binary glTF.
+    /// Also write the mesh coloured by segment as binary glTF (the extension decides, as for
+    /// --ply).
     #[arg(long)]
     pub glb: Option<PathBuf>,
     /// Include the sparse bone-heat weights (`[bone, weight]` pairs per vertex) in the JSON.
