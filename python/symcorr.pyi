@@ -79,7 +79,7 @@ class Labels:
     """The joints as the attachment refined them."""
     fit_score: float
     corrections: Dict[str, object]
-    """``turned_triangles``, ``mirrored_fixed``, ``joint_moves``, ``repaired_joints``, ``accepted_poor_fit``, ``unreached_vertices``."""
+    """``turned_triangles``, ``mirrored_fixed``, ``limbs_swapped`` (``"arms"``, ``"legs"`` or ``None``: that limb pair's sides swapped back alone), ``joint_moves``, ``repaired_joints``, ``accepted_poor_fit``, ``unreached_vertices``."""
     def __init__(
         self,
         segments: npt.NDArray[np.int64],

@@ -769,6 +769,13 @@ fn sequence_recording(dir: &Path) -> PathBuf {
     rec
 }
 
+/// [`sequence_recording`] and a copy of its joint log in `dir` (a log a test may change).
+fn sequence_recording_and_log(dir: &Path) -> (PathBuf, PathBuf) {
+    let log = dir.join("joints.json");
+    std::fs::copy(fixtures().join("../sequence/joints.json"), &log).unwrap();
+    (sequence_recording(dir), log)
+}
+
 fn npy_rows(path: &Path, cols: usize) -> Vec<Vec<u8>> {
     let bytes = std::fs::read(path).unwrap();
     let header = u16::from_le_bytes([bytes[8], bytes[9]]) as usize + 10;
@@ -972,6 +979,104 @@ fn track_streams_a_recording_and_resumes_after_an_interruption() {
         posed_before[..2]
     );
     assert_template_track_covers(&out, &doc, n);
+    // posed.npy lost while the journal says its rows were written: refused, nothing touched
+    // (it is NaN-filled only for a folder whose run never wrote it).
+    std::fs::remove_file(out.join("posed.npy")).unwrap();
+    let corr = std::fs::read(out.join("correspondence.npy")).unwrap();
+    let o = bin()
+        .args(["track", rec.to_str().unwrap(), "--resume", "--joints"])
+        .arg(&log)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("posed.npy") && e.contains("journal"), "{e}");
+    assert!(!out.join("posed.npy").exists());
+    assert_eq!(std::fs::read(out.join("correspondence.npy")).unwrap(), corr);
+}
+
+#[test]
+fn track_resumes_by_content_not_by_path() {
+    // `--resume` compares digests of the recording and the joint log: the same files under
+    // another spelling resume; other files at the same paths are refused, naming the entry.
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, log) = sequence_recording_and_log(dir.path());
+    let out = dir.path().join("track");
+    let track = |rec: &Path, log: &Path| {
+        bin()
+            .arg("track")
+            .arg(rec)
+            .args(["--frames", "0..2", "--resume", "--joints"])
+            .arg(log)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    assert!(track(&rec, &log).status.success());
+    let journal = std::fs::read(out.join("journal.jsonl")).unwrap();
+    // Another spelling of both paths: resumed (nothing left to track).
+    let spelled = dir.path().join(".").join("rec");
+    let o = track(&spelled, &dir.path().join("./joints.json"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Another joint log at the same path.
+    let mut other = read_json(&log);
+    other["frames"].as_array_mut().unwrap().truncate(3);
+    std::fs::write(&log, other.to_string()).unwrap();
+    let e = assert_one_line_error(&track(&rec, &log));
+    assert!(e.contains("joints_digest"), "{e}");
+    std::fs::copy(fixtures().join("../sequence/joints.json"), &log).unwrap();
+    // Another recording at the same path (its frames' times differ).
+    std::fs::write(rec.join("depth_times.txt"), "0\n0.04\n0.08\n0.12\n").unwrap();
+    let e = assert_one_line_error(&track(&rec, &log));
+    assert!(e.contains("recording_digest"), "{e}");
+    assert_eq!(std::fs::read(out.join("journal.jsonl")).unwrap(), journal);
+}
+
+#[test]
+fn track_refuses_a_view_page_on_an_input_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, log) = sequence_recording_and_log(dir.path());
+    let out = dir.path().join("track");
+    let before: Vec<Vec<u8>> = [log.clone(), rec.join("depth_times.txt")]
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
+    std::fs::create_dir_all(dir.path().join("pages")).unwrap();
+    let link = dir.path().join("pages/link.html");
+    std::os::unix::fs::symlink(&log, &link).unwrap();
+    for (page, says) in [
+        (log.clone(), "input"),
+        (link, "input"),
+        (rec.join("depth_times.txt"), "recording folder"),
+        (rec.join("depth/page.html"), "recording folder"),
+        (out.join("track.json"), "own outputs"),
+        (dir.path().join("missing/page.html"), "does not exist"),
+        (dir.path().join("pages"), "directory"),
+    ] {
+        let o = run(bin()
+            .arg("track")
+            .arg(&rec)
+            .arg("--joints")
+            .arg(&log)
+            .arg("--out")
+            .arg(&out)
+            .arg("--view")
+            .arg(&page));
+        let e = assert_one_line_error(&o);
+        assert!(
+            e.contains("--view") && e.contains(says),
+            "{}: {e}",
+            page.display()
+        );
+        assert!(!out.exists(), "{}: nothing written", page.display());
+    }
+    let after: Vec<Vec<u8>> = [log, rec.join("depth_times.txt")]
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
+    assert_eq!(before, after, "the inputs are untouched");
 }
 
 #[test]
@@ -1125,6 +1230,108 @@ fn track_turns_back_a_skeleton_logged_facing_away() {
     for (a, b) in posed[0].iter().zip(&posed[1]) {
         let mean = mean_point_distance(a, b);
         assert!(mean < 0.04, "mean distance between the poses {mean}");
+    }
+}
+
+/// `log` with the left and right joints of one limb pair (`names`: "hip", "knee", …)
+/// exchanged in every frame: a tracker that swapped that pair for the whole recording.
+fn swap_log_pair(log: &mut Value, names: &[&str]) {
+    for f in log["frames"].as_array_mut().unwrap() {
+        for key in ["joints", "confidence"] {
+            let Some(m) = f.get_mut(key).and_then(Value::as_object_mut) else {
+                continue;
+            };
+            for n in names {
+                let (l, r) = (format!("{n}_left"), format!("{n}_right"));
+                if let (Some(a), Some(b)) = (m.remove(&l), m.remove(&r)) {
+                    m.insert(l, b);
+                    m.insert(r, a);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn match_swaps_back_one_limb_pair_and_says_so() {
+    // A tracker's leg swap or arm swap on the target's joints: the pair is swapped back alone
+    // (not the whole skeleton, which would move the swap onto the other pair), no match
+    // flips, and the fit block names the pair.
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = ("s0_rest", "s0_walk-10");
+    let target = symcorr_mesh::io::read(mesh(b)).unwrap().mesh;
+    let m = mirror();
+    for (pair, names) in [
+        ("legs", ["hip", "knee", "ankle", "foot"]),
+        ("arms", ["shoulder", "elbow", "wrist", "hand"]),
+    ] {
+        let mut log = read_json(&joints(b));
+        swap_log_pair(&mut log, &names);
+        let swapped = dir.path().join(format!("{pair}.json"));
+        std::fs::write(&swapped, log.to_string()).unwrap();
+        let out = dir.path().join(format!("{pair}-corr.json"));
+        let o = run(bin()
+            .arg("match")
+            .arg(mesh(a))
+            .arg(mesh(b))
+            .arg("--template-joints")
+            .arg(joints(a))
+            .arg("--target-joints")
+            .arg(&swapped)
+            .args(["--samples", "2000"])
+            .arg("--out")
+            .arg(&out));
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let doc = read_json(&out);
+        assert_eq!(doc["fit"]["target"]["limbs_swapped"], pair);
+        assert!(
+            doc["fit"]["target"].get("sides_swapped").is_none(),
+            "{}",
+            doc["fit"]
+        );
+        assert!(doc["fit"]["template"].get("limbs_swapped").is_none());
+        let corr = CorrespondenceFile::read(&out).unwrap();
+        let pairs: Vec<(u32, u32)> = corr.pairs.iter().map(|&(p, q, _)| (p, q)).collect();
+        let e = evaluate(
+            &EvalGraph::new(&target),
+            target.total_area(),
+            &pairs,
+            |p| p,
+            Some(&m),
+        );
+        assert_eq!(e.flip_rate(), Some(0.0), "{pair}");
+        assert!(e.mean_error() < 0.01, "{pair}: {}", e.mean_error());
+    }
+}
+
+#[test]
+fn track_swaps_back_legs_the_log_swapped_throughout() {
+    // Continuity cannot fix a pair swapped from the first frame on; the attachment sees the
+    // hips point opposite to the shoulders, and the feet say which pair to swap back.
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sequence_recording(dir.path());
+    let log_path = fixtures().join("../sequence/joints.json");
+    let mut log = read_json(&log_path);
+    swap_log_pair(&mut log, &["hip", "knee", "ankle", "foot"]);
+    let swapped_path = dir.path().join("legs.json");
+    std::fs::write(&swapped_path, log.to_string()).unwrap();
+    let (_, as_logged) = track_frames_and_poses(&rec, &[], &log_path, &dir.path().join("a"));
+    let (frames, swapped) = track_frames_and_poses(&rec, &[], &swapped_path, &dir.path().join("b"));
+    for f in &frames {
+        assert_eq!(f["status"], "ok", "{f}");
+        assert!(
+            f["corrections"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|c| c == "legs_swap_fixed"),
+            "{f}"
+        );
+    }
+    // The same fits as with the log as recorded.
+    for (a, b) in as_logged.iter().zip(&swapped) {
+        let mean = mean_point_distance(a, b);
+        assert!(mean < 1e-3, "mean distance between the poses {mean}");
     }
 }
 

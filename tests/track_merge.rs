@@ -244,13 +244,21 @@ fn merged_slices_are_the_run_over_their_frames() {
         false,
     );
     let other = d.join("other");
-    edited_copy(&p1, &other, |l| l[0]["recording"] = "elsewhere/rec".into());
+    edited_copy(&p1, &other, |l| {
+        l[0]["recording_digest"] = "0123456789abcdef".into()
+    });
     assert_refused(
         &merge(&[&p0, &other], &out, &[]),
-        "not slices of one run: their journals' recording differ",
+        "not slices of one run: their journals' recording_digest differ",
         &out,
         false,
     );
+    // The same recording under another path (a job run from another working folder): the
+    // content's digest decides, not the spelling.
+    let moved = d.join("moved");
+    edited_copy(&p1, &moved, |l| l[0]["recording"] = "elsewhere/rec".into());
+    let o = merge(&[&p0, &moved], &d.join("merged-moved"), &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let offset = d.join("offset");
     edited_copy(&p1, &offset, |l| l[0]["joint_offset_s"] = 0.04.into());
     assert_refused(

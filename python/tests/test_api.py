@@ -83,6 +83,18 @@ def test_label_matches_the_command_line(rest, cli, tmp_path):
     assert again.corrections == labels.corrections and again.joints == labels.joints
 
 
+def test_label_swaps_back_a_swapped_leg_pair(rest):
+    v, f, j = rest
+    assert symcorr.label(v, f, j).corrections["limbs_swapped"] is None
+    legs = dict(j)
+    for n in ("hip", "knee", "ankle", "foot"):
+        legs[n + "_left"], legs[n + "_right"] = j[n + "_right"], j[n + "_left"]
+    swapped = symcorr.label(v, f, legs)
+    assert swapped.corrections["limbs_swapped"] == "legs"
+    assert swapped.corrections["mirrored_fixed"] is False
+    np.testing.assert_array_equal(swapped.segments, symcorr.label(v, f, j).segments)
+
+
 def test_label_with_the_makehuman_convention(rest):
     a = symcorr.label(*rest)
     b = symcorr.label(*rest, boundaries="makehuman")

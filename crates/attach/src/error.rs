@@ -1,3 +1,4 @@
+use symcorr_skeleton::LimbPair;
 use thiserror::Error;
 
 /// Everything that can make attachment fail. Each message says what was wrong and what to do.
@@ -59,6 +60,22 @@ pub enum AttachError {
         /// Combined facing evidence (negative: mirrored).
         evidence: f64,
     },
+    /// One limb pair's left and right are exchanged against the other pair's (a tracker's
+    /// arm or leg swap) and the options say to refuse rather than fix.
+    #[error("the {} left and right are swapped against the rest of the skeleton (the shoulders and the hips point opposite ways across the spine); swap the joint names or allow the fix", pair_name(*.pair))]
+    SwappedLimbs {
+        /// The exchanged pair.
+        pair: LimbPair,
+    },
+    /// The shoulders and the hips point opposite ways across the spine — one limb pair's left
+    /// and right are exchanged — and nothing in the mesh or the joints tells which.
+    #[error("the arms' and the legs' left and right disagree (the shoulders and the hips point opposite ways across the spine, cosine {cosine:.2}) and neither the feet nor the knees tell which pair the tracker swapped (facing evidence {evidence:.2}); fix the joint names of one pair")]
+    LimbSidesUndetermined {
+        /// Cosine between the shoulders' and the hips' left → right directions.
+        cosine: f64,
+        /// The facing evidence of the better of the two corrections.
+        evidence: f64,
+    },
     /// The linear solve of bone heat failed.
     #[error("bone heat: {0}")]
     Solver(String),
@@ -96,4 +113,12 @@ pub enum AttachError {
     /// No boundary rule could be learned from the labelled bodies.
     #[error("no segment boundary could be learned from the labelled bodies")]
     NothingLearned,
+}
+
+/// "arms'" or "legs'", for messages.
+fn pair_name(pair: LimbPair) -> &'static str {
+    match pair {
+        LimbPair::Arms => "arms'",
+        LimbPair::Legs => "legs'",
+    }
 }

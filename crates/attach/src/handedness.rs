@@ -1,12 +1,15 @@
 //! A left/right verdict for a skeleton against a mesh (e.g. a single-view scan), from the
 //! evidence of [`check_handedness`](crate::check_handedness): a verdict needs foot geometry in
 //! the mesh that reaches at least `min_offset_m` farther forward than backward, and combined
-//! evidence beyond [`MIRROR_MARGIN`]; anything weaker is [`Handedness::Undetermined`].
+//! evidence beyond [`MIRROR_MARGIN`]; anything weaker is [`Handedness::Undetermined`]. A
+//! skeleton whose shoulders and hips point opposite ways across the spine has one limb pair
+//! exchanged; the verdict names it ([`Handedness::LimbsSwapped`]) when the evidence tells
+//! which, as [`attach`](crate::attach) decides before it swaps that pair back.
 //!
 //! The skeleton and the mesh must be in the same frame (e.g. both in Kinect camera space, or the
 //! skeleton already aligned to the mesh).
 
-use crate::{check_handedness, Skeleton, MIRROR_MARGIN};
+use crate::{refine, repair, LimbPair, Skeleton, MIRROR_MARGIN};
 use nalgebra::Vector3;
 use symcorr_mesh::TriMesh;
 
@@ -17,6 +20,10 @@ pub enum Handedness {
     Consistent,
     /// Left and right are swapped relative to the mesh (use [`Skeleton::swap_sides`]).
     Swapped,
+    /// One limb pair's left and right are exchanged against the rest of the skeleton (a
+    /// tracker's arm or leg swap; use [`Skeleton::swap_limbs`]); the facing evidence is that of
+    /// the skeleton with the pair swapped back.
+    LimbsSwapped(LimbPair),
     /// The mesh gives no usable cue (no foot geometry found, or the evidence is too weak).
     Undetermined,
 }
@@ -61,19 +68,32 @@ pub fn handedness_verdict(
         vertices_used: 0,
         evidence: 0.0,
     };
-    let Ok(check) = check_handedness(mesh, skeleton) else {
+    if mesh.num_vertices() == 0 {
+        return undetermined;
+    }
+    let Ok(rep) = repair::repair(skeleton) else {
         return undetermined;
     };
+    let height = repair::skeleton_height(&rep.positions, &rep.usable);
+    let Ok((positions, usable, swapped_limbs)) =
+        crate::limb_pair_step(mesh, rep.positions, rep.usable, height)
+    else {
+        return undetermined;
+    };
+    let check = refine::mirror_check(mesh, &positions, &usable, height);
     let facing = check.facing.unwrap_or_else(Vector3::zeros);
     let evidence = check.evidence();
     let Some(offset) = check.mesh_offset else {
         return HandednessReport {
+            verdict: swapped_limbs.map_or(Handedness::Undetermined, Handedness::LimbsSwapped),
             facing,
             evidence,
             ..undetermined
         };
     };
-    let verdict = if offset >= min_offset_m && evidence > MIRROR_MARGIN {
+    let verdict = if let Some(pair) = swapped_limbs {
+        Handedness::LimbsSwapped(pair)
+    } else if offset >= min_offset_m && evidence > MIRROR_MARGIN {
         Handedness::Consistent
     } else if offset <= -min_offset_m && check.says_swapped() {
         Handedness::Swapped

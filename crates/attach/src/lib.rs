@@ -74,7 +74,7 @@ pub use error::AttachError;
 pub use fit::{camera_side, FitCheck, FitCheckKind, FitQuality, FIT_THRESHOLD, REACH};
 pub use handedness::{handedness_verdict, Handedness, HandednessReport};
 pub use symcorr_skeleton::{
-    BodySide, Bone, Joint, Plane, SagittalPlanes, Segment, Skeleton, BONES,
+    BodySide, Bone, Joint, LimbPair, Plane, SagittalPlanes, Segment, Skeleton, BONES,
 };
 
 use nalgebra::{Point3, Rotation3, Vector3};
@@ -262,6 +262,11 @@ pub struct MirrorCheck {
     pub facing: Option<Vector3<f64>>,
     /// True if the sides were swapped (policy [`MirrorPolicy::Fix`]).
     pub swapped: bool,
+    /// The limb pair whose sides were swapped back alone (policy [`MirrorPolicy::Fix`]): its
+    /// left → right direction across the spine opposed the other pair's (shoulders against
+    /// hips, a tracker's arm or leg swap), and the facing evidence said which of the two
+    /// pairs was the exchanged one. The evidence fields describe the corrected skeleton.
+    pub swapped_limbs: Option<LimbPair>,
 }
 
 impl MirrorCheck {
@@ -270,6 +275,31 @@ impl MirrorCheck {
     /// skeleton; below `-`[`MIRROR_MARGIN`] the skeleton's sides are swapped.
     pub fn evidence(&self) -> f64 {
         refine::mirror_decision(self)
+    }
+
+    /// The joint of the skeleton as given that the checked skeleton's joint `j` came from:
+    /// through the limb pair swapped back ([`MirrorCheck::swapped_limbs`]), then the whole
+    /// side swap ([`MirrorCheck::swapped`]).
+    ///
+    /// ```
+    /// use symcorr_attach::{Joint, LimbPair, MirrorCheck};
+    /// let m = MirrorCheck { swapped_limbs: Some(LimbPair::Legs), ..MirrorCheck::default() };
+    /// assert_eq!(m.source(Joint::KneeLeft), Joint::KneeRight);
+    /// assert_eq!(m.source(Joint::ElbowLeft), Joint::ElbowLeft);
+    /// ```
+    pub fn source(&self, j: Joint) -> Joint {
+        let j = j.mirror_if(self.swapped);
+        match self.swapped_limbs {
+            Some(pair)
+                if pair
+                    .left_joints()
+                    .iter()
+                    .any(|&l| l == j || l.mirror() == j) =>
+            {
+                j.mirror()
+            }
+            _ => j,
+        }
     }
 
     /// True if the evidence says the skeleton's left and right are swapped relative to the
@@ -532,11 +562,15 @@ pub(crate) fn attach_with_usable(
         };
         let centroid = mesh_centroid(mesh);
         let mut best = None;
+        // A limb pair already swapped back stays so (and reported) in every placement.
+        let swapped_limbs = mirror.swapped_limbs;
         for (r, t) in fit::search(&fit_mesh, &unmirrored.0, &unmirrored.1, height, &centroid) {
             let q: geom::Joints = std::array::from_fn(|j| r * unmirrored.0[j] + t);
-            let Ok((q, qu, m)) = mirror_step(mesh, q, unmirrored.1, height, options.mirror) else {
+            let Ok((q, qu, mut m)) = mirror_step(mesh, q, unmirrored.1, height, options.mirror)
+            else {
                 continue;
             };
+            m.swapped_limbs = m.swapped_limbs.or(swapped_limbs);
             let f = fit::measure(&fit_mesh, &q, &qu, height, &m);
             if f.passed()
                 && best
@@ -644,15 +678,15 @@ pub(crate) fn attach_with_usable(
     joints.head_turn = skeleton.head_turn;
     for j in Joint::ALL {
         joints.confidence[j.index()] = if usable[j.index()] {
-            skeleton.confidence[j.mirror_if(mirror.swapped).index()].max(0.0)
+            skeleton.confidence[mirror.source(j).index()].max(0.0)
         } else {
             0.0
         };
         joints.interpolated[j.index()] = rep
             .repaired
             .iter()
-            .any(|&(k, r)| k == j.mirror_if(mirror.swapped) && r == JointRepair::Interpolated)
-            || skeleton.interpolated[j.mirror_if(mirror.swapped).index()];
+            .any(|&(k, r)| k == mirror.source(j) && r == JointRepair::Interpolated)
+            || skeleton.interpolated[mirror.source(j).index()];
     }
     let attachment = Attachment {
         labels,
@@ -689,7 +723,12 @@ fn mirror_step(
     if policy == MirrorPolicy::Ignore {
         return Ok((positions, usable, MirrorCheck::default()));
     }
+    let (positions, usable, swapped_limbs) = limb_pair_step(mesh, positions, usable, height)?;
+    if let (Some(pair), MirrorPolicy::Refuse) = (swapped_limbs, policy) {
+        return Err(AttachError::SwappedLimbs { pair });
+    }
     let mut mirror = refine::mirror_check(mesh, &positions, &usable, height);
+    mirror.swapped_limbs = swapped_limbs;
     let evidence = mirror.evidence();
     if evidence < -MIRROR_MARGIN {
         if policy == MirrorPolicy::Refuse {
@@ -700,6 +739,81 @@ fn mirror_step(
         return Ok((p, u, mirror));
     }
     Ok((positions, usable, mirror))
+}
+
+/// Below this cosine between the shoulders' and the hips' left → right directions (across the
+/// spine) the two pairs point opposite ways: one of them is exchanged. A torso twists by 45–60°
+/// at most; 120° leaves room for a tracker's noise on hips 15–25 cm apart.
+const OPPOSED_PAIRS_COS: f64 = -0.5;
+
+/// A tracker's swap of one limb pair, undone: when the shoulders' and the hips' left → right
+/// directions across the spine oppose ([`OPPOSED_PAIRS_COS`]), the arms and the legs each get
+/// swapped back in turn and the facing evidence of the result ([`MirrorCheck::evidence`]: the
+/// feet point forward, the knees bend forward, the mesh reaches forward around the ankles)
+/// picks the one that makes the body consistent — the other leaves a fully mirrored skeleton,
+/// whose evidence is the same with the sign reversed. The torso frame of the whole-body check
+/// averages the two pairs' directions, so without this step their disagreement is noise there.
+/// Evidence too weak to choose (no feet, straight legs) is an error naming the cause: matching
+/// on either guess maps one limb pair onto its twin.
+pub(crate) fn limb_pair_step(
+    mesh: &TriMesh,
+    positions: geom::Joints,
+    usable: [bool; 20],
+    height: f64,
+) -> Result<(geom::Joints, [bool; 20], Option<LimbPair>), AttachError> {
+    let Some(cos) = pairs_cosine(&positions, &usable) else {
+        return Ok((positions, usable, None));
+    };
+    if cos > OPPOSED_PAIRS_COS {
+        return Ok((positions, usable, None));
+    }
+    let swapped = |pair: LimbPair| {
+        let (mut p, mut u) = (positions, usable);
+        for l in pair.left_joints() {
+            let (a, b) = (l.index(), l.mirror().index());
+            p.swap(a, b);
+            u.swap(a, b);
+        }
+        let evidence = refine::mirror_check(mesh, &p, &u, height).evidence();
+        (p, u, evidence)
+    };
+    let (arms, legs) = (swapped(LimbPair::Arms), swapped(LimbPair::Legs));
+    if arms.2 - legs.2 > 2.0 * MIRROR_MARGIN {
+        Ok((arms.0, arms.1, Some(LimbPair::Arms)))
+    } else if legs.2 - arms.2 > 2.0 * MIRROR_MARGIN {
+        Ok((legs.0, legs.1, Some(LimbPair::Legs)))
+    } else {
+        Err(AttachError::LimbSidesUndetermined {
+            cosine: cos,
+            evidence: arms.2.max(legs.2),
+        })
+    }
+}
+
+/// The cosine between the shoulders' and the hips' left → right directions, both taken across
+/// the spine (hip centre → shoulder centre); `None` without those six joints or when one
+/// direction vanishes.
+fn pairs_cosine(p: &geom::Joints, usable: &[bool; 20]) -> Option<f64> {
+    use Joint as J;
+    let joints = [
+        J::HipCenter,
+        J::ShoulderCenter,
+        J::ShoulderLeft,
+        J::ShoulderRight,
+        J::HipLeft,
+        J::HipRight,
+    ];
+    if !joints.iter().all(|j| usable[j.index()]) {
+        return None;
+    }
+    let up = geom::unit(p[J::ShoulderCenter.index()] - p[J::HipCenter.index()])?;
+    let across = |l: Joint, r: Joint| {
+        let d = p[l.index()] - p[r.index()];
+        geom::unit(d - up * d.dot(&up))
+    };
+    let s = across(J::ShoulderLeft, J::ShoulderRight)?;
+    let h = across(J::HipLeft, J::HipRight)?;
+    Some(s.dot(&h))
 }
 
 /// The joints with left and right exchanged.

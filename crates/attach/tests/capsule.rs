@@ -5,7 +5,7 @@ mod common;
 
 use common::{agreement, noisy, unambiguous, Rng};
 use symcorr_attach::testbody::{capsule_body, t_pose};
-use symcorr_attach::{attach, AttachOptions, HeatMesh, Segment, Skeleton};
+use symcorr_attach::{attach, AttachOptions, HeatMesh, Joint, LimbPair, Segment, Skeleton};
 use symcorr_mesh::TriMesh;
 
 fn body() -> (Skeleton, TriMesh, Vec<Segment>, Vec<bool>) {
@@ -114,6 +114,68 @@ fn swapped_sides_are_detected_and_fixed_or_refused() {
     };
     let e = attach(&mesh, &swapped, &refuse).unwrap_err();
     assert!(e.to_string().contains("swapped"), "{e}");
+}
+
+#[test]
+fn one_swapped_limb_pair_is_swapped_back_alone_or_refused() {
+    let (sk, mesh, reference, core) = body();
+    let plain = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
+    assert_eq!(plain.diagnostics.mirror.swapped_limbs, None);
+    for pair in [LimbPair::Arms, LimbPair::Legs] {
+        let a = attach(&mesh, &sk.swap_limbs(pair), &AttachOptions::default()).unwrap();
+        let m = &a.diagnostics.mirror;
+        assert_eq!(m.swapped_limbs, Some(pair), "{pair:?}");
+        assert!(!m.swapped, "{pair:?}: the rest of the body was not swapped");
+        let (agree, mirror) = agreement(&mesh, &a.labels, &reference, &core);
+        assert!(agree >= 0.95 && mirror == 0.0, "{pair:?}: {agree} {mirror}");
+        assert_eq!(a.labels, plain.labels, "{pair:?}");
+        // The refined joints are the unswapped skeleton's, with its confidences.
+        assert_eq!(a.joints.positions, plain.joints.positions, "{pair:?}");
+        let refuse = AttachOptions {
+            mirror: symcorr_attach::MirrorPolicy::Refuse,
+            ..AttachOptions::default()
+        };
+        let e = attach(&mesh, &sk.swap_limbs(pair), &refuse).unwrap_err();
+        let name = if pair == LimbPair::Arms {
+            "arms'"
+        } else {
+            "legs'"
+        };
+        assert!(e.to_string().contains(name), "{e}");
+        // Both pairs swapped is the whole skeleton mirrored: the whole-body fix, no pair.
+        let both = sk.swap_limbs(LimbPair::Arms).swap_limbs(LimbPair::Legs);
+        let b = attach(&mesh, &both, &AttachOptions::default()).unwrap();
+        assert!(b.diagnostics.mirror.swapped && b.diagnostics.mirror.swapped_limbs.is_none());
+    }
+}
+
+#[test]
+fn a_swapped_limb_pair_nothing_tells_apart_is_refused() {
+    // Feet straight below the ankles and straight legs: no forward cue at all, so an arm swap
+    // and a leg swap look the same.
+    let mut sk = t_pose(1.0);
+    for (ankle, foot) in [
+        (Joint::AnkleLeft, Joint::FootLeft),
+        (Joint::AnkleRight, Joint::FootRight),
+    ] {
+        sk.positions[foot.index()] = sk.positions[ankle.index()] - nalgebra::Vector3::y() * 0.06;
+    }
+    let (mesh, _) = capsule_body(&sk, 0.02);
+    assert!(attach(&mesh, &sk, &AttachOptions::default()).is_ok());
+    let e = attach(
+        &mesh,
+        &sk.swap_limbs(LimbPair::Arms),
+        &AttachOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, symcorr_attach::AttachError::LimbSidesUndetermined { .. }),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("neither the feet nor the knees"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -50,6 +50,7 @@ use crate::geom::median;
 use crate::joints::{JointFrame, JointLog, KINECT_FPS};
 use nalgebra::{Point3, Vector3};
 use std::path::{Path, PathBuf};
+pub use symcorr_skeleton::LimbPair;
 use symcorr_skeleton::{Joint, Skeleton};
 
 /// The intrinsics file of a recording folder.
@@ -971,35 +972,6 @@ impl JointMoveFilter {
             *p = g + filter_xyz(fs, time_s, m - g);
         }
         out
-    }
-}
-
-/// A left/right pair of limbs whose joints a tracker may exchange.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LimbPair {
-    /// Shoulders, elbows, wrists and hands.
-    Arms,
-    /// Hips, knees, ankles and feet.
-    Legs,
-}
-
-impl LimbPair {
-    /// The left-side joints of the pair (their mirrors, [`Joint::mirror`], are the right side).
-    pub const fn left_joints(self) -> [Joint; 4] {
-        match self {
-            LimbPair::Arms => [
-                Joint::ShoulderLeft,
-                Joint::ElbowLeft,
-                Joint::WristLeft,
-                Joint::HandLeft,
-            ],
-            LimbPair::Legs => [
-                Joint::HipLeft,
-                Joint::KneeLeft,
-                Joint::AnkleLeft,
-                Joint::FootLeft,
-            ],
-        }
     }
 }
 

@@ -866,15 +866,6 @@ fn walker(t: f64) -> Skeleton {
     Skeleton::from_positions(p)
 }
 
-/// `s` with only the joints of `pair` exchanged left for right.
-fn swap_pair(s: &Skeleton, pair: LimbPair) -> Skeleton {
-    let mut out = s.clone();
-    for l in pair.left_joints() {
-        out.positions.swap(l.index(), l.mirror().index());
-    }
-    out
-}
-
 #[test]
 fn a_swapped_frame_is_detected() {
     for i in 0..30 {
@@ -884,7 +875,7 @@ fn a_swapped_frame_is_detected() {
         assert!(e > 0.9, "frame {i}: {e}");
         assert!(legs_swapped(&prev, &swapped) && arms_swapped(&prev, &swapped));
         // Only the legs exchanged.
-        let legs = swap_pair(&cur, LimbPair::Legs);
+        let legs = cur.swap_limbs(LimbPair::Legs);
         assert!(legs_swapped(&prev, &legs), "frame {i}");
         assert!(!arms_swapped(&prev, &legs), "frame {i}");
         assert!(limb_swap_evidence(&prev, &legs, LimbPair::Legs) > 0.7);

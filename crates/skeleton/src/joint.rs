@@ -212,3 +212,38 @@ mod tests {
         assert_eq!(Bone::new(Joint::Head, Joint::Spine).index(), None);
     }
 }
+
+/// A left/right pair of limbs whose joints a tracker may exchange (a leg or arm swap: the
+/// pair's left joints reported at the right limb and the other way round).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LimbPair {
+    /// Shoulders, elbows, wrists and hands.
+    Arms,
+    /// Hips, knees, ankles and feet.
+    Legs,
+}
+
+impl LimbPair {
+    /// The left-side joints of the pair (their mirrors, [`Joint::mirror`], are the right side).
+    ///
+    /// ```
+    /// use symcorr_skeleton::{Joint, LimbPair};
+    /// assert_eq!(LimbPair::Legs.left_joints()[1], Joint::KneeLeft);
+    /// ```
+    pub const fn left_joints(self) -> [Joint; 4] {
+        match self {
+            LimbPair::Arms => [
+                Joint::ShoulderLeft,
+                Joint::ElbowLeft,
+                Joint::WristLeft,
+                Joint::HandLeft,
+            ],
+            LimbPair::Legs => [
+                Joint::HipLeft,
+                Joint::KneeLeft,
+                Joint::AnkleLeft,
+                Joint::FootLeft,
+            ],
+        }
+    }
+}

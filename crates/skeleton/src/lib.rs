@@ -33,7 +33,7 @@ mod planes;
 mod segment;
 mod skeleton;
 
-pub use joint::{Bone, Joint, BONES};
+pub use joint::{Bone, Joint, LimbPair, BONES};
 pub use planes::{Plane, SagittalPlanes};
 pub use segment::{BodySide, Segment};
 pub use skeleton::Skeleton;

@@ -1,6 +1,6 @@
 //! A skeleton: one position, confidence and provenance per joint.
 
-use crate::{Bone, Joint};
+use crate::{Bone, Joint, LimbPair};
 use nalgebra::{Point3, Vector3};
 
 /// A canonical 20-joint skeleton: one position (metres unless stated otherwise, in whatever
@@ -92,6 +92,28 @@ impl Skeleton {
             out.positions[j.index()] = self.positions[j.mirror().index()];
             out.confidence[j.index()] = self.confidence[j.mirror().index()];
             out.interpolated[j.index()] = self.interpolated[j.mirror().index()];
+        }
+        out
+    }
+
+    /// The skeleton with the left and right joints of one limb pair exchanged (positions
+    /// unchanged, names swapped): what a tracker that swapped that pair alone reported.
+    ///
+    /// ```
+    /// use symcorr_skeleton::{Joint, LimbPair, Skeleton};
+    /// let mut xyz = [[0.0, 1.0, 2.0]; Joint::COUNT];
+    /// xyz[Joint::KneeLeft.index()] = [0.1, 0.5, 2.0];
+    /// let s = Skeleton::from_arrays(xyz).swap_limbs(LimbPair::Legs);
+    /// assert_eq!(s.position(Joint::KneeRight).x, 0.1);
+    /// assert_eq!(s.position(Joint::KneeLeft).x, 0.0);
+    /// ```
+    pub fn swap_limbs(&self, pair: LimbPair) -> Skeleton {
+        let mut out = self.clone();
+        for l in pair.left_joints() {
+            let (a, b) = (l.index(), l.mirror().index());
+            out.positions.swap(a, b);
+            out.confidence.swap(a, b);
+            out.interpolated.swap(a, b);
         }
         out
     }

@@ -212,6 +212,15 @@ pub struct FitEntry {
     /// turned joints held more (`Pipeline::run_on_view`). Absent when false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub turned_about_spine: bool,
+    /// The skeleton's left and right were swapped to fit the mesh (symcorr-attach's handedness
+    /// check: the feet pointed backwards). Absent when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sides_swapped: bool,
+    /// `"arms"` or `"legs"`: that limb pair's left and right were swapped back alone — the
+    /// shoulders and the hips pointed opposite ways across the spine (a tracker's arm or leg
+    /// swap). Absent when none was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limbs_swapped: Option<String>,
 }
 
 /// One fit check of a [`FitEntry`].

@@ -93,9 +93,9 @@ pub fn correspondence_json(
         fit: Some(MeshPair {
             target: FitEntry {
                 view_held: corr.view_held().map(round6),
-                ..fit_entry(&target.attachment.diagnostics.fit, target.unreached)
+                ..fit_entry(&target.attachment.diagnostics, target.unreached)
             },
-            template: fit_entry(&template.attachment.diagnostics.fit, template.unreached),
+            template: fit_entry(&template.attachment.diagnostics, template.unreached),
         }),
         format: CORRESPONDENCE_FORMAT.to_string(),
         no_counterpart: corr.has_counterpart().map(|_| no_counterpart),
@@ -123,7 +123,8 @@ pub fn correspondence_json(
 
 /// The `fit` block of the output files; `unreached` counts the vertices left out because no bone
 /// reaches their component.
-pub fn fit_entry(fit: &symcorr_attach::FitQuality, unreached: usize) -> FitEntry {
+pub fn fit_entry(d: &symcorr_attach::Diagnostics, unreached: usize) -> FitEntry {
+    let fit = &d.fit;
     FitEntry {
         accepted_poor_fit: fit.accepted_poor_fit,
         checks: fit
@@ -144,6 +145,14 @@ pub fn fit_entry(fit: &symcorr_attach::FitQuality, unreached: usize) -> FitEntry
         unreached_vertices: unreached.max(fit.unreached.len()),
         view_held: None,
         turned_about_spine: false,
+        sides_swapped: d.mirror.swapped,
+        limbs_swapped: d.mirror.swapped_limbs.map(|p| {
+            match p {
+                symcorr_attach::LimbPair::Arms => "arms",
+                symcorr_attach::LimbPair::Legs => "legs",
+            }
+            .to_string()
+        }),
     }
 }
 
@@ -200,7 +209,7 @@ pub fn labels_file(
                 })
                 .collect(),
             convention_changes: d.convention_changes,
-            fit: Some(fit_entry(&d.fit, 0)),
+            fit: Some(fit_entry(d, 0)),
             joint_asymmetry: d.joint_asymmetry,
             joint_moves: d
                 .joint_moves

@@ -157,9 +157,11 @@ pub enum Correction {
     /// Joints the tracker lost in this frame were borrowed from the previous frame, moved with
     /// the joints it did track.
     JointsBorrowed,
-    /// The legs' left and right were swapped back (continuity with the previous frame).
+    /// The legs' left and right were swapped back: by continuity with the previous frame, or
+    /// because the hips pointed opposite to the shoulders across the spine (the attachment's
+    /// handedness check).
     LegsSwapped,
-    /// The arms' left and right were swapped back (continuity with the previous frame).
+    /// The arms' left and right were swapped back (as the legs', [`Correction::LegsSwapped`]).
     ArmsSwapped,
     /// The whole skeleton's sides were swapped to fit the scan (handedness check).
     SidesSwapped,
@@ -646,7 +648,18 @@ impl Observer<'_> {
         // The fit's anchors: the refinement's moves low-passed (its labels and bone heat keep
         // this frame's own refinement).
         if let Some(f) = &mut self.refinement {
-            target.attachment.joints = f.filter(time_s, &skeleton, &target.attachment.joints);
+            // The moves are measured from the joints as the attachment read them: a limb pair
+            // or the whole skeleton it swapped back is swapped here too (else the move is the
+            // distance between the two legs, low-passed into the next frames' anchors).
+            let mirror = &target.attachment.diagnostics.mirror;
+            let mut given = match mirror.swapped_limbs {
+                Some(pair) => skeleton.swap_limbs(pair),
+                None => skeleton.clone(),
+            };
+            if mirror.swapped {
+                given = given.swap_sides();
+            }
+            target.attachment.joints = f.filter(time_s, &given, &target.attachment.joints);
         }
         let t_prepare = t.elapsed().as_secs_f64();
         let d = &target.attachment.diagnostics;
@@ -709,7 +722,7 @@ impl Observer<'_> {
                 (LimbPair::Arms, Correction::ArmsSwapped),
             ] {
                 if limb_swap_evidence(prev, &skeleton, pair) > SWAP_EVIDENCE_THRESHOLD {
-                    skeleton = swap_limbs(&skeleton, pair);
+                    skeleton = skeleton.swap_limbs(pair);
                     corrections.push(fix);
                 }
             }
@@ -955,6 +968,11 @@ fn attachment_corrections(target: &PreparedMesh) -> Vec<Correction> {
     if d.mirror.swapped {
         out.push(Correction::SidesSwapped);
     }
+    match d.mirror.swapped_limbs {
+        Some(LimbPair::Legs) => out.push(Correction::LegsSwapped),
+        Some(LimbPair::Arms) => out.push(Correction::ArmsSwapped),
+        None => {}
+    }
     if d.fit.accepted_poor_fit {
         out.push(Correction::PoorFitAccepted);
     }
@@ -1043,18 +1061,6 @@ fn largest_joint_motion(a: &Skeleton, b: &Skeleton) -> f64 {
         .filter(|&j| a.confidence[j] > 0.0 && b.confidence[j] > 0.0)
         .map(|j| (a.positions[j] - b.positions[j]).norm())
         .fold(0.0, f64::max)
-}
-
-/// `skeleton` with the left and right joints of one limb pair exchanged.
-fn swap_limbs(skeleton: &Skeleton, pair: LimbPair) -> Skeleton {
-    let mut out = skeleton.clone();
-    for l in pair.left_joints() {
-        let (a, b) = (l.index(), l.mirror().index());
-        out.positions.swap(a, b);
-        out.confidence.swap(a, b);
-        out.interpolated.swap(a, b);
-    }
-    out
 }
 
 #[cfg(test)]
@@ -1185,10 +1191,10 @@ mod tests {
     #[test]
     fn swapping_a_limb_pair_exchanges_only_its_joints_and_twice_is_identity() {
         let sk = symcorr_attach::testbody::t_pose(1.0);
-        let s = swap_limbs(&sk, LimbPair::Legs);
+        let s = sk.swap_limbs(LimbPair::Legs);
         assert_eq!(s.position(Joint::KneeLeft), sk.position(Joint::KneeRight));
         assert_eq!(s.position(Joint::FootRight), sk.position(Joint::FootLeft));
         assert_eq!(s.position(Joint::HandLeft), sk.position(Joint::HandLeft));
-        assert_eq!(swap_limbs(&s, LimbPair::Legs).positions, sk.positions);
+        assert_eq!(s.swap_limbs(LimbPair::Legs).positions, sk.positions);
     }
 }

@@ -121,12 +121,17 @@ pub fn run(a: LabelArgs, max_input_bytes: u64) -> Result<(), CliError> {
     }
     batch.commit().map_err(cli)?;
     eprintln!(
-        "labelled {} vertices ({} triangles turned to a consistent orientation, {} joints moved, alignment scale {}, mirrored fixed: {}, fit score {:.2}{}, {} component(s), {} fallback, {} unreached vertices)",
+        "labelled {} vertices ({} triangles turned to a consistent orientation, {} joints moved, alignment scale {}, mirrored fixed: {}{}, fit score {:.2}{}, {} component(s), {} fallback, {} unreached vertices)",
         mesh.num_vertices(),
         turned,
         d.joint_moves.len(),
         al.scale,
         d.mirror.swapped,
+        match d.mirror.swapped_limbs {
+            Some(symcorr_attach::LimbPair::Arms) => ", arms' sides swapped back",
+            Some(symcorr_attach::LimbPair::Legs) => ", legs' sides swapped back",
+            None => "",
+        },
         d.fit.score,
         if d.fit.accepted_poor_fit {
             " (poor fit accepted)"

@@ -196,12 +196,22 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
         r.component_vertices_removed
     );
     let hand = symcorr_attach::handedness_verdict(&scan.mesh, &skeleton, 0.01);
-    if hand.verdict == symcorr_attach::Handedness::Swapped {
-        eprintln!(
+    match hand.verdict {
+        symcorr_attach::Handedness::Swapped => eprintln!(
             "symcorr: warning: the skeleton's left/right look swapped relative to the scan \
              (feet point {:.3} m backwards)",
             -hand.foot_offset_m
-        );
+        ),
+        symcorr_attach::Handedness::LimbsSwapped(pair) => eprintln!(
+            "symcorr: warning: the skeleton's {} left/right look swapped against the rest of it \
+             (the shoulders and the hips point opposite ways across the spine); match and label \
+             swap them back",
+            match pair {
+                symcorr_attach::LimbPair::Arms => "arms'",
+                symcorr_attach::LimbPair::Legs => "legs'",
+            }
+        ),
+        _ => {}
     }
     Ok(())
 }

@@ -232,13 +232,15 @@ fn journal_header(
     method: &str,
     joint_offset_s: f64,
     intrinsics: &Intrinsics,
-) -> Value {
+) -> Result<Value, CliError> {
     let intrinsics: Value = serde_json::to_value(intrinsics).unwrap_or(Value::Null);
-    json!({
+    Ok(json!({
         "format": "symcorr.track-journal/1",
         "recording": args.recording.display().to_string(),
+        "recording_digest": recording_digest(&args.recording)?,
         "intrinsics": intrinsics,
         "joints": args.joints.display().to_string(),
+        "joints_digest": file_digest(&args.joints)?,
         "template": template,
         "template_vertices": vertices,
         "frames": frames,
@@ -249,7 +251,100 @@ fn journal_header(
         "head_warm_twist": args.head_warm_twist,
         "scans": args.scans,
         "method": method,
-    })
+    }))
+}
+
+/// The first 64 bits (hex) of a SHA-256 digest of `bytes`.
+fn digest_hex(bytes: impl IntoIterator<Item = Vec<u8>>) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for b in bytes {
+        h.update((b.len() as u64).to_le_bytes());
+        h.update(&b);
+    }
+    h.finalize()[..8]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// [`digest_hex`] of a file's content (the joint log: a few MB to tens of MB).
+fn file_digest(path: &Path) -> Result<String, CliError> {
+    let bytes = std::fs::read(path).map_err(|e| CliError::with(path.display(), e))?;
+    Ok(digest_hex([bytes]))
+}
+
+/// What identifies a recording's content without reading every depth frame: a folder's
+/// `intrinsics.json` and `depth_times.txt` and the name and size of every file under `depth/`;
+/// a file's (`.oni`) size and first and last MiB. `--resume` and `track-merge` compare it
+/// rather than the path, which another working folder spells otherwise.
+fn recording_digest(path: &Path) -> Result<String, CliError> {
+    let io = |p: &Path, e: std::io::Error| CliError::with(p.display(), e);
+    if path.is_dir() {
+        let mut parts = Vec::new();
+        for name in ["intrinsics.json", "depth_times.txt"] {
+            let p = path.join(name);
+            parts.push(std::fs::read(&p).map_err(|e| io(&p, e))?);
+        }
+        let depth = path.join("depth");
+        let mut files = Vec::new();
+        for e in std::fs::read_dir(&depth).map_err(|e| io(&depth, e))? {
+            let e = e.map_err(|e| io(&depth, e))?;
+            let len = e.metadata().map_err(|err| io(&e.path(), err))?.len();
+            files.push((e.file_name().to_string_lossy().into_owned(), len));
+        }
+        files.sort();
+        parts.extend(
+            files
+                .into_iter()
+                .map(|(name, len)| format!("{name} {len}").into_bytes()),
+        );
+        Ok(digest_hex(parts))
+    } else {
+        use std::io::{Read, Seek, SeekFrom};
+        const MIB: u64 = 1 << 20;
+        let mut f = std::fs::File::open(path).map_err(|e| io(path, e))?;
+        let len = f.metadata().map_err(|e| io(path, e))?.len();
+        let mut head = Vec::new();
+        (&mut f)
+            .take(MIB)
+            .read_to_end(&mut head)
+            .map_err(|e| io(path, e))?;
+        let mut tail = Vec::new();
+        f.seek(SeekFrom::Start(len.saturating_sub(MIB)))
+            .map_err(|e| io(path, e))?;
+        f.take(MIB)
+            .read_to_end(&mut tail)
+            .map_err(|e| io(path, e))?;
+        Ok(digest_hex([len.to_le_bytes().to_vec(), head, tail]))
+    }
+}
+
+/// The first entry, other than `ignore`'s, in which two journal headers differ, with both
+/// values (`null` for a missing one). The recording's and the log's paths count only where a
+/// header lacks their digests (a journal written before them): the content decides, not the
+/// spelling of the path.
+pub(super) fn header_difference(
+    a: &Value,
+    b: &Value,
+    ignore: &[&str],
+) -> Option<(String, String, String)> {
+    let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
+        return Some(("header".into(), a.to_string(), b.to_string()));
+    };
+    let digests = ["recording_digest", "joints_digest"]
+        .iter()
+        .all(|k| a.contains_key(*k) && b.contains_key(*k));
+    a.keys()
+        .chain(b.keys())
+        .filter(|k| !ignore.contains(&k.as_str()))
+        .filter(|k| !(digests && matches!(k.as_str(), "recording" | "joints")))
+        .find(|k| a.get(*k) != b.get(*k))
+        .map(|k| {
+            let v =
+                |m: &serde_json::Map<String, Value>| m.get(k).unwrap_or(&Value::Null).to_string();
+            (k.clone(), v(a), v(b))
+        })
 }
 
 /// The first 64 bits (hex) of a SHA-256 digest of every option the run matches with (their
@@ -289,12 +384,12 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
     let err = |m: String| CliError(format!("{}: cannot resume: {m}", path.display()));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
     let (first, frames, complete) = parse_journal(&text).map_err(err)?;
-    if &first != header {
-        return Err(err(
-            "it was written for another recording or intrinsics, template, joints, frame list or \
-             options, or by a build whose method differs (the header's `method`)"
-                .into(),
-        ));
+    if let Some((key, then, now)) = header_difference(&first, header, &[]) {
+        return Err(err(format!(
+            "its `{key}` is {then}, this run's {now}: it was written for another recording (its \
+             content: `recording_digest`) or intrinsics, template, joint log (`joints_digest`), \
+             frame list or options, or by a build whose method differs (`method`)"
+        )));
     }
     if complete < text.len() {
         let f = std::fs::OpenOptions::new()
@@ -304,6 +399,64 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
         f.set_len(complete as u64).map_err(|e| err(e.to_string()))?;
     }
     Ok(frames)
+}
+
+/// `--view`'s page, checked before any work like every output: not a folder, in a folder that
+/// exists, not an input (the joint log, the intrinsics, the template, an `.oni` file), not a file
+/// of the recording folder, and not one of the run's own outputs in `--out`.
+fn check_view_page(page: &Path, args: &TrackArgs) -> Result<(), CliError> {
+    let outputs: Vec<PathBuf> = [
+        JOURNAL,
+        report::TRACK_JSON,
+        report::TRACK_SVG,
+        posed::POSED_NPY,
+        posed::TEMPLATE_GLB,
+        "correspondence.npy",
+        "confidence.npy",
+    ]
+    .iter()
+    .map(|name| args.out.join(name))
+    .collect();
+    let mut inputs: Vec<&Path> = vec![&args.joints, &args.recording];
+    inputs.extend(args.intrinsics.as_deref());
+    inputs.extend(args.template.as_deref());
+    inputs.extend(args.template_joints.as_deref());
+    inputs.extend(outputs.iter().map(PathBuf::as_path));
+    // A page in the --out folder that this run creates: only the run's own names are taken.
+    let in_new_out = !args.out.exists()
+        && page
+            .parent()
+            .is_some_and(|d| d.components().eq(args.out.components()));
+    if in_new_out {
+        if outputs.iter().any(|o| o.file_name() == page.file_name()) {
+            return Err(CliError(format!(
+                "--view {}: one of the run's own outputs",
+                page.display()
+            )));
+        }
+        return Ok(());
+    }
+    let dest = symcorr_mesh::io::check_output(page, &inputs)
+        .map_err(|e| CliError(format!("--view {e}")))?;
+    // Anywhere in the recording folder: its depth frames, times and intrinsics are inputs, and
+    // files it may gain are not ours to overwrite.
+    let canonical_dir = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        std::fs::canonicalize(dir.unwrap_or(Path::new("."))).ok()
+    };
+    if let (Some(dir), Ok(rec)) = (
+        canonical_dir(dest.path()),
+        std::fs::canonicalize(&args.recording),
+    ) {
+        if rec.is_dir() && dir.starts_with(&rec) {
+            return Err(CliError(format!(
+                "--view {}: inside the recording folder {}; write the page elsewhere",
+                page.display(),
+                args.recording.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Runs `symcorr track`.
@@ -335,6 +488,9 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             "{}: --out must be a folder",
             args.out.display()
         )));
+    }
+    if let Some(page) = &args.view {
+        check_view_page(page, &args)?;
     }
     let journal_path = args.out.join(JOURNAL);
     if journal_path.exists() && !args.resume {
@@ -382,7 +538,7 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         &method,
         joint_offset_s,
         recording.intrinsics(),
-    );
+    )?;
     let resuming = args.resume && journal_path.exists();
     // The log against the frames, before anything is written (a resumed run was checked when
     // it started).
@@ -404,10 +560,6 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
         })?;
     }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::with(args.out.display(), e))?;
-    if args.scans {
-        let d = args.out.join("scans");
-        std::fs::create_dir_all(&d).map_err(|e| CliError::with(d.display(), e))?;
-    }
     let (corr_path, conf_path) = (
         args.out.join("correspondence.npy"),
         args.out.join("confidence.npy"),
@@ -421,6 +573,17 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             .map(FrameDigest::of)
             .collect();
         let k = done.len();
+        // posed.npy is NaN-filled for a folder whose run started before the file was written,
+        // never for one whose journal says its rows were.
+        let posed_rows = done.iter().filter(|d| d.posed).count();
+        let posed_path = args.out.join(posed::POSED_NPY);
+        if posed_rows > 0 && !posed_path.exists() {
+            return Err(CliError(format!(
+                "{}: missing, but the journal records posed rows for {posed_rows} frames; the \
+                 folder cannot be resumed (start the run in a new folder)",
+                posed_path.display()
+            )));
+        }
         (
             done,
             NpyWriter::resume(&corr_path, NpyType::I32, frames.len(), n, k).map_err(npy)?,
@@ -436,6 +599,10 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             NpyWriter::create(&conf_path, NpyType::F32, frames.len(), n).map_err(npy)?,
         )
     };
+    if args.scans {
+        let d = args.out.join("scans");
+        std::fs::create_dir_all(&d).map_err(|e| CliError::with(d.display(), e))?;
+    }
     let mut posed_npy = posed::open(&args.out, frames.len(), n, resuming.then_some(done.len()))?;
     let mut journal = std::fs::OpenOptions::new()
         .append(true)

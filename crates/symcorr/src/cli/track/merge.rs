@@ -21,7 +21,7 @@
 //! its first frame), exactly as a run resumed there would: the merged folder equals a single
 //! run over the same frames interrupted and resumed at the slices' starts.
 
-use super::{parse_journal, posed, report, CliError, BUNDLED_TEMPLATE, JOURNAL};
+use super::{header_difference, parse_journal, posed, report, CliError, BUNDLED_TEMPLATE, JOURNAL};
 use clap::Args;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -257,23 +257,6 @@ impl Slice {
     }
 }
 
-/// The first header entry, other than the frame list, in which `a` and `b` differ, with both
-/// values (`null` for a missing one).
-fn header_difference(a: &Value, b: &Value) -> Option<(String, String, String)> {
-    let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
-        return Some(("header".into(), a.to_string(), b.to_string()));
-    };
-    a.keys()
-        .chain(b.keys())
-        .filter(|k| k.as_str() != "frames")
-        .find(|k| a.get(*k) != b.get(*k))
-        .map(|k| {
-            let v =
-                |m: &serde_json::Map<String, Value>| m.get(k).unwrap_or(&Value::Null).to_string();
-            (k.clone(), v(a), v(b))
-        })
-}
-
 /// The slices in frame order, checked to be one run, finished and disjoint; and the frames
 /// between consecutive slices that none holds (`from..to`), refused unless `allow_gaps`.
 fn order(
@@ -283,7 +266,7 @@ fn order(
     // Invariant: clap requires at least one DIR, and every one was read into a slice.
     let first = &slices[0];
     for s in &slices[1..] {
-        if let Some((key, this, other)) = header_difference(&s.header, &first.header) {
+        if let Some((key, this, other)) = header_difference(&s.header, &first.header, &["frames"]) {
             return Err(MergeError::DifferentRun {
                 dir: s.dir.clone(),
                 other_dir: first.dir.clone(),
