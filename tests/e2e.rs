@@ -483,6 +483,48 @@ fn turn_about_spine(log: &mut Value) {
 /// their spine (facing away from the camera) `match` turns them back: the output says so and
 /// its matches land where those of the joints as given land.
 #[test]
+fn scan_refuses_a_depth_image_read_with_the_wrong_mirroring() {
+    // The fixture's depth image with its columns reversed (an image that is not mirrored, as
+    // an Azure Kinect's) read with intrinsics that say it is: the joints find the body only
+    // the other way round. Refused naming the key; with "mirrored": false it scans.
+    let dir = tempfile::tempdir().unwrap();
+    let scan_dir = fixtures().join("../scan");
+    let f = symcorr_kinect::read_depth_png16(scan_dir.join("depth.png")).unwrap();
+    let w = f.width as usize;
+    let reversed: Vec<u16> = f
+        .data_mm
+        .chunks(w)
+        .flat_map(|row| row.iter().rev().copied())
+        .collect();
+    let png = dir.path().join("direct.png");
+    let frame = symcorr_kinect::DepthFrame::new(f.width, f.height, reversed).unwrap();
+    symcorr_kinect::write_depth_png16(&png, &frame).unwrap();
+    let mut k = read_json(&scan_dir.join("intrinsics.json"));
+    let direct_k = dir.path().join("direct.json");
+    let scan = |k: &Path| {
+        bin()
+            .arg("scan")
+            .arg("--depth")
+            .arg(&png)
+            .arg("--intrinsics")
+            .arg(k)
+            .arg("--joints")
+            .arg(scan_dir.join("joints.json"))
+            .arg("--out")
+            .arg(dir.path().join("scan.ply"))
+            .output()
+            .unwrap()
+    };
+    let e = assert_one_line_error(&scan(&scan_dir.join("intrinsics.json")));
+    assert!(e.contains("\"mirrored\": false"), "{e}");
+    assert!(!dir.path().join("scan.ply").exists());
+    k["mirrored"] = false.into();
+    std::fs::write(&direct_k, k.to_string()).unwrap();
+    let o = scan(&direct_k);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
 fn scan_target_reports_template_points_without_counterpart() {
     let dir = tempfile::tempdir().unwrap();
     let scan_dir = fixtures().join("../scan");
@@ -1302,6 +1344,53 @@ fn match_swaps_back_one_limb_pair_and_says_so() {
         assert_eq!(e.flip_rate(), Some(0.0), "{pair}");
         assert!(e.mean_error() < 0.01, "{pair}: {}", e.mean_error());
     }
+}
+
+#[test]
+fn match_places_a_limb_the_tracker_lost_by_the_bone_above_it() {
+    // The target's left ankle and foot untracked (confidence 0): the attachment cannot rebuild
+    // a chain's end, so the fit carries them with the left thigh's transform instead
+    // of posing the shin and foot onto the hip centre (9 % of the matches had flipped).
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = ("s0_rest", "s0_walk-10");
+    let mut log = read_json(&joints(b));
+    for f in log["frames"].as_array_mut().unwrap() {
+        f["confidence"]["ankle_left"] = 0.0.into();
+        f["confidence"]["foot_left"] = 0.0.into();
+    }
+    let lost = dir.path().join("lost.json");
+    std::fs::write(&lost, log.to_string()).unwrap();
+    let out = dir.path().join("corr.json");
+    let o = run(bin()
+        .arg("match")
+        .arg(mesh(a))
+        .arg(mesh(b))
+        .arg("--template-joints")
+        .arg(joints(a))
+        .arg("--target-joints")
+        .arg(&lost)
+        .args(["--samples", "2000"])
+        .arg("--out")
+        .arg(&out));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let target = symcorr_mesh::io::read(mesh(b)).unwrap().mesh;
+    let corr = CorrespondenceFile::read(&out).unwrap();
+    let pairs: Vec<(u32, u32)> = corr.pairs.iter().map(|&(p, q, _)| (p, q)).collect();
+    let m = mirror();
+    let e = evaluate(
+        &EvalGraph::new(&target),
+        target.total_area(),
+        &pairs,
+        |p| p,
+        Some(&m),
+    );
+    eprintln!(
+        "lost foot: mean {} flips {:?}",
+        e.mean_error(),
+        e.flip_rate()
+    );
+    assert_eq!(e.flip_rate(), Some(0.0));
+    assert!(e.mean_error() < 0.01, "{}", e.mean_error());
 }
 
 #[test]

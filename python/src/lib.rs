@@ -1005,6 +1005,7 @@ fn scan<'py>(
         remove_floor: !keep_floor,
         ..ScanOptions::default()
     };
+    symcorr_kinect::scan::check_mirroring(&frame, &k, &skeleton).map_err(kinect_err)?;
     let s = py
         .detach(|| symcorr_kinect::scan_mesh(&frame, &k, Some(&skeleton), &opts))
         .map_err(kinect_err)?;

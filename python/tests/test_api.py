@@ -229,6 +229,9 @@ def test_scan_reads_an_image_that_is_not_mirrored():
     # The file's own keys, "format" included, are accepted as a dict.
     v2, _, _ = symcorr.scan(depth, k, joints)
     np.testing.assert_array_equal(v, v2)
+    # The reversed image read as mirrored puts the pose on the other side: refused.
+    with pytest.raises(ValueError, match='"mirrored": false'):
+        symcorr.scan(np.ascontiguousarray(depth[:, ::-1]), k, joints)
 
 
 def test_scan_undoes_a_lens_distortion():

@@ -143,6 +143,17 @@ pub enum KinectError {
     /// Building the scan mesh failed (e.g. nothing left after background removal).
     #[error("scan: {0}")]
     Scan(String),
+    /// The depth image and the joints disagree about left and right: clearly more joints lie
+    /// on the body with the image's columns reversed ([`crate::scan::check_mirroring`]).
+    #[error("the depth image and the joints disagree about left and right: {given} joints lie on the body with the image read as {}, {reversed} with its columns reversed; if the camera's depth is {} (an Azure Kinect's, Orbbec's or RealSense's is not mirrored, the Kinect SDK's is), set \"mirrored\": {} in the intrinsics, else the joints' x axis is reversed", if *.stated_mirrored { "mirrored" } else { "not mirrored" }, if *.stated_mirrored { "not mirrored" } else { "mirrored" }, !*.stated_mirrored)]
+    MirroringMismatch {
+        /// Joints on the body as the intrinsics read the image.
+        given: usize,
+        /// Joints on the body with the columns reversed.
+        reversed: usize,
+        /// The intrinsics say the image is mirrored (the Kinect SDK's convention).
+        stated_mirrored: bool,
+    },
     /// An error from the mesh crate.
     #[error(transparent)]
     Mesh(#[from] symcorr_mesh::MeshError),

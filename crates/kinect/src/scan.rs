@@ -520,6 +520,60 @@ pub fn depth_unit_hint(depth_ratio: Option<f64>) -> String {
     }
 }
 
+/// Refuses an image read with the wrong mirroring: [`KinectError::MirroringMismatch`] when the
+/// image read the other way fits `s` clearly better — at least a quarter of the usable joints
+/// (and three) more lie on the body with the columns reversed
+/// ([`Intrinsics::columns_reversed`]). A depth image whose mirroring the intrinsics state
+/// wrongly (an Azure Kinect's, Orbbec's or RealSense's image read as the Kinect SDK's mirrored
+/// one, or the other way round), or joints whose x axis is reversed, show the subject's pose on
+/// the other side: the limbs' joints miss the body as given and find it read the other way.
+/// Scanned and matched as given, such a frame had three matches in four flipped.
+///
+/// ```
+/// use symcorr_kinect::{scan::check_mirroring, DepthFrame, Intrinsics, Mirroring};
+/// use symcorr_skeleton::Skeleton;
+/// let k = Intrinsics {
+///     width: 8, height: 6, fx: 7.0, fy: 7.0, cx: 3.5, cy: 2.5,
+///     mirroring: Mirroring::Mirrored,
+///     distortion: None,
+/// };
+/// // A body 2 m away on the image's left two columns only; every joint on it as given.
+/// let mut depth = vec![0u16; 48];
+/// for v in 0..6 { depth[v * 8] = 2000; depth[v * 8 + 1] = 2000; }
+/// let frame = DepthFrame::new(8, 6, depth).unwrap();
+/// let u0 = k.unproject(0.5, 2.5, 2.0);
+/// let on_body = Skeleton::from_arrays([[u0.x, u0.y, 2.0]; 20]);
+/// assert!(check_mirroring(&frame, &k, &on_body).is_ok());
+/// // Joints where an image that is not mirrored would show that body: they miss it as given.
+/// let direct = Intrinsics { mirroring: Mirroring::Direct, ..k };
+/// let u1 = direct.unproject(0.5, 2.5, 2.0);
+/// let other_side = Skeleton::from_arrays([[u1.x, u1.y, 2.0]; 20]);
+/// let e = check_mirroring(&frame, &k, &other_side).unwrap_err();
+/// assert!(e.to_string().contains("\"mirrored\": false"), "{e}");
+/// ```
+pub fn check_mirroring(
+    frame: &DepthFrame,
+    k: &Intrinsics,
+    s: &Skeleton,
+) -> Result<(), KinectError> {
+    let given = joints_on_depth(frame, k, s);
+    let mut other = *k;
+    other.mirroring = match k.mirroring {
+        Mirroring::Mirrored => Mirroring::Direct,
+        Mirroring::Direct => Mirroring::Mirrored,
+    };
+    let reversed = joints_on_depth(frame, &other, s);
+    let margin = (given.usable / 4).max(3);
+    if reversed.on_body >= given.on_body + margin {
+        return Err(KinectError::MirroringMismatch {
+            given: given.on_body,
+            reversed: reversed.on_body,
+            stated_mirrored: k.mirroring == Mirroring::Mirrored,
+        });
+    }
+    Ok(())
+}
+
 /// How `s`'s tracked joints lie on `frame` seen through `k` ([`JointsOnDepth`]). Pixels
 /// outside the frame (intrinsics of another size) have no reading.
 ///

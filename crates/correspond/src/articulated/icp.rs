@@ -163,12 +163,15 @@ pub(super) fn articulated_icp(
                 let wsum: f64 = pairs.iter().map(|p| p.2).sum();
                 // The skeleton anchors the fit: both joints of the bone pulled to the
                 // target's joints.
+                // Not at a joint the target's skeleton lost (placed, not seen).
                 for j in [BONES[b].parent, BONES[b].child] {
-                    pairs.push((
-                        template.joints.position(j),
-                        target.joints.position(j),
-                        options.anchor(b, j) * wsum,
-                    ));
+                    if target.joints.tracks(j) {
+                        pairs.push((
+                            template.joints.position(j),
+                            target.joints.position(j),
+                            options.anchor(b, j) * wsum,
+                        ));
+                    }
                 }
                 if let Some((pb, extra)) = &prior_pairs {
                     if *pb == b {

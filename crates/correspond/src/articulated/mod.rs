@@ -39,7 +39,8 @@
 //!    must explain, while template points can pair with what the view lacks. Each bone with at
 //!    least 20 pairs of weight > 0.1 is re-fitted by weighted Kabsch (Arun et al. 1987) to both
 //!    sets plus its two joints as anchors
-//!    ([`ArticulatedOptions::joint_anchor`]; the head's anchor at the neck's base is weaker,
+//!    ([`ArticulatedOptions::joint_anchor`]; none at a joint the target's skeleton does not
+//!    track, which is placed by the last tracked bone above it; the head's anchor at the neck's base is weaker,
 //!    [`ArticulatedOptions::head_neck_anchor`]: the neck bends below the skull, so the two
 //!    joints do not give the skull's pitch); with a target viewpoint the head's fit also pulls
 //!    its twist towards the chest's ([`ArticulatedOptions::head_twist_prior`]: one view of a
@@ -555,6 +556,13 @@ pub fn articulated_match_indexed(
         return Err(CorrespondError::IndexMismatch);
     }
     let mut timings = Vec::new();
+    // A joint the target's skeleton lost is placed by the limb above it, not at the hip centre
+    // where the attachment parked it.
+    let completed = transforms::complete_untracked(template.joints, target.joints);
+    let target = &ArticulatedInputs {
+        joints: completed.as_ref().unwrap_or(target.joints),
+        ..*target
+    };
     let al = Alignment::new(template, weights, target, index, options);
     let t = Instant::now();
     let (mut transforms, head_limit, head_prior) = initial_transforms(&al, start)?;

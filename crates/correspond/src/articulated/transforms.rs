@@ -91,6 +91,42 @@ pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> BoneTransforms {
     limb_transforms(from, to, LimbTwist::Hinge)
 }
 
+/// `target` with every joint it does not track ([`Skeleton::tracks`]: one the attachment could
+/// not rebuild and parked at the hip centre) placed where the last tracked bone above it carries
+/// the template's joint ([`bone_transforms`]; the torso's bone for a hip or a shoulder): the lost
+/// part of the limb follows it rigidly in the template's pose, instead of every bone below it
+/// being posed onto the hip centre. The placed joints stay untracked, so the fit takes no anchor
+/// at them and their bones are fitted by their pairs alone. `None` when `target` tracks every
+/// joint.
+pub(crate) fn complete_untracked(template: &Skeleton, target: &Skeleton) -> Option<Skeleton> {
+    if Joint::ALL.iter().all(|&j| target.tracks(j)) {
+        return None;
+    }
+    let transforms = bone_transforms(template, target);
+    let bone_index = |child: Joint| BONES.iter().position(|b| b.child == child);
+    let mut out = target.clone();
+    // The transform that carries each placed joint (BONES lists parents before children).
+    let mut carrier: [Option<IsometryMatrix3<f64>>; Joint::COUNT] = [None; Joint::COUNT];
+    for bone in BONES {
+        let (p, c) = (bone.parent, bone.child);
+        if target.tracks(c) {
+            continue;
+        }
+        let t = match carrier[p.index()] {
+            Some(t) => t,
+            None => {
+                // The bone ending at the tracked parent, when its own parent is tracked too;
+                // else (the hip centre, or a parent bone half lost) the torso's bone.
+                let up = bone_index(p).filter(|&b| target.tracks(BONES[b].parent));
+                transforms[up.unwrap_or(0)]
+            }
+        };
+        carrier[c.index()] = Some(t);
+        out.positions[c.index()] = t * template.position(c);
+    }
+    Some(out)
+}
+
 /// [`bone_transforms`] with every limb bone turned by its smallest rotation alone: how the
 /// bones of a fit move from one frame of a recording to the next. The fit already holds each
 /// limb's twist, refined by its ICP; the change of a bend plane between two frames' joints is
@@ -455,6 +491,37 @@ mod tests {
             })
             .collect();
         assert!(kabsch(&line).is_none());
+    }
+
+    /// Joints a rigidly moved skeleton lost (parked at the hip centre, as the attachment
+    /// leaves them) are placed where the motion puts the template's; tracked ones stay.
+    #[test]
+    fn untracked_joints_follow_the_last_tracked_bone() {
+        let s = symcorr_attach::testbody::t_pose(1.0);
+        let r = rot_z(0.6) * swing(Vector3::x(), Vector3::new(0.1, -0.3, 0.9));
+        let t = Vector3::new(0.2, 0.5, 2.8);
+        let moved = s.map_positions(|p| Point3::from(r * p.coords + t));
+        assert!(complete_untracked(&s, &moved).is_none(), "nothing lost");
+        let mut lost = moved.clone();
+        let hip = moved.position(Joint::HipCenter);
+        for j in [
+            Joint::KneeLeft,
+            Joint::AnkleLeft,
+            Joint::FootLeft,
+            Joint::HandRight,
+        ] {
+            lost.confidence[j.index()] = 0.0;
+            lost.positions[j.index()] = hip;
+        }
+        let done = complete_untracked(&s, &lost).unwrap();
+        for j in Joint::ALL {
+            assert!(
+                (done.position(j) - moved.position(j)).norm() < 1e-9,
+                "{j:?}: {} from its place",
+                (done.position(j) - moved.position(j)).norm()
+            );
+            assert_eq!(done.tracks(j), lost.tracks(j), "{j:?} keeps its tracking");
+        }
     }
 
     /// A rigidly moved skeleton gives the same rigid motion for every bone.

@@ -388,7 +388,7 @@ fn refit(
             break;
         }
         let held = pairs.len() as f64;
-        for j in [p, c] {
+        for j in [p, c].into_iter().filter(|&j| target.joints.tracks(j)) {
             pairs.push((
                 template.joints.position(j),
                 target.joints.position(j),

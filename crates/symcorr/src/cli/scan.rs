@@ -164,6 +164,10 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
     } else {
         symcorr_kinect::fuse_depth_frames(&frames).map_err(|e| CliError(e.to_string()))?
     };
+    // A depth image whose mirroring the intrinsics state wrongly shows the pose on the other
+    // side; scanned as given, its match flipped three matches in four.
+    symcorr_kinect::scan::check_mirroring(&frame, &k, &skeleton)
+        .map_err(|e| CliError(e.to_string()))?;
     let opts = ScanOptions {
         discontinuity_m: a.discontinuity,
         remove_floor: !a.keep_floor,
