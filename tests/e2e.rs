@@ -525,6 +525,55 @@ fn scan_refuses_a_depth_image_read_with_the_wrong_mirroring() {
 }
 
 #[test]
+fn scan_and_track_refuse_another_cameras_focal_length() {
+    // A Kinect v2's focal length (365 px) on a Kinect v1's image (571 px): the scan stretches
+    // across the line of sight while the joints keep their size. `scan` refuses the frame and
+    // `track` the run before writing, both naming the focal length.
+    let dir = tempfile::tempdir().unwrap();
+    let scan_dir = fixtures().join("../scan");
+    let mut k = read_json(&scan_dir.join("intrinsics.json"));
+    let f = k["fx"].as_f64().unwrap() * 365.0 / 571.26;
+    k["fx"] = f.into();
+    k["fy"] = f.into();
+    let wrong = dir.path().join("k.json");
+    std::fs::write(&wrong, k.to_string()).unwrap();
+    let o = bin()
+        .arg("scan")
+        .arg("--depth")
+        .arg(scan_dir.join("depth.png"))
+        .arg("--intrinsics")
+        .arg(&wrong)
+        .arg("--joints")
+        .arg(scan_dir.join("joints.json"))
+        .arg("--out")
+        .arg(dir.path().join("scan.ply"))
+        .output()
+        .unwrap();
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("focal length"), "{e}");
+    assert!(!dir.path().join("scan.ply").exists());
+    let (rec, log) = sequence_recording_and_log(dir.path());
+    let mut k = read_json(&rec.join("intrinsics.json"));
+    let f = k["fx"].as_f64().unwrap() * 365.0 / 571.26;
+    k["fx"] = f.into();
+    k["fy"] = f.into();
+    std::fs::write(rec.join("intrinsics.json"), k.to_string()).unwrap();
+    let out = dir.path().join("track");
+    let o = bin()
+        .arg("track")
+        .arg(&rec)
+        .arg("--joints")
+        .arg(&log)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let e = assert_one_line_error(&o);
+    assert!(e.contains("focal length"), "{e}");
+    assert!(!out.exists());
+}
+
+#[test]
 fn scan_target_reports_template_points_without_counterpart() {
     let dir = tempfile::tempdir().unwrap();
     let scan_dir = fixtures().join("../scan");

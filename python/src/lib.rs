@@ -1009,6 +1009,7 @@ fn scan<'py>(
     let s = py
         .detach(|| symcorr_kinect::scan_mesh(&frame, &k, Some(&skeleton), &opts))
         .map_err(kinect_err)?;
+    symcorr_kinect::scan::check_scale(&s.mesh, &skeleton, &k).map_err(kinect_err)?;
     let ids: Vec<i64> = s.pixel_ids.iter().map(|&p| i64::from(p)).collect();
     Ok((
         vertices_out(py, &s.mesh)?,

@@ -154,6 +154,15 @@ pub enum KinectError {
         /// The intrinsics say the image is mirrored (the Kinect SDK's convention).
         stated_mirrored: bool,
     },
+    /// The scan is much taller than its skeleton along the spine
+    /// ([`crate::scan::check_scale`]).
+    #[error("the scan is {ratio:.2}× as tall as its skeleton along the spine (a body's own joints measure 0.85–1.12×): the intrinsics' focal length (fx {fx}) may be another camera's or in other units, or the joints may be another subject's")]
+    ScaleMismatch {
+        /// [`crate::scan::height_ratio`].
+        ratio: f64,
+        /// The focal length the image was read with, pixels.
+        fx: f64,
+    },
     /// An error from the mesh crate.
     #[error(transparent)]
     Mesh(#[from] symcorr_mesh::MeshError),

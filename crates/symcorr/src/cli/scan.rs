@@ -175,6 +175,8 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
     };
     let scan =
         scan_mesh(&frame, &k, Some(&skeleton), &opts).map_err(|e| CliError(e.to_string()))?;
+    symcorr_kinect::scan::check_scale(&scan.mesh, &skeleton, &k)
+        .map_err(|e| CliError(e.to_string()))?;
     // Both outputs are staged, then committed together: an error leaves neither.
     let cli = |e: symcorr_mesh::MeshError| CliError(e.to_string());
     let mut batch = symcorr_mesh::io::OutputBatch::new();

@@ -22,7 +22,9 @@ use super::TrackOptions;
 use super::Tracker;
 use crate::{Pipeline, PreparedMesh};
 use symcorr_attach::{FitCheckKind, FitQuality};
-use symcorr_kinect::scan::{depth_unit_hint, joints_on_depth, JointsOnDepth};
+use symcorr_kinect::scan::{
+    depth_unit_hint, height_ratio, joints_on_depth, JointsOnDepth, MAX_HEIGHT_RATIO,
+};
 use symcorr_kinect::{DepthSource, JointTrack, SkipReason};
 
 /// Frames [`check_log`] looks at by default, spread over the run.
@@ -68,6 +70,11 @@ pub struct LogCheck {
     /// leaves fewer bone points outside — or why the frame has no skeleton fit (no log frame
     /// near its time, no body in the depth, joints the scan refuses, an unreadable frame).
     pub frames: Vec<(usize, Result<FitQuality, String>)>,
+    /// Per sampled frame prepared, how tall its scan is against the skeleton along the spine
+    /// ([`height_ratio`]).
+    pub heights: Vec<f64>,
+    /// The focal length the frames were read with, pixels (for the message).
+    pub fx: f64,
 }
 
 /// A joint log refused by [`LogCheck::verdict`].
@@ -94,6 +101,22 @@ pub enum LogMismatch {
     /// No frame of the run has a log frame near its time.
     #[error("{0}")]
     Clocks(ClockGap),
+    /// The frames' scans are much taller than the log's skeletons along the spine.
+    #[error(
+        "the depth frames' scans are a median {median:.2}× as tall as the joint log's skeletons \
+         along the spine on {frames} frames spread over the run (at most {max:.2}× accepted; a \
+         body's own joints measure 0.85–1.12×): the intrinsics' focal length (fx {fx}) may be \
+         another camera's, or the log may be another subject's",
+        max = MAX_HEIGHT_RATIO
+    )]
+    Scale {
+        /// Sampled frames with a scan and a skeleton.
+        frames: usize,
+        /// Their median [`height_ratio`].
+        median: f64,
+        /// The focal length the frames were read with, pixels.
+        fx: f64,
+    },
     /// In most sampled frames the log's joints do not lie on the body the depth shows.
     #[error(
         "the joint log does not lie on the depth frames: in {off} of {frames} frames spread over \
@@ -199,6 +222,15 @@ impl LogCheck {
                 hint: depth_unit_hint(median(ratios)),
             });
         }
+        if let Some(m) = median(self.heights.clone()) {
+            if self.heights.len() >= MIN_LOG_CHECK_FITS && m > MAX_HEIGHT_RATIO {
+                return Err(LogMismatch::Scale {
+                    frames: self.heights.len(),
+                    median: m,
+                    fx: self.fx,
+                });
+            }
+        }
         let fits = self.outside().len();
         match self.median_outside() {
             Some(median) if fits >= MIN_LOG_CHECK_FITS && median > MAX_LOG_OUTSIDE => {
@@ -252,6 +284,8 @@ pub fn check_log(
             }),
             on_depth: Vec::new(),
             frames: Vec::new(),
+            heights: Vec::new(),
+            fx: source.intrinsics().fx,
         };
     }
     let k = samples.min(frames.len());
@@ -265,6 +299,7 @@ pub fn check_log(
     );
     let intrinsics = *source.intrinsics();
     let mut on_depth = Vec::new();
+    let mut heights = Vec::new();
     let frames = (0..k)
         .map(|i| frames[(2 * i + 1) * frames.len() / (2 * k)])
         .map(|index| {
@@ -279,6 +314,7 @@ pub fn check_log(
                     tracker.reset();
                     let (observer, _) = tracker.parts();
                     let target = observer.prepared(time_s, &depth)?;
+                    heights.extend(height_ratio(&target.mesh, &target.attachment.joints));
                     let given = target.attachment.diagnostics.fit.clone();
                     // A skeleton logged facing away from the camera is one the tracker turns back
                     // (module `track`, step 5): its turned reading is judged too.
@@ -301,6 +337,8 @@ pub fn check_log(
         clocks: None,
         on_depth,
         frames,
+        heights,
+        fx: intrinsics.fx,
     }
 }
 
@@ -335,7 +373,22 @@ mod tests {
                 .enumerate()
                 .map(|(i, &o)| (i, Ok(fit(o))))
                 .collect(),
+            heights: Vec::new(),
+            fx: 571.26,
         }
+    }
+
+    #[test]
+    fn scans_much_taller_than_the_skeletons_are_refused_by_the_median() {
+        let mut c = check(&[Some(0.0), Some(0.0), Some(0.0)]);
+        c.heights = vec![1.05, 2.1, 1.08];
+        assert!(c.verdict().is_ok(), "one odd frame does not refuse a log");
+        c.heights = vec![1.9, 2.1, 1.08];
+        let e = c.verdict().unwrap_err();
+        assert!(matches!(e, LogMismatch::Scale { frames: 3, .. }), "{e:?}");
+        assert!(e.to_string().contains("focal length (fx 571.26)"), "{e}");
+        c.heights.truncate(2);
+        assert!(c.verdict().is_ok(), "two frames are too few");
     }
 
     #[test]
