@@ -40,7 +40,8 @@
 //!    least 20 pairs of weight > 0.1 is re-fitted by weighted Kabsch (Arun et al. 1987) to both
 //!    sets plus its two joints as anchors
 //!    ([`ArticulatedOptions::joint_anchor`]; none at a joint the target's skeleton does not
-//!    track, which is placed by the last tracked bone above it; the head's anchor at the neck's base is weaker,
+//!    track, which is placed by the last tracked bone above it; the head's anchor at the
+//!    neck's base is weaker,
 //!    [`ArticulatedOptions::head_neck_anchor`]: the neck bends below the skull, so the two
 //!    joints do not give the skull's pitch); with a target viewpoint the head's fit also pulls
 //!    its twist towards the chest's ([`ArticulatedOptions::head_twist_prior`]: one view of a

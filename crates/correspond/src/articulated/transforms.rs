@@ -93,16 +93,17 @@ pub fn bone_transforms(from: &Skeleton, to: &Skeleton) -> BoneTransforms {
 
 /// `target` with every joint it does not track ([`Skeleton::tracks`]: one the attachment could
 /// not rebuild and parked at the hip centre) placed where the last tracked bone above it carries
-/// the template's joint ([`bone_transforms`]; the torso's bone for a hip or a shoulder): the lost
-/// part of the limb follows it rigidly in the template's pose, instead of every bone below it
-/// being posed onto the hip centre. The placed joints stay untracked, so the fit takes no anchor
+/// the template's joint ([`bone_motion`]: each bone by its smallest rotation down the chain, so
+/// that no hinge's bend plane reads a lost joint; the torso's bone for a hip or a shoulder): the
+/// lost part of the limb follows it rigidly in the template's pose, instead of every bone below
+/// it being posed onto the hip centre. The placed joints stay untracked, so the fit takes no anchor
 /// at them and their bones are fitted by their pairs alone. `None` when `target` tracks every
 /// joint.
 pub(crate) fn complete_untracked(template: &Skeleton, target: &Skeleton) -> Option<Skeleton> {
     if Joint::ALL.iter().all(|&j| target.tracks(j)) {
         return None;
     }
-    let transforms = bone_transforms(template, target);
+    let transforms = bone_motion(template, target);
     let bone_index = |child: Joint| BONES.iter().position(|b| b.child == child);
     let mut out = target.clone();
     // The transform that carries each placed joint (BONES lists parents before children).

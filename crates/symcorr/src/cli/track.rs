@@ -254,18 +254,21 @@ fn journal_header(
     }))
 }
 
-/// The first 64 bits (hex) of a SHA-256 digest of `bytes`.
-fn digest_hex(bytes: impl IntoIterator<Item = Vec<u8>>) -> String {
+/// The first 64 bits of a digest, in hex: the journal header's fingerprints.
+fn hex64(digest: &[u8]) -> String {
+    digest.iter().take(8).map(|b| format!("{b:02x}")).collect()
+}
+
+/// [`hex64`] of a SHA-256 digest of `parts`, each prefixed by its length (so that no two lists
+/// of parts hash alike by where one ends).
+fn digest_hex(parts: impl IntoIterator<Item = Vec<u8>>) -> String {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
-    for b in bytes {
+    for b in parts {
         h.update((b.len() as u64).to_le_bytes());
         h.update(&b);
     }
-    h.finalize()[..8]
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    hex64(&h.finalize())
 }
 
 /// [`digest_hex`] of a file's content (the joint log: a few MB to tens of MB).
@@ -353,8 +356,9 @@ pub(super) fn header_difference(
 /// before, whose frames it would not reproduce.
 fn method_fingerprint(pipeline: &PipelineOptions, track: &TrackOptions) -> String {
     use sha2::{Digest, Sha256};
-    let digest = Sha256::digest(format!("{pipeline:?}\n{track:?}").as_bytes());
-    digest[..8].iter().map(|b| format!("{b:02x}")).collect()
+    hex64(&Sha256::digest(
+        format!("{pipeline:?}\n{track:?}").as_bytes(),
+    ))
 }
 
 /// The journal's name in a run folder.
