@@ -768,13 +768,7 @@ fn label<'py>(
     let c = PyDict::new(py);
     c.set_item("turned_triangles", l.turned_triangles)?;
     c.set_item("mirrored_fixed", d.mirror.swapped)?;
-    c.set_item(
-        "limbs_swapped",
-        d.mirror.swapped_limbs.map(|p| match p {
-            symcorr_attach::LimbPair::Arms => "arms",
-            symcorr_attach::LimbPair::Legs => "legs",
-        }),
-    )?;
+    c.set_item("limbs_swapped", d.mirror.swapped_limbs.map(|p| p.name()))?;
     let moves: Vec<(String, f64, String)> = d
         .joint_moves
         .iter()

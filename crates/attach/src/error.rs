@@ -62,7 +62,7 @@ pub enum AttachError {
     },
     /// One limb pair's left and right are exchanged against the other pair's (a tracker's
     /// arm or leg swap) and the options say to refuse rather than fix.
-    #[error("the {} left and right are swapped against the rest of the skeleton (the shoulders and the hips point opposite ways across the spine); swap the joint names or allow the fix", pair_name(*.pair))]
+    #[error("the {}' left and right are swapped against the rest of the skeleton (the shoulders and the hips point opposite ways across the spine); swap the joint names or allow the fix", .pair.name())]
     SwappedLimbs {
         /// The exchanged pair.
         pair: LimbPair,
@@ -113,12 +113,4 @@ pub enum AttachError {
     /// No boundary rule could be learned from the labelled bodies.
     #[error("no segment boundary could be learned from the labelled bodies")]
     NothingLearned,
-}
-
-/// "arms'" or "legs'", for messages.
-fn pair_name(pair: LimbPair) -> &'static str {
-    match pair {
-        LimbPair::Arms => "arms'",
-        LimbPair::Legs => "legs'",
-    }
 }

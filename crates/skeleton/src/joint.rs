@@ -224,6 +224,18 @@ pub enum LimbPair {
 }
 
 impl LimbPair {
+    /// The pair's name in files and messages: `"arms"` or `"legs"`.
+    ///
+    /// ```
+    /// assert_eq!(symcorr_skeleton::LimbPair::Legs.name(), "legs");
+    /// ```
+    pub const fn name(self) -> &'static str {
+        match self {
+            LimbPair::Arms => "arms",
+            LimbPair::Legs => "legs",
+        }
+    }
+
     /// The left-side joints of the pair (their mirrors, [`Joint::mirror`], are the right side).
     ///
     /// ```

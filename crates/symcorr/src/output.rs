@@ -146,13 +146,7 @@ pub fn fit_entry(d: &symcorr_attach::Diagnostics, unreached: usize) -> FitEntry 
         view_held: None,
         turned_about_spine: false,
         sides_swapped: d.mirror.swapped,
-        limbs_swapped: d.mirror.swapped_limbs.map(|p| {
-            match p {
-                symcorr_attach::LimbPair::Arms => "arms",
-                symcorr_attach::LimbPair::Legs => "legs",
-            }
-            .to_string()
-        }),
+        limbs_swapped: d.mirror.swapped_limbs.map(|p| p.name().to_string()),
     }
 }
 

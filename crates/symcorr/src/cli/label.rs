@@ -127,11 +127,9 @@ pub fn run(a: LabelArgs, max_input_bytes: u64) -> Result<(), CliError> {
         d.joint_moves.len(),
         al.scale,
         d.mirror.swapped,
-        match d.mirror.swapped_limbs {
-            Some(symcorr_attach::LimbPair::Arms) => ", arms' sides swapped back",
-            Some(symcorr_attach::LimbPair::Legs) => ", legs' sides swapped back",
-            None => "",
-        },
+        d.mirror
+            .swapped_limbs
+            .map_or(String::new(), |p| format!(", {}' sides swapped back", p.name())),
         d.fit.score,
         if d.fit.accepted_poor_fit {
             " (poor fit accepted)"

@@ -209,13 +209,10 @@ pub fn run(a: ScanArgs) -> Result<(), CliError> {
             -hand.foot_offset_m
         ),
         symcorr_attach::Handedness::LimbsSwapped(pair) => eprintln!(
-            "symcorr: warning: the skeleton's {} left/right look swapped against the rest of it \
+            "symcorr: warning: the skeleton's {}' left/right look swapped against the rest of it \
              (the shoulders and the hips point opposite ways across the spine); match and label \
              swap them back",
-            match pair {
-                symcorr_attach::LimbPair::Arms => "arms'",
-                symcorr_attach::LimbPair::Legs => "legs'",
-            }
+            pair.name()
         ),
         _ => {}
     }
