@@ -1126,6 +1126,39 @@ fn track_resumes_by_content_not_by_path() {
 }
 
 #[test]
+fn track_does_not_write_over_files_of_its_names_without_a_journal() {
+    // A folder holding a track.json (of something else) but no journal: refused, untouched;
+    // a folder holding only other files is a fine place for a run.
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, log) = sequence_recording_and_log(dir.path());
+    let out = dir.path().join("track");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("track.json"), "mine").unwrap();
+    std::fs::write(out.join("notes.txt"), "mine too").unwrap();
+    let track = || {
+        bin()
+            .arg("track")
+            .arg(&rec)
+            .args(["--frames", "0..1", "--joints"])
+            .arg(&log)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let e = assert_one_line_error(&track());
+    assert!(
+        e.contains("track.json") && e.contains("no journal.jsonl"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(out.join("track.json")).unwrap(), b"mine");
+    std::fs::remove_file(out.join("track.json")).unwrap();
+    let o = track();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine too");
+}
+
+#[test]
 fn track_refuses_a_view_page_on_an_input_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
     let (rec, log) = sequence_recording_and_log(dir.path());

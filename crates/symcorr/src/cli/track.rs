@@ -405,22 +405,22 @@ fn read_journal(path: &Path, header: &Value) -> Result<Vec<Value>, CliError> {
     Ok(frames)
 }
 
+/// The files a run writes in its folder.
+const RUN_FILES: [&str; 7] = [
+    JOURNAL,
+    report::TRACK_JSON,
+    report::TRACK_SVG,
+    posed::POSED_NPY,
+    posed::TEMPLATE_GLB,
+    "correspondence.npy",
+    "confidence.npy",
+];
+
 /// `--view`'s page, checked before any work like every output: not a folder, in a folder that
 /// exists, not an input (the joint log, the intrinsics, the template, an `.oni` file), not a file
 /// of the recording folder, and not one of the run's own outputs in `--out`.
 fn check_view_page(page: &Path, args: &TrackArgs) -> Result<(), CliError> {
-    let outputs: Vec<PathBuf> = [
-        JOURNAL,
-        report::TRACK_JSON,
-        report::TRACK_SVG,
-        posed::POSED_NPY,
-        posed::TEMPLATE_GLB,
-        "correspondence.npy",
-        "confidence.npy",
-    ]
-    .iter()
-    .map(|name| args.out.join(name))
-    .collect();
+    let outputs: Vec<PathBuf> = RUN_FILES.iter().map(|name| args.out.join(name)).collect();
     let mut inputs: Vec<&Path> = vec![&args.joints, &args.recording];
     inputs.extend(args.intrinsics.as_deref());
     inputs.extend(args.template.as_deref());
@@ -502,6 +502,22 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
             "{}: holds a previous run; pass --resume to continue it or choose another folder",
             args.out.display()
         )));
+    }
+    // Files of a run's names without its journal are not a run this command wrote or can
+    // continue: written over, they would be lost.
+    if !journal_path.exists() {
+        let taken: Vec<&str> = (RUN_FILES.iter().copied())
+            .chain(["scans"])
+            .filter(|name| args.out.join(name).exists())
+            .collect();
+        if !taken.is_empty() {
+            return Err(CliError(format!(
+                "{}: holds {} but no {JOURNAL}, so no run to continue; choose a new or empty \
+                 folder",
+                args.out.display(),
+                taken.join(", ")
+            )));
+        }
     }
     let mut recording = DepthSource::open(&args.recording).map_err(|e| CliError(e.to_string()))?;
     if let Some(path) = &args.intrinsics {
