@@ -559,16 +559,7 @@ fn scan_and_track_refuse_another_cameras_focal_length() {
     k["fy"] = f.into();
     std::fs::write(rec.join("intrinsics.json"), k.to_string()).unwrap();
     let out = dir.path().join("track");
-    let o = bin()
-        .arg("track")
-        .arg(&rec)
-        .arg("--joints")
-        .arg(&log)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let e = assert_one_line_error(&o);
+    let e = assert_one_line_error(&track_output(&rec, &[], &log, &out));
     assert!(e.contains("focal length"), "{e}");
     assert!(!out.exists());
 }
@@ -1094,17 +1085,8 @@ fn track_resumes_by_content_not_by_path() {
     let dir = tempfile::tempdir().unwrap();
     let (rec, log) = sequence_recording_and_log(dir.path());
     let out = dir.path().join("track");
-    let track = |rec: &Path, log: &Path| {
-        bin()
-            .arg("track")
-            .arg(rec)
-            .args(["--frames", "0..2", "--resume", "--joints"])
-            .arg(log)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap()
-    };
+    let track =
+        |rec: &Path, log: &Path| track_output(rec, &["--frames", "0..2", "--resume"], log, &out);
     assert!(track(&rec, &log).status.success());
     let journal = std::fs::read(out.join("journal.jsonl")).unwrap();
     // Another spelling of both paths: resumed (nothing left to track).
@@ -1135,17 +1117,7 @@ fn track_does_not_write_over_files_of_its_names_without_a_journal() {
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("track.json"), "mine").unwrap();
     std::fs::write(out.join("notes.txt"), "mine too").unwrap();
-    let track = || {
-        bin()
-            .arg("track")
-            .arg(&rec)
-            .args(["--frames", "0..1", "--joints"])
-            .arg(&log)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap()
-    };
+    let track = || track_output(&rec, &["--frames", "0..1"], &log, &out);
     let e = assert_one_line_error(&track());
     assert!(
         e.contains("track.json") && e.contains("no journal.jsonl"),
@@ -1179,16 +1151,8 @@ fn track_refuses_a_view_page_on_an_input_before_any_work() {
         (dir.path().join("missing/page.html"), "does not exist"),
         (dir.path().join("pages"), "directory"),
     ] {
-        let o = run(bin()
-            .arg("track")
-            .arg(&rec)
-            .arg("--joints")
-            .arg(&log)
-            .arg("--out")
-            .arg(&out)
-            .arg("--view")
-            .arg(&page));
-        let e = assert_one_line_error(&o);
+        let page_arg = page.to_str().unwrap();
+        let e = assert_one_line_error(&track_output(&rec, &["--view", page_arg], &log, &out));
         assert!(
             e.contains("--view") && e.contains(says),
             "{}: {e}",
@@ -1484,6 +1448,19 @@ fn track_swaps_back_legs_the_log_swapped_throughout() {
     }
 }
 
+/// `symcorr track REC [extra] --joints JOINTS --out OUT`, run to its end: what it printed and
+/// its exit status.
+fn track_output(rec: &Path, extra: &[&str], joints: &Path, out: &Path) -> Output {
+    run(bin()
+        .arg("track")
+        .arg(rec)
+        .args(extra)
+        .arg("--joints")
+        .arg(joints)
+        .arg("--out")
+        .arg(out))
+}
+
 /// `symcorr track REC [extra] --joints JOINTS --out OUT`, which must succeed: the frames of
 /// its `track.json` and the rows of its `posed.npy` (one per frame, x y z per template vertex).
 fn track_frames_and_poses(
@@ -1492,14 +1469,7 @@ fn track_frames_and_poses(
     joints: &Path,
     out: &Path,
 ) -> (Vec<Value>, Vec<Vec<f32>>) {
-    let o = run(bin()
-        .arg("track")
-        .arg(rec)
-        .args(extra)
-        .arg("--joints")
-        .arg(joints)
-        .arg("--out")
-        .arg(out));
+    let o = track_output(rec, extra, joints, out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let doc = read_json(&out.join("track.json"));
     let frames = doc["frames"].as_array().unwrap().clone();

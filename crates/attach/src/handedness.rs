@@ -9,7 +9,7 @@
 //! The skeleton and the mesh must be in the same frame (e.g. both in Kinect camera space, or the
 //! skeleton already aligned to the mesh).
 
-use crate::{refine, repair, LimbPair, Skeleton, MIRROR_MARGIN};
+use crate::{check_handedness, LimbPair, Skeleton, MIRROR_MARGIN};
 use nalgebra::Vector3;
 use symcorr_mesh::TriMesh;
 
@@ -68,19 +68,10 @@ pub fn handedness_verdict(
         vertices_used: 0,
         evidence: 0.0,
     };
-    if mesh.num_vertices() == 0 {
-        return undetermined;
-    }
-    let Ok(rep) = repair::repair(skeleton) else {
+    let Ok(check) = check_handedness(mesh, skeleton) else {
         return undetermined;
     };
-    let height = repair::skeleton_height(&rep.positions, &rep.usable);
-    let Ok((positions, usable, swapped_limbs)) =
-        crate::limb_pair_step(mesh, rep.positions, rep.usable, height)
-    else {
-        return undetermined;
-    };
-    let check = refine::mirror_check(mesh, &positions, &usable, height);
+    let swapped_limbs = check.swapped_limbs;
     let facing = check.facing.unwrap_or_else(Vector3::zeros);
     let evidence = check.evidence();
     let Some(offset) = check.mesh_offset else {

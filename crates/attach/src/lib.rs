@@ -302,6 +302,28 @@ impl MirrorCheck {
         }
     }
 
+    /// `skeleton` with the corrections this check made ([`MirrorCheck::source`]): its joints as
+    /// the attachment read them.
+    ///
+    /// ```
+    /// use symcorr_attach::{Joint, LimbPair, MirrorCheck, Skeleton};
+    /// let mut xyz = [[0.0; 3]; Joint::COUNT];
+    /// xyz[Joint::KneeLeft.index()] = [0.1, 0.5, 2.0];
+    /// let s = Skeleton::from_arrays(xyz);
+    /// let m = MirrorCheck { swapped_limbs: Some(LimbPair::Legs), ..MirrorCheck::default() };
+    /// assert_eq!(m.apply(&s).positions, s.swap_limbs(LimbPair::Legs).positions);
+    /// ```
+    pub fn apply(&self, skeleton: &Skeleton) -> Skeleton {
+        let mut out = skeleton.clone();
+        for j in Joint::ALL {
+            let from = self.source(j).index();
+            out.positions[j.index()] = skeleton.positions[from];
+            out.confidence[j.index()] = skeleton.confidence[from];
+            out.interpolated[j.index()] = skeleton.interpolated[from];
+        }
+        out
+    }
+
     /// True if the evidence says the skeleton's left and right are swapped relative to the
     /// mesh (`evidence() < -MIRROR_MARGIN`).
     pub fn says_swapped(&self) -> bool {
@@ -314,7 +336,10 @@ pub use refine::MIRROR_MARGIN;
 /// The handedness check on its own: is `skeleton`'s left/right consistent with `mesh`? Both must
 /// be in the same frame (no alignment is done here). Untracked or non-finite joints are
 /// repaired as in [`attach`]; the result's `swapped` is always `false` (nothing is changed);
-/// see [`MirrorCheck::says_swapped`].
+/// see [`MirrorCheck::says_swapped`]. A limb pair exchanged against the other (shoulders and
+/// hips opposed across the spine) is named in `swapped_limbs`, as [`attach`] decides it, and
+/// the evidence is then that of the skeleton with the pair swapped back; one that nothing
+/// tells apart is [`AttachError::LimbSidesUndetermined`].
 ///
 /// ```
 /// # let (mesh, skeleton) = symcorr_attach::doc_example();
@@ -332,12 +357,11 @@ pub fn check_handedness(mesh: &TriMesh, skeleton: &Skeleton) -> Result<MirrorChe
     }
     let rep = repair::repair(skeleton)?;
     let height = repair::skeleton_height(&rep.positions, &rep.usable);
-    Ok(refine::mirror_check(
-        mesh,
-        &rep.positions,
-        &rep.usable,
-        height,
-    ))
+    let (positions, usable, swapped_limbs) =
+        limb_pair_step(mesh, rep.positions, rep.usable, height)?;
+    let mut check = refine::mirror_check(mesh, &positions, &usable, height);
+    check.swapped_limbs = swapped_limbs;
+    Ok(check)
 }
 
 /// How a joint was repaired before attachment.
@@ -755,7 +779,7 @@ const OPPOSED_PAIRS_COS: f64 = -0.5;
 /// averages the two pairs' directions, so without this step their disagreement is noise there.
 /// Evidence too weak to choose (no feet, straight legs) is an error naming the cause: matching
 /// on either guess maps one limb pair onto its twin.
-pub(crate) fn limb_pair_step(
+fn limb_pair_step(
     mesh: &TriMesh,
     positions: geom::Joints,
     usable: [bool; 20],

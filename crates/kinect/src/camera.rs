@@ -86,6 +86,19 @@ impl Mirroring {
             Some(true) | None => Mirroring::Mirrored,
         }
     }
+
+    /// The other direction.
+    ///
+    /// ```
+    /// use symcorr_kinect::Mirroring;
+    /// assert_eq!(Mirroring::Mirrored.other(), Mirroring::Direct);
+    /// ```
+    pub fn other(self) -> Mirroring {
+        match self {
+            Mirroring::Mirrored => Mirroring::Direct,
+            Mirroring::Direct => Mirroring::Mirrored,
+        }
+    }
 }
 
 /// Lens distortion in OpenCV's camera model (the "rational" model; Brown–Conrady, OpenCV's
@@ -703,10 +716,7 @@ impl Intrinsics {
     pub fn columns_reversed(&self) -> Intrinsics {
         Intrinsics {
             cx: f64::from(self.width) - 1.0 - self.cx,
-            mirroring: match self.mirroring {
-                Mirroring::Mirrored => Mirroring::Direct,
-                Mirroring::Direct => Mirroring::Mirrored,
-            },
+            mirroring: self.mirroring.other(),
             // The image's a = (u − cx)/fx changes sign: p2, the one coefficient odd in a.
             distortion: self.distortion.map(|d| Distortion {
                 tangential: [d.tangential[0], -d.tangential[1]],

@@ -622,10 +622,9 @@ pub fn check_mirroring(
     s: &Skeleton,
 ) -> Result<(), KinectError> {
     let given = joints_on_depth(frame, k, s);
-    let mut other = *k;
-    other.mirroring = match k.mirroring {
-        Mirroring::Mirrored => Mirroring::Direct,
-        Mirroring::Direct => Mirroring::Mirrored,
+    let other = Intrinsics {
+        mirroring: k.mirroring.other(),
+        ..*k
     };
     let reversed = joints_on_depth(frame, &other, s);
     let margin = (given.usable / 4).max(3);

@@ -173,6 +173,15 @@ pub enum Correction {
 }
 
 impl Correction {
+    /// The correction of a limb pair swapped back: [`Correction::LegsSwapped`] or
+    /// [`Correction::ArmsSwapped`].
+    pub fn limbs_swapped(pair: LimbPair) -> Correction {
+        match pair {
+            LimbPair::Legs => Correction::LegsSwapped,
+            LimbPair::Arms => Correction::ArmsSwapped,
+        }
+    }
+
     /// The name in `track.json`.
     pub fn name(self) -> &'static str {
         match self {
@@ -651,14 +660,7 @@ impl Observer<'_> {
             // The moves are measured from the joints as the attachment read them: a limb pair
             // or the whole skeleton it swapped back is swapped here too (else the move is the
             // distance between the two legs, low-passed into the next frames' anchors).
-            let mirror = &target.attachment.diagnostics.mirror;
-            let mut given = match mirror.swapped_limbs {
-                Some(pair) => skeleton.swap_limbs(pair),
-                None => skeleton.clone(),
-            };
-            if mirror.swapped {
-                given = given.swap_sides();
-            }
+            let given = target.attachment.diagnostics.mirror.apply(&skeleton);
             target.attachment.joints = f.filter(time_s, &given, &target.attachment.joints);
         }
         let t_prepare = t.elapsed().as_secs_f64();
@@ -717,13 +719,10 @@ impl Observer<'_> {
         }
         let mut skeleton = timed.skeleton;
         if let (true, Some(prev)) = (self.options.fix_swaps, &self.previous) {
-            for (pair, fix) in [
-                (LimbPair::Legs, Correction::LegsSwapped),
-                (LimbPair::Arms, Correction::ArmsSwapped),
-            ] {
+            for pair in [LimbPair::Legs, LimbPair::Arms] {
                 if limb_swap_evidence(prev, &skeleton, pair) > SWAP_EVIDENCE_THRESHOLD {
                     skeleton = skeleton.swap_limbs(pair);
-                    corrections.push(fix);
+                    corrections.push(Correction::limbs_swapped(pair));
                 }
             }
         }
@@ -968,11 +967,7 @@ fn attachment_corrections(target: &PreparedMesh) -> Vec<Correction> {
     if d.mirror.swapped {
         out.push(Correction::SidesSwapped);
     }
-    match d.mirror.swapped_limbs {
-        Some(LimbPair::Legs) => out.push(Correction::LegsSwapped),
-        Some(LimbPair::Arms) => out.push(Correction::ArmsSwapped),
-        None => {}
-    }
+    out.extend(d.mirror.swapped_limbs.map(Correction::limbs_swapped));
     if d.fit.accepted_poor_fit {
         out.push(Correction::PoorFitAccepted);
     }
