@@ -42,7 +42,7 @@ pub enum AttachError {
     },
     /// The skeleton fails a fit check (`FitQuality`) in every placement the rotation search
     /// tried, and the options say to refuse.
-    #[error("the skeleton does not fit the mesh: {check} is {value:.3} (at most {limit} accepted): {meaning}; are the joints from another frame, pose or subject? (--accept-poor-fit uses them anyway)")]
+    #[error("the skeleton does not fit the mesh: {check} is {value:.3} (at most {limit} accepted): {meaning}; {}(--accept-poor-fit uses them anyway)", likely_cause(*two_large_parts))]
     PoorFit {
         /// The worst failed check's name.
         check: &'static str,
@@ -52,6 +52,10 @@ pub enum AttachError {
         limit: f64,
         /// What its failure usually means.
         meaning: &'static str,
+        /// The vertex counts of the mesh's two largest connected parts when the second holds
+        /// at least a third as many as the first: the mesh may hold two bodies, which no one
+        /// skeleton fits, and the message asks about the mesh before the joints.
+        two_large_parts: Option<(usize, usize)>,
     },
     /// The skeleton's left and right are exchanged relative to the mesh and the options say
     /// to refuse rather than fix.
@@ -113,4 +117,16 @@ pub enum AttachError {
     /// No boundary rule could be learned from the labelled bodies.
     #[error("no segment boundary could be learned from the labelled bodies")]
     NothingLearned,
+}
+
+/// The question a [`AttachError::PoorFit`] message ends with: about the mesh when it has two
+/// large parts, else about the joints.
+fn likely_cause(two_large_parts: Option<(usize, usize)>) -> String {
+    match two_large_parts {
+        Some((a, b)) => format!(
+            "the mesh has two large connected parts ({a} and {b} vertices): does it hold more \
+             than one body? A skeleton is one body's; cut the mesh down to that body. "
+        ),
+        None => "are the joints from another frame, pose or subject? ".to_string(),
+    }
 }

@@ -247,6 +247,23 @@ impl FitMesh {
         }
     }
 
+    /// The vertex counts of the two largest connected components when the second holds at
+    /// least a third as many vertices as the first: a mesh holding two bodies (or a body and
+    /// something as large), which no one skeleton can fit. `None` for one body, with or without
+    /// small stray parts (an arm a depth scan cut off holds far less than the rest).
+    pub(crate) fn two_large_parts(&self) -> Option<(usize, usize)> {
+        let (labels, count) = &self.components;
+        let mut sizes = vec![0usize; *count];
+        for &c in labels {
+            sizes[c as usize] += 1;
+        }
+        sizes.sort_unstable_by(|a, b| b.cmp(a));
+        match sizes[..] {
+            [a, b, ..] if 3 * b >= a => Some((a, b)),
+            _ => None,
+        }
+    }
+
     /// How far `x` lies outside the surface along its nearest vertex's outward normal (negative
     /// inside); `sign` is [`FitMesh::outward`].
     fn outside_depth(&self, x: &Point3<f64>, sign: f64) -> f64 {
@@ -619,6 +636,38 @@ mod tests {
         let a = attach(&mesh, &sk, &AttachOptions::default()).unwrap();
         let want: Vec<u32> = (n..n + ico.num_vertices() as u32).collect();
         assert_eq!(a.diagnostics.fit.unreached, want);
+    }
+
+    #[test]
+    fn a_mesh_of_two_bodies_is_named_as_the_likely_cause() {
+        // The body twice, side by side: one skeleton covers half of it. The message asks about
+        // the mesh, not (only) the joints.
+        let (mesh, sk) = crate::doc_example();
+        let n = mesh.positions.len() as u32;
+        let mut positions = mesh.positions.clone();
+        positions.extend(mesh.positions.iter().map(|p| [p[0] + 1.5, p[1], p[2]]));
+        let mut triangles = mesh.triangles.clone();
+        triangles.extend(mesh.triangles.iter().map(|t| t.map(|v| v + n)));
+        let two = TriMesh::new(positions, triangles).unwrap();
+        let e = attach(&two, &sk, &AttachOptions::default()).unwrap_err();
+        let m = e.to_string();
+        assert!(
+            matches!(e, AttachError::PoorFit { two_large_parts: Some((a, b)), .. } if a == b),
+            "{m}"
+        );
+        assert!(m.contains("does it hold more than one body?"), "{m}");
+        // One body: the question is about the joints.
+        let mut far = sk.clone();
+        for p in far.positions.iter_mut() {
+            p.x += 0.12;
+        }
+        let refuse = AttachOptions {
+            align: false,
+            ..AttachOptions::default()
+        };
+        let m = attach(&mesh, &far, &refuse).unwrap_err().to_string();
+        assert!(m.contains("are the joints from another frame"), "{m}");
+        assert!(!m.contains("more than one body"), "{m}");
     }
 
     #[test]

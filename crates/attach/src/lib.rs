@@ -622,6 +622,7 @@ pub(crate) fn attach_with_usable(
                     value: worst.value,
                     limit: worst.limit,
                     meaning: worst.kind.meaning(),
+                    two_large_parts: fit_mesh.two_large_parts(),
                 })
             }
             PoorFitPolicy::Accept => fit.accepted_poor_fit = true,

@@ -57,6 +57,26 @@ pub fn read_depth_png16(path: impl AsRef<Path>) -> Result<DepthFrame, KinectErro
     decode_depth_png16(&bytes, &file)
 }
 
+/// The width and height of a PNG file, from its header alone (the image data is not read):
+/// a recording checks its frames' size against its intrinsics before decoding any.
+///
+/// Errors: [`KinectError::Io`], [`KinectError::Png`] for a file without a readable PNG header.
+pub(crate) fn png_size(path: impl AsRef<Path>) -> Result<(u32, u32), KinectError> {
+    let path = path.as_ref();
+    let file = std::fs::File::open(path).map_err(|source| KinectError::Io {
+        file: path.display().to_string(),
+        source,
+    })?;
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .map_err(|e| KinectError::Png {
+            file: path.display().to_string(),
+            message: format!("not a readable PNG: {e}"),
+        })?;
+    let info = reader.info();
+    Ok((info.width, info.height))
+}
+
 /// Decodes PNG bytes as a depth frame; `file` names the source in errors.
 pub fn decode_depth_png16(bytes: &[u8], file: &str) -> Result<DepthFrame, KinectError> {
     let perr = |message: String| KinectError::Png {

@@ -16,8 +16,8 @@
 //! Other files are allowed and ignored (a `.png` in `depth/` whose name is all digits but not
 //! six of them is refused: it is a mis-numbered frame). [`Recording::open`] checks the layout
 //! up front (intrinsics, contiguous frame files, one finite and strictly increasing time per
-//! frame) without decoding any PNG; [`Recording::frame`] decodes one frame on demand and checks
-//! its size against the intrinsics. The two text files are parsed in memory by
+//! frame, the first frame's size against the intrinsics from its PNG header) without decoding
+//! any image; [`Recording::frame`] decodes one frame on demand and checks its size too. The two text files are parsed in memory by
 //! [`Intrinsics::from_json_str`] and [`parse_depth_times`]. A recording holds its intrinsics
 //! and one `f64` per frame (its time), never the depth images.
 //!
@@ -44,7 +44,7 @@
 //! ```
 
 use crate::camera::Intrinsics;
-use crate::depth::{read_depth_png16, DepthFrame};
+use crate::depth::{png_size, read_depth_png16, DepthFrame};
 use crate::error::KinectError;
 use crate::geom::median;
 use crate::joints::{JointFrame, JointLog, KINECT_FPS};
@@ -88,7 +88,7 @@ impl Recording {
     /// Errors: [`KinectError::Io`] (a missing file or folder, named); [`KinectError::Json`] for
     /// the intrinsics; [`KinectError::Recording`] naming the folder or file (no frames, a missing
     /// frame number, a mis-numbered frame file, as many times as frames, times not in
-    /// seconds); [`KinectError::Parse`]
+    /// seconds, a first frame of another size than the intrinsics); [`KinectError::Parse`]
     /// naming `depth_times.txt` and the line (not a number, not finite, not increasing).
     ///
     /// ```
@@ -105,6 +105,7 @@ impl Recording {
         let intrinsics = Intrinsics::read(dir.join(INTRINSICS_FILE))?;
         let count = count_frames(&dir.join(DEPTH_DIR))?;
         let times_s = read_times(&dir.join(DEPTH_TIMES_FILE), count)?;
+        check_first_frame_size(&dir.join(DEPTH_DIR).join(frame_file_name(0)), &intrinsics)?;
         Ok(Recording {
             dir,
             intrinsics,
@@ -176,6 +177,25 @@ impl Recording {
             });
         }
         Ok(frame)
+    }
+}
+
+/// Refuses a recording whose first frame has another size than its intrinsics: intrinsics of
+/// another camera or mode would otherwise skip every frame one by one, each with the same
+/// reason, and the run would end "successfully" having matched nothing. Only the PNG header is
+/// read. A first frame whose header cannot be read is left to [`Recording::frame`], which skips
+/// that frame alone (one damaged file does not refuse a recording).
+fn check_first_frame_size(path: &Path, k: &Intrinsics) -> Result<(), KinectError> {
+    match png_size(path) {
+        Ok((w, h)) if (w, h) != (k.width, k.height) => Err(KinectError::Recording {
+            file: path.display().to_string(),
+            message: format!(
+                "depth frame is {w}x{h}, but {INTRINSICS_FILE} says {}x{}: the intrinsics are \
+                 another camera's or another depth mode's",
+                k.width, k.height
+            ),
+        }),
+        _ => Ok(()),
     }
 }
 

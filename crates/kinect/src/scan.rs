@@ -722,7 +722,8 @@ fn check_joints_on_depth(
 /// Errors: [`KinectError::ScanOption`] for an invalid option ([`ScanOptions::validate`]),
 /// [`KinectError::Intrinsics`] for implausible intrinsics ([`Intrinsics::validate`]),
 /// [`KinectError::DepthSize`] if the frame does not match the intrinsics,
-/// [`KinectError::Scan`] if nothing is left to triangulate, the skeleton tracks no joint, or its
+/// [`KinectError::Scan`] if the frame has no reading in range, nothing is left to triangulate,
+/// the skeleton tracks no joint, or its
 /// joints do not lie on the body the frame shows (fewer than half within
 /// [`JOINT_DEPTH_TOLERANCE_M`] of the surface at their pixel: joints of another frame, camera or
 /// unit).
@@ -767,6 +768,15 @@ fn scan_checked(
         valid_pixels: points.iter().filter(|p| p.is_some()).count(),
         ..ScanReport::default()
     };
+    // Said before anything about the joints: with no reading, no joint can lie on the body,
+    // and a message blaming the joints would send the user to the wrong stream.
+    if report.valid_pixels == 0 {
+        return Err(KinectError::Scan(format!(
+            "the depth frame has no reading between {} and {} m (every pixel is 0 or out of \
+             that range): the camera saw nothing in this frame",
+            opts.min_depth_m, opts.max_depth_m
+        )));
+    }
     if let Some(s) = skeleton {
         if usable_joints(s).next().is_none() {
             return Err(KinectError::Scan(

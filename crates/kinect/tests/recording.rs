@@ -272,6 +272,34 @@ fn intrinsics_are_checked_on_open() {
 }
 
 #[test]
+fn open_refuses_intrinsics_of_another_size_than_the_first_frame() {
+    // Intrinsics of another depth mode (8x6 against frames of 4x3) would skip every frame.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    write_recording(dir, &[0, 1], "0\n1\n");
+    for i in 0..2 {
+        write_depth_png16(
+            dir.join(format!("depth/{i:06}.png")),
+            &DepthFrame::new(4, 3, vec![1; 12]).unwrap(),
+        )
+        .unwrap();
+    }
+    let e = open_err(dir);
+    let file = dir.join("depth/000000.png").display().to_string();
+    assert!(matches!(e, KinectError::Recording { .. }), "{e}");
+    assert!(
+        e.to_string().starts_with(&format!(
+            "{file}: depth frame is 4x3, but intrinsics.json says 8x6: the intrinsics are another"
+        )),
+        "{e}"
+    );
+    // A first frame that is no PNG at all is that frame's problem, not the recording's.
+    std::fs::write(dir.join("depth/000000.png"), b"not a png").unwrap();
+    let rec = Recording::open(dir).unwrap();
+    assert!(rec.frame(0).is_err() && rec.frame(1).is_err());
+}
+
+#[test]
 fn open_decodes_no_frame_and_frame_checks_each_one() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();

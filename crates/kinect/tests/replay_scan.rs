@@ -553,6 +553,22 @@ fn untracked_joints_do_not_crop_and_a_lost_body_is_refused() {
 }
 
 #[test]
+fn a_frame_without_any_reading_is_refused_naming_the_depth_not_the_joints() {
+    // A camera that delivered an empty frame (every pixel 0): the joints are right, and the
+    // message must not send the user to them.
+    let k = small_k();
+    let mut frame = render(&k);
+    frame.data_mm.iter_mut().for_each(|d| *d = 0);
+    for skeleton in [Some(subject_skeleton()), None] {
+        let e = scan_mesh(&frame, &k, skeleton.as_ref(), &ScanOptions::default()).unwrap_err();
+        let m = e.to_string();
+        assert!(matches!(e, KinectError::Scan(_)), "{e}");
+        assert!(m.contains("the depth frame has no reading"), "{m}");
+        assert!(!m.contains("joint"), "{m}");
+    }
+}
+
+#[test]
 fn without_cleanup_the_grid_mesh_never_bridges_depth_jumps() {
     let k = small_k();
     let frame = render(&k);

@@ -82,9 +82,9 @@ pub mod view;
 
 pub use midline::{midline_halves, midline_sagittal, symmetric_midline_halves};
 pub use pipeline::{
-    keeps_turned_fit, ArticulatedTables, Correspondence, Method, MethodReport, Mode, Pipeline,
-    PipelineOptions, SurfacePoint, ViewMatch, DEFAULT_SAMPLES, MIN_VIEW_HELD, TURN_KEEP_AREA_RATIO,
-    TURN_KEEP_MARGIN, TURN_RETRY_BELOW,
+    keeps_turned_fit, turn_verdict, ArticulatedTables, Correspondence, Method, MethodReport, Mode,
+    Pipeline, PipelineOptions, SurfacePoint, TurnVerdict, ViewMatch, DEFAULT_SAMPLES,
+    MIN_VIEW_HELD, TURN_KEEP_AREA_RATIO, TURN_KEEP_MARGIN, TURN_RETRY_BELOW,
 };
 pub use prepare::{
     metres_per_unit, PaperData, PrepareOptions, PreparedMesh, RefineData, DEFAULT_BASE_RADIUS,
@@ -166,6 +166,24 @@ pub enum PipelineError {
     ViewNotHeld {
         /// The fraction of its view the kept fit holds.
         held: f64,
+    },
+    /// A target seen from one viewpoint on which neither the fit on the joints as given nor
+    /// the fit on them turned half a turn about their spine holds clearly more
+    /// ([`TurnVerdict::Undetermined`]): which way the body faces the camera is unknown, and a
+    /// guess would map left onto right over the whole view ([`Pipeline::run_on_view`]).
+    #[error(
+        "cannot tell which way the body faces the camera: the fit on the joints as given holds \
+         {:.0} % of its view, the fit on them turned half a turn about their spine {:.0} %, and \
+         neither lays clearly more surface on the scan; the joints may face the other way than \
+         the body, or the view shows too little of the body to tell",
+        100.0 * given,
+        100.0 * turned
+    )]
+    FacingUndetermined {
+        /// The fraction of its view the fit on the joints as given holds.
+        given: f64,
+        /// The fraction of its view the fit on the turned joints holds.
+        turned: f64,
     },
     /// A file other than a mesh or joint file (dataset list, output) is wrong.
     #[error("{file}: {message}")]

@@ -705,6 +705,66 @@ pub fn keeps_turned_fit(given: Option<ViewHold>, turned: Option<ViewHold>) -> bo
     }
 }
 
+/// Which of the two fits on one view — on the joints as given and on them turned half a turn
+/// about their spine — says how the body faces the camera ([`turn_verdict`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TurnVerdict {
+    /// The fit on the joints as given: it holds clearly more than the turned one
+    /// ([`turn_verdict`]), or there is no turned fit to compare.
+    Given,
+    /// The fit on the joints turned half a turn ([`keeps_turned_fit`]).
+    Turned,
+    /// Neither fit holds clearly more of its view or lays clearly more surface on the scan:
+    /// the scan does not say which way the body faces. A body's back lies on a scan of its
+    /// front nearly as well as its front, so keeping either would be a guess, and the wrong
+    /// guess maps left onto right over the whole view.
+    Undetermined,
+}
+
+/// Compares the fit on the joints as given (holding `given` of its view) with the fit on them
+/// turned half a turn about their spine (`turned`): [`TurnVerdict::Turned`] by
+/// [`keeps_turned_fit`]; [`TurnVerdict::Given`] when the given fit lays
+/// [`TURN_KEEP_AREA_RATIO`] times the turned fit's surface on the scan, or holds
+/// [`TURN_KEEP_MARGIN`] more of its view and no less surface; else
+/// [`TurnVerdict::Undetermined`]. Without a turned fit (or without views to compare) the given
+/// fit stands.
+///
+/// ```
+/// use symcorr::{turn_verdict, TurnVerdict, ViewHold};
+/// let hold = |held, shown, held_area, shown_area| {
+///     Some(ViewHold { held, shown, held_area, shown_area })
+/// };
+/// // 0.55 → 0.90 of its view: turned.
+/// assert_eq!(turn_verdict(hold(2200, 4000, 0.3, 0.6), hold(3600, 4000, 0.5, 0.6)), TurnVerdict::Turned);
+/// // 0.75 → 0.36 of its view, two thirds of the surface: as given.
+/// assert_eq!(turn_verdict(hold(2990, 4000, 0.67, 0.7), hold(2500, 7000, 0.45, 0.7)), TurnVerdict::Given);
+/// // 0.51 and 0.48 of their views, 0.47 and 0.44 of surface: either could be the body's front.
+/// assert_eq!(turn_verdict(hold(1538, 3005, 0.47, 0.73), hold(3166, 6530, 0.44, 0.70)), TurnVerdict::Undetermined);
+/// // 0.54 against 0.43 of the points, but 0.91 times the surface: the share does not count.
+/// assert_eq!(turn_verdict(hold(1610, 3005, 0.466, 0.73), hold(2808, 6530, 0.512, 0.74)), TurnVerdict::Undetermined);
+/// assert_eq!(turn_verdict(hold(1538, 3005, 0.47, 0.73), None), TurnVerdict::Given);
+/// ```
+pub fn turn_verdict(given: Option<ViewHold>, turned: Option<ViewHold>) -> TurnVerdict {
+    if keeps_turned_fit(given, turned) {
+        return TurnVerdict::Turned;
+    }
+    let (Some(g), Some(t)) = (given, turned) else {
+        return TurnVerdict::Given;
+    };
+    // The given fit's larger share of its view counts only if it lays no less surface: the
+    // shares are of points, and a fit showing the template's finely meshed face holds a smaller
+    // share of them than one showing its coarse back (the fixture's log turned about the
+    // vertical, frame 4: 0.536 against 0.430 of the points, 0.91 times the surface — the given
+    // fit was the mirrored one). Not asked of a turned fit: no turned fit kept on its share
+    // against the surface was measured wrong, and two were right.
+    let more_share = g.fraction() >= t.fraction() + TURN_KEEP_MARGIN && g.held_area >= t.held_area;
+    if more_share || g.held_area >= TURN_KEEP_AREA_RATIO * t.held_area {
+        TurnVerdict::Given
+    } else {
+        TurnVerdict::Undetermined
+    }
+}
+
 /// A fit on one view whose kept fit holds less than this fraction of its view
 /// ([`Correspondence::view_held`]) is refused ([`PipelineError::ViewNotHeld`]), never returned
 /// as a match: the template does not lie on the scan
@@ -757,15 +817,17 @@ impl Pipeline {
     /// attachment's checks on about half of the frontal scans measured; the template posed on
     /// it shows the camera its back, which the scan does not hold. A fit that holds less than
     /// [`TURN_RETRY_BELOW`] of its view ([`Correspondence::view_held`]) is fitted again on the
-    /// joints turned back, and kept when it holds [`TURN_KEEP_MARGIN`] more. A target that is
-    /// not one view (or another method) is matched by [`Pipeline::run`] alone.
+    /// joints turned back, and kept when it holds clearly more ([`turn_verdict`]). A target
+    /// that is not one view (or another method) is matched by [`Pipeline::run`] alone.
     ///
     /// After a retry the correspondence's timings end with `view_retry_dropped`: the seconds of
     /// the fit (or the turned preparation and fit) whose result was dropped.
     ///
     /// Errors: those of [`Pipeline::run`]; [`PipelineError::ViewNotHeld`] when the kept fit
-    /// holds less than [`MIN_VIEW_HELD`] (the joints belong to another frame, body or camera).
-    /// A turned target that cannot be prepared or matched leaves the fit on the given joints.
+    /// holds less than [`MIN_VIEW_HELD`] (the joints belong to another frame, body or camera);
+    /// [`PipelineError::FacingUndetermined`] when neither fit holds clearly more
+    /// ([`TurnVerdict::Undetermined`]). A turned target that cannot be prepared or matched
+    /// leaves the fit on the given joints.
     ///
     /// ```no_run
     /// # let (pipeline, template, scan): (symcorr::Pipeline, symcorr::PreparedMesh, symcorr::PreparedMesh) = unimplemented!();
@@ -794,11 +856,20 @@ impl Pipeline {
             let t = Instant::now();
             if let Some(turned) = self.prepare_turned(target) {
                 if let Ok(corr) = self.run(template, &turned) {
-                    if keeps_turned_fit(hold, corr.view_hold()) {
-                        kept = ViewMatch {
-                            correspondence: corr,
-                            turned_target: Some(turned),
-                        };
+                    match turn_verdict(hold, corr.view_hold()) {
+                        TurnVerdict::Turned => {
+                            kept = ViewMatch {
+                                correspondence: corr,
+                                turned_target: Some(turned),
+                            }
+                        }
+                        TurnVerdict::Given => {}
+                        TurnVerdict::Undetermined => {
+                            return Err(PipelineError::FacingUndetermined {
+                                given: kept.correspondence.view_held().unwrap_or(0.0),
+                                turned: corr.view_held().unwrap_or(0.0),
+                            })
+                        }
                     }
                 }
             }

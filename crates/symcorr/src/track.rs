@@ -45,8 +45,11 @@
 //!    camera: the frame is prepared and fitted again with the joints turned half a turn about
 //!    their spine, and the turned fit is kept when it holds [`crate::TURN_KEEP_MARGIN`] more
 //!    or lays [`crate::TURN_KEEP_AREA_RATIO`] times as much template surface on the scan
-//!    ([`crate::keeps_turned_fit`]). A kept fit that holds less than
-//!    [`crate::MIN_VIEW_HELD`] skips the frame — never matched to garbage.
+//!    ([`crate::keeps_turned_fit`]). When neither fit holds clearly more
+//!    ([`crate::TurnVerdict::Undetermined`]) the fit warm-started from the previous frame is
+//!    kept (a body does not turn half a turn between frames); without one the frame is
+//!    skipped. A kept fit that holds less than [`crate::MIN_VIEW_HELD`] skips the frame —
+//!    never matched to garbage.
 //!
 //! Before a run, [`log_check::check_log`] observes a few frames on their own and refuses a
 //! joint log that does not belong to the depth frames (another recording or clock, mirrored
@@ -68,8 +71,9 @@ pub mod animation;
 pub mod log_check;
 
 use crate::{
-    keeps_turned_fit, ArticulatedStart, ArticulatedTables, BoneTransforms, Correspondence, Method,
-    MethodReport, Pipeline, PipelineError, PreparedMesh, MIN_VIEW_HELD, TURN_RETRY_BELOW,
+    turn_verdict, ArticulatedStart, ArticulatedTables, BoneTransforms, Correspondence, Method,
+    MethodReport, Pipeline, PipelineError, PreparedMesh, TurnVerdict, MIN_VIEW_HELD,
+    TURN_RETRY_BELOW,
 };
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{channel, sync_channel};
@@ -826,14 +830,33 @@ impl Fitter<'_> {
         // A fit that leaves most of what it shows the camera without a counterpart may stand on
         // a skeleton turned away from the camera: the template then shows the scan its back.
         // The joints turned half a turn get their own fit, kept when it clearly holds more of
-        // its view or lays clearly more surface on the scan (`keeps_turned_fit`; a turned fit
-        // that cannot be made leaves the frame to the first).
+        // its view or lays clearly more surface on the scan (`turn_verdict`; a turned fit that
+        // cannot be made leaves the frame to the first). When neither holds clearly more, the
+        // scan cannot tell front from back, but time can: a body does not turn half a turn
+        // between two frames, so the fit that continues the previous frame's (warm-started:
+        // its joints moved little from those the previous fit posed) is kept. Without such a
+        // fit the frame is skipped: a guess would map left onto right over the whole view.
         let mut turned_back = false;
         if corr.view_held().is_some_and(|h| h < TURN_RETRY_BELOW) {
             if let Ok((turned, turned_corr, turned_warm)) = self.turned_match(&target) {
-                if keeps_turned_fit(corr.view_hold(), turned_corr.view_hold()) {
-                    (target, corr, was_warm) = (turned, turned_corr, turned_warm);
-                    turned_back = true;
+                let verdict = match turn_verdict(corr.view_hold(), turned_corr.view_hold()) {
+                    TurnVerdict::Undetermined if was_warm && !turned_warm => TurnVerdict::Given,
+                    TurnVerdict::Undetermined if turned_warm && !was_warm => TurnVerdict::Turned,
+                    verdict => verdict,
+                };
+                match verdict {
+                    TurnVerdict::Turned => {
+                        (target, corr, was_warm) = (turned, turned_corr, turned_warm);
+                        turned_back = true;
+                    }
+                    TurnVerdict::Given => {}
+                    TurnVerdict::Undetermined => {
+                        return Err(PipelineError::FacingUndetermined {
+                            given: corr.view_held().unwrap_or(0.0),
+                            turned: turned_corr.view_held().unwrap_or(0.0),
+                        }
+                        .to_string())
+                    }
                 }
             }
         }

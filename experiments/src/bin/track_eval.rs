@@ -39,6 +39,9 @@ struct Args {
     /// Joint log (default: RECORDING/joints.json).
     #[arg(long)]
     joints: Option<PathBuf>,
+    /// Track every Nth frame only (as `symcorr track --every N`).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    every: u64,
     /// Template body folder (meshes/, joints/, mirror.txt), the recording body's topology.
     #[arg(long, default_value = "fixtures/synth/bodies")]
     bodies: PathBuf,
@@ -243,7 +246,8 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "frame status corrections coverage mean_error flips off_body seconds labels_agreement jumps"
     );
-    for i in 0..rec.len() {
+    let frames: Vec<usize> = (0..rec.len()).step_by(args.every as usize).collect();
+    for &i in &frames {
         let time = rec.time(i).unwrap_or(f64::NAN);
         let depth = rec.frame(i)?;
         let truth = read_depth_png16(args.recording.join(format!("truth/{i:06}.png")))?;
@@ -433,9 +437,9 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let mean = all_errors.iter().sum::<f64>() / all_errors.len().max(1) as f64;
     println!(
         "ALL frames {} matched {matched_frames} mean_error {mean:.4} flips {flips}/{counted} off_body {off_body} jumps {jumps}/{followed} ({:.3} %) frames/s {:.2}",
-        rec.len(),
+        frames.len(),
         100.0 * jumps as f64 / followed.max(1) as f64,
-        rec.len() as f64 / seconds.max(f64::MIN_POSITIVE)
+        frames.len() as f64 / seconds.max(f64::MIN_POSITIVE)
     );
     let per: Vec<String> = symcorr_attach::Segment::ALL
         .iter()

@@ -2,8 +2,9 @@
 //! target's joints as given (optionally turned about their spine first: a log in a frame turned
 //! about the vertical, a tracker that took a back for a front) and with those joints turned
 //! back half a turn, each by `Pipeline::run`; then `run_on_view`'s rule (below the retry
-//! threshold keep the turned fit when `keeps_turned_fit` says so, refuse a kept fit under
-//! `MIN_VIEW_HELD`) replayed at several thresholds.
+//! threshold keep the turned fit when `turn_verdict` says so, refuse the pair when it says
+//! neither fit holds clearly more, refuse a kept fit under `MIN_VIEW_HELD`) replayed at several
+//! thresholds.
 //!
 //! ```text
 //! cargo run --release -p symcorr-experiments --bin view_turn_eval -- \
@@ -174,22 +175,32 @@ fn main() -> Result<(), String> {
         outcomes.len()
     );
     // `Pipeline::run_on_view`'s rule at each retry threshold: below it, the turned fit is kept
-    // when `keeps_turned_fit` says so; a kept fit below `MIN_VIEW_HELD` is refused.
+    // when `turn_verdict` says so and the pair refused when it cannot tell; a kept fit below
+    // `MIN_VIEW_HELD` is refused.
     for threshold in [0.0, 0.75, 0.8, 0.85, 0.9, 0.95] {
         let (mut n, mut err, mut flips, mut counted, mut mostly, mut turned_n, mut refused) =
             (0, 0.0, 0, 0, 0, 0, 0);
+        // Refused as undetermined, and of those the pairs whose given fit was mostly flipped.
+        let (mut undetermined, mut undetermined_mostly) = (0, 0);
         for (_, _, o) in &outcomes {
             let Outcome::Matched { given, turned } = o else {
                 continue;
             };
             let mut kept = given;
             if given.view_hold.is_some_and(|h| h.fraction() < threshold) {
-                if let Some(t) = turned
-                    .as_ref()
-                    .filter(|t| symcorr::keeps_turned_fit(given.view_hold, t.view_hold))
-                {
-                    kept = t;
-                    turned_n += 1;
+                if let Some(t) = turned {
+                    match symcorr::turn_verdict(given.view_hold, t.view_hold) {
+                        symcorr::TurnVerdict::Turned => {
+                            kept = t;
+                            turned_n += 1;
+                        }
+                        symcorr::TurnVerdict::Given => {}
+                        symcorr::TurnVerdict::Undetermined => {
+                            undetermined += 1;
+                            undetermined_mostly += usize::from(5 * given.flips > given.counted);
+                            continue;
+                        }
+                    }
                 }
             }
             if kept
@@ -206,7 +217,7 @@ fn main() -> Result<(), String> {
             mostly += usize::from(5 * kept.flips > kept.counted);
         }
         println!(
-            "retry below {threshold:.2}: turned {turned_n} refused {refused} matched {n} mean error {:.4} flips {flips}/{counted} ({:.3} %) pairs mostly flipped {mostly}",
+            "retry below {threshold:.2}: turned {turned_n} undetermined {undetermined} (given mostly flipped {undetermined_mostly}) refused {refused} matched {n} mean error {:.4} flips {flips}/{counted} ({:.3} %) pairs mostly flipped {mostly}",
             err / n.max(1) as f64,
             100.0 * flips as f64 / counted.max(1) as f64
         );

@@ -304,7 +304,7 @@ pub fn load_prepared(
 /// skeleton that is unusable on its own, both for a skeleton that does not fit the mesh, the
 /// mesh otherwise.
 pub fn blame(mesh: &Path, joints: &Path, e: symcorr::PipelineError) -> CliError {
-    use symcorr::PipelineError::{Attach, ViewNotHeld};
+    use symcorr::PipelineError::{Attach, FacingUndetermined, ViewNotHeld};
     use symcorr_attach::AttachError as A;
     match &e {
         Attach(A::EmptySkeleton { .. }) => CliError::with(joints.display(), e),
@@ -314,7 +314,8 @@ pub fn blame(mesh: &Path, joints: &Path, e: symcorr::PipelineError) -> CliError 
             | A::ScaleMismatch { .. }
             | A::MirroredSkeleton { .. },
         )
-        | ViewNotHeld { .. } => {
+        | ViewNotHeld { .. }
+        | FacingUndetermined { .. } => {
             CliError(format!("{} with {}: {e}", mesh.display(), joints.display()))
         }
         _ => CliError::with(mesh.display(), e),

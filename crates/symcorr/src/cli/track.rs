@@ -780,7 +780,8 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
     }
     if done.len() < total {
         return Err(CliError(format!(
-            "interrupted after {} of {total} frames; {} holds them, --resume continues",
+            "interrupted after {} of {total} frames; {} holds them, --resume continues (the \
+             .npy arrays are sized for the whole run: numpy loads them once it has finished)",
             done.len(),
             args.out.display()
         )));
