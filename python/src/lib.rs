@@ -465,7 +465,8 @@ fn pipeline_for(
 /// the fit shows the camera that lie on the scan (`None` elsewhere), and `turned_about_spine`
 /// says that the target's joints faced away from the camera and were turned half a turn about
 /// their spine before the match (as ``symcorr match`` does; a fit that holds under half of its
-/// view either way is a ``ValueError``).
+/// view either way is a ``ValueError``, and so is a view on which neither fit holds clearly
+/// more: which way the body faces is then unknown).
 #[pyclass(module = "symcorr", frozen, get_all)]
 struct Correspondence {
     pairs: Py<PyAny>,
