@@ -17,9 +17,9 @@
 //! six of them is refused: it is a mis-numbered frame). [`Recording::open`] checks the layout
 //! up front (intrinsics, contiguous frame files, one finite and strictly increasing time per
 //! frame, the first frame's size against the intrinsics from its PNG header) without decoding
-//! any image; [`Recording::frame`] decodes one frame on demand and checks its size too. The two text files are parsed in memory by
-//! [`Intrinsics::from_json_str`] and [`parse_depth_times`]. A recording holds its intrinsics
-//! and one `f64` per frame (its time), never the depth images.
+//! any image; [`Recording::frame`] decodes one frame on demand and checks its size too. The two
+//! text files are parsed in memory by [`Intrinsics::from_json_str`] and [`parse_depth_times`].
+//! A recording holds its intrinsics and one `f64` per frame (its time), never the depth images.
 //!
 //! ```
 //! use symcorr_kinect::{write_depth_png16, DepthFrame, Intrinsics, Mirroring, Recording};
