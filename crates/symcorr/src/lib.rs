@@ -17,8 +17,9 @@
 //!   points a scan does not show ([`Correspondence::has_counterpart`]).
 //!   [`Pipeline::run_on_view`] is `run` guarded for a scan: a fit that holds too little of its
 //!   view ([`Correspondence::view_held`]) is tried with the scan's joints turned half a turn
-//!   about their spine (a skeleton facing away from the camera), and a fit that holds under
-//!   half is refused; `symcorr match`, `bench` and the Python package run it.
+//!   about their spine (a skeleton facing away from the camera); a view on which neither fit
+//!   holds clearly more ([`turn_verdict`]) is refused, and so is a fit that holds under half;
+//!   `symcorr match`, `bench` and the Python package run it.
 //!   [`Method::Refined`]: skeleton landmark coordinates + si-HKS within segment pools, then
 //!   segment-constrained ZoomOut. [`Method::Paper`]: the paper's si-HKS candidates, skeleton
 //!   filter and eq. 8 selection (DESIGN.md, Algorithms 1–6).
