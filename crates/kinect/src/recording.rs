@@ -166,16 +166,7 @@ impl Recording {
         }
         let path = self.frame_path(i);
         let frame = read_depth_png16(&path)?;
-        let k = &self.intrinsics;
-        if (frame.width, frame.height) != (k.width, k.height) {
-            return Err(KinectError::Recording {
-                file: path.display().to_string(),
-                message: format!(
-                    "depth frame is {}x{}, but {INTRINSICS_FILE} says {}x{}",
-                    frame.width, frame.height, k.width, k.height
-                ),
-            });
-        }
+        check_frame_size(&path, (frame.width, frame.height), &self.intrinsics, "")?;
         Ok(frame)
     }
 }
@@ -187,16 +178,34 @@ impl Recording {
 /// that frame alone (one damaged file does not refuse a recording).
 fn check_first_frame_size(path: &Path, k: &Intrinsics) -> Result<(), KinectError> {
     match png_size(path) {
-        Ok((w, h)) if (w, h) != (k.width, k.height) => Err(KinectError::Recording {
-            file: path.display().to_string(),
-            message: format!(
-                "depth frame is {w}x{h}, but {INTRINSICS_FILE} says {}x{}: the intrinsics are \
-                 another camera's or another depth mode's",
-                k.width, k.height
-            ),
-        }),
-        _ => Ok(()),
+        Ok(size) => check_frame_size(
+            path,
+            size,
+            k,
+            ": the intrinsics are another camera's or another depth mode's",
+        ),
+        Err(_) => Ok(()),
     }
+}
+
+/// Refuses a frame at `path` whose `(width, height)` is not the intrinsics' size, the message
+/// ended by `cause`.
+fn check_frame_size(
+    path: &Path,
+    (w, h): (u32, u32),
+    k: &Intrinsics,
+    cause: &str,
+) -> Result<(), KinectError> {
+    if (w, h) == (k.width, k.height) {
+        return Ok(());
+    }
+    Err(KinectError::Recording {
+        file: path.display().to_string(),
+        message: format!(
+            "depth frame is {w}x{h}, but {INTRINSICS_FILE} says {}x{}{cause}",
+            k.width, k.height
+        ),
+    })
 }
 
 /// The number of frame files in `depth_dir`, checked to be `000000.png` … with no gap.
