@@ -810,6 +810,29 @@ impl Pipeline {
         })
     }
 
+    /// `target` prepared anew ([`Pipeline::prepare`], from its input mesh) on its joints with
+    /// left and right exchanged ([`Skeleton::swap_sides`]), taken as they are: the handedness
+    /// check is not asked again ([`symcorr_attach::MirrorPolicy::Ignore`]), the caller having
+    /// decided the sides from more than this scan (`symcorr track`: the previous frames'
+    /// evidence). Seen from the same viewpoint. `None` when the exchanged joints cannot be
+    /// attached.
+    pub fn prepare_sides_exchanged(&self, target: &PreparedMesh) -> Option<PreparedMesh> {
+        let joints = target.attachment.joints.swap_sides();
+        let mut options = self.options.prepare.clone();
+        options.attach.mirror = symcorr_attach::MirrorPolicy::Ignore;
+        let exchanged = PreparedMesh::new(
+            target.input_mesh().clone(),
+            &joints,
+            &[self.options.method],
+            &options,
+        )
+        .ok()?;
+        Some(match target.viewpoint {
+            Some(eye) => exchanged.seen_from(eye),
+            None => exchanged,
+        })
+    }
+
     /// [`Pipeline::run`], guarded against a target skeleton that faces away from the camera.
     /// On a target seen from one viewpoint (a depth scan, [`PreparedMesh::view_point`]) a
     /// skeleton turned half a turn about its spine — a log in a frame turned about the

@@ -49,7 +49,10 @@
 //!    ([`crate::TurnVerdict::Undetermined`]) the fit warm-started from the previous frame is
 //!    kept (a body does not turn half a turn between frames); without one the frame is
 //!    skipped. A kept fit that holds less than [`crate::MIN_VIEW_HELD`] skips the frame —
-//!    never matched to garbage.
+//!    never matched to garbage. The handedness check's evidence is fused over time
+//!    ([`TrackOptions::sides_memory`]): a frame whose kept skeleton has the previous frames'
+//!    sides exchanged on less evidence than they carry is prepared again with its sides
+//!    exchanged back ([`Pipeline::prepare_sides_exchanged`], [`Correction::SidesContinued`]).
 //!
 //! Before a run, [`log_check::check_log`] observes a few frames on their own and refuses a
 //! joint log that does not belong to the depth frames (another recording or clock, mirrored
@@ -121,6 +124,16 @@ pub struct TrackOptions {
     /// refinement): the fit is anchored at the smoothed joints plus the low-passed moves of the
     /// refinement ([`JointMoveFilter`]), reset with the joint smoothing.
     pub refinement_smoothing: Option<JointMoveFilter>,
+    /// Memory of the sides evidence over time (`None`: each frame's handedness check decides
+    /// alone): each kept frame's facing evidence for its skeleton's sides
+    /// ([`symcorr_attach::MirrorCheck::evidence`]) is added to this share of the previous
+    /// frames' fused evidence. A frame whose kept skeleton has its left and right where the
+    /// previous frame's right and left were keeps that exchange only when its own evidence
+    /// outweighs the fused evidence for the previous sides; otherwise its sides are exchanged
+    /// back ([`Pipeline::prepare_sides_exchanged`], `sides_continued`). A body does not swap
+    /// its sides between two frames, while one frame's feet cue can mislead: at 3.8 m from
+    /// a Kinect v1 a frame's noisy feet swapped a correct skeleton, every match mirrored.
+    pub sides_memory: Option<f64>,
 }
 
 impl Default for TrackOptions {
@@ -136,9 +149,18 @@ impl Default for TrackOptions {
             max_match_shift_m: Some(MAX_MATCH_SHIFT_M),
             scan_heat_mesh: SCAN_HEAT_MESH,
             refinement_smoothing: Some(JointMoveFilter::DEFAULT),
+            sides_memory: Some(SIDES_MEMORY),
         }
     }
 }
+
+/// Default [`TrackOptions::sides_memory`]: two thirds of the fused evidence carry over to the
+/// next frame. A kept frame's evidence for its sides is 1–2 with a clear view of the feet and
+/// 0.1–1 with a poor one (the handedness check swaps below −0.45); a steady run then holds
+/// twice its frames' evidence for its sides, so a frame exchanges them at once only on more
+/// than twice that evidence, and two frames of contrary evidence as strong as the run's
+/// exchange them. Measured: docs/decisions/2026-12-06-sides-evidence-over-time.md.
+pub const SIDES_MEMORY: f64 = 2.0 / 3.0;
 
 /// Default [`TrackOptions::reciprocal_radius`] (√area of the template).
 /// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
@@ -169,6 +191,10 @@ pub enum Correction {
     ArmsSwapped,
     /// The whole skeleton's sides were swapped to fit the scan (handedness check).
     SidesSwapped,
+    /// The frame's handedness check was overruled by the previous frames' evidence: its
+    /// skeleton's sides were exchanged back to continue theirs ([`TrackOptions::sides_memory`]).
+    /// With [`Correction::SidesSwapped`] when the sides kept are the log's exchanged.
+    SidesContinued,
     /// The skeleton failed a fit check and was used anyway.
     PoorFitAccepted,
     /// The skeleton was turned half a turn about its spine: as logged, it faced away from the
@@ -194,6 +220,7 @@ impl Correction {
             Correction::LegsSwapped => "legs_swap_fixed",
             Correction::ArmsSwapped => "arms_swap_fixed",
             Correction::SidesSwapped => "sides_swap_fixed",
+            Correction::SidesContinued => "sides_continued",
             Correction::PoorFitAccepted => "poor_fit_accepted",
             Correction::SkeletonTurned => "skeleton_turn_fixed",
         }
@@ -288,6 +315,9 @@ pub struct Fitter<'a> {
     options: TrackOptions,
     /// The previous frame's fit: its bone transforms and the refined joints they pose onto.
     previous_fit: Option<(BoneTransforms, Skeleton)>,
+    /// The previous frames' fused evidence for the previous fit's sides
+    /// ([`TrackOptions::sides_memory`]).
+    previous_sides: Option<SidesEvidence>,
     /// Per template input vertex, the previous frame's match minus its posed position (camera
     /// space, metres; `None` where it had no match): the temporal check's reference.
     previous_offsets: Option<Vec<Option<[f64; 3]>>>,
@@ -342,6 +372,7 @@ impl<'a> Tracker<'a> {
                 template,
                 options,
                 previous_fit: None,
+                previous_sides: None,
                 previous_offsets: None,
             },
         }
@@ -752,6 +783,7 @@ impl Fitter<'_> {
     /// Forgets the previous fit: the next frame starts from the skeletons.
     pub fn reset(&mut self) {
         self.previous_fit = None;
+        self.previous_sides = None;
         self.previous_offsets = None;
     }
 
@@ -808,13 +840,19 @@ impl Fitter<'_> {
             .pipeline
             .prepare_turned(target)
             .ok_or("the turned skeleton does not attach")?;
+        let (corr, warm) = self.match_reprepared(&turned)?;
+        Ok((turned, corr, warm))
+    }
+
+    /// The match of a frame's scan prepared anew in the fitter ([`Fitter::run_match`], with the
+    /// search index built here): the match and whether it was warm.
+    fn match_reprepared(&self, target: &PreparedMesh) -> Result<(Correspondence, bool), String> {
         let tables = scan_tables(
             &self.pipeline,
             (self.template, &self.template_tables),
-            &turned,
+            target,
         )?;
-        let (corr, warm) = self.run_match(&turned, tables.as_ref())?;
-        Ok((turned, corr, warm))
+        self.run_match(target, tables.as_ref())
     }
 
     fn fit_inner(&mut self, observation: Observation) -> Result<MatchedFrame, String> {
@@ -860,8 +898,54 @@ impl Fitter<'_> {
                 }
             }
         }
+        // The sides, from this frame's evidence and the previous frames'
+        // (`TrackOptions::sides_memory`).
+        let own = sides_evidence(&target);
+        let memory = match (
+            &self.previous_sides,
+            &self.previous_fit,
+            self.options.sides_memory,
+        ) {
+            (Some(sides), Some((_, joints)), Some(m)) if sides.turned_back == turned_back => {
+                sides_exchanged(joints, &target.attachment.joints)
+                    .map(|exchanged| (exchanged, m * sides.fused))
+            }
+            _ => None,
+        };
+        let (continued, fused) = match memory {
+            // This frame's sides are the previous frames' exchanged, with less evidence for
+            // them than the previous frames hold against: exchanged back, its evidence with them.
+            Some((true, memory)) if own < memory => (true, memory - own),
+            Some((true, memory)) => (false, own - memory),
+            Some((false, memory)) => (false, own + memory),
+            None => (false, own),
+        };
         // What the attachment corrected is the kept skeleton's.
-        corrections.extend(attachment_corrections(&target));
+        if continued {
+            let exchanged = self.pipeline.prepare_sides_exchanged(&target).ok_or(
+                "the skeleton with its sides continued from the previous frames does not attach",
+            )?;
+            let (c, w) = self.match_reprepared(&exchanged)?;
+            // The sides kept are the log's exchanged unless the attachment had exchanged them.
+            if !target.attachment.diagnostics.mirror.swapped {
+                corrections.push(Correction::SidesSwapped);
+            }
+            corrections.push(Correction::SidesContinued);
+            corrections.extend(
+                target
+                    .attachment
+                    .diagnostics
+                    .mirror
+                    .swapped_limbs
+                    .map(Correction::limbs_swapped),
+            );
+            (target, corr, was_warm) = (exchanged, c, w);
+            if target.attachment.diagnostics.fit.accepted_poor_fit {
+                corrections.push(Correction::PoorFitAccepted);
+            }
+        } else {
+            corrections.extend(attachment_corrections(&target));
+        }
         if turned_back {
             corrections.push(Correction::SkeletonTurned);
         }
@@ -874,6 +958,7 @@ impl Fitter<'_> {
                 posed, transforms, ..
             } => {
                 self.previous_fit = Some((**transforms, target.attachment.joints.clone()));
+                self.previous_sides = Some(SidesEvidence { fused, turned_back });
                 let rest = &self.template.input_mesh().positions;
                 let mut out: Vec<[f32; 3]> = rest.iter().map(|p| p.map(|x| x as f32)).collect();
                 for (v, p) in posed.iter().enumerate() {
@@ -937,6 +1022,46 @@ impl Fitter<'_> {
             warm: was_warm,
             timings,
         })
+    }
+}
+
+/// The fused evidence for a kept fit's sides ([`TrackOptions::sides_memory`]).
+#[derive(Debug, Clone, Copy)]
+struct SidesEvidence {
+    /// This frame's facing evidence for its skeleton's sides plus the memory's share of the
+    /// previous frame's.
+    fused: f64,
+    /// Whether its skeleton was turned back ([`Correction::SkeletonTurned`]): the sides of a
+    /// turned and an unturned skeleton are not compared.
+    turned_back: bool,
+}
+
+/// The handedness check's facing evidence for the sides of `target`'s skeleton as attached
+/// ([`symcorr_attach::MirrorCheck::evidence`] is that of the skeleton before the attachment's
+/// side swap: reversed when it swapped). 0 when the check was not made.
+fn sides_evidence(target: &PreparedMesh) -> f64 {
+    let m = &target.attachment.diagnostics.mirror;
+    if m.swapped {
+        -m.evidence()
+    } else {
+        m.evidence()
+    }
+}
+
+/// Whether `current` has its sides exchanged against `previous` (the previous fit's joints):
+/// `Some(true)` when both limb pairs fit `previous` clearly better with left and right
+/// exchanged ([`limb_swap_evidence`] above [`SWAP_EVIDENCE_THRESHOLD`]), `Some(false)` when
+/// both fit it clearly better as named, `None` otherwise (limbs passing each other, or a pair
+/// whose joints were lost).
+fn sides_exchanged(previous: &Skeleton, current: &Skeleton) -> Option<bool> {
+    let evidence =
+        [LimbPair::Legs, LimbPair::Arms].map(|p| limb_swap_evidence(previous, current, p));
+    if evidence.iter().all(|&e| e > SWAP_EVIDENCE_THRESHOLD) {
+        Some(true)
+    } else if evidence.iter().all(|&e| e < -SWAP_EVIDENCE_THRESHOLD) {
+        Some(false)
+    } else {
+        None
     }
 }
 
@@ -1085,6 +1210,99 @@ fn largest_joint_motion(a: &Skeleton, b: &Skeleton) -> f64 {
 mod tests {
     use super::*;
     use symcorr_skeleton::Joint;
+
+    /// The fixture recording's frames 10–15 (each tracked with sides as logged, `ok`), frame 15
+    /// observed with its handedness check made to exchange the skeleton's sides on evidence as
+    /// strong as the true sides have (a frame's misleading feet cue): the tracker continues the
+    /// previous frames' sides, and the frame is posed where it is posed unforged; each frame's
+    /// check deciding alone poses it with every limb on its twin's side.
+    #[test]
+    fn a_frame_whose_handedness_check_exchanges_the_sides_continues_the_previous_frames() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/synth");
+        let rec = symcorr_kinect::Recording::open(root.join("recording")).unwrap();
+        let log = symcorr_kinect::read_joints(root.join("recording/joints.json")).unwrap();
+        let pipeline = Pipeline::new(crate::PipelineOptions {
+            mode: crate::Mode::Dense,
+            ..crate::PipelineOptions::default()
+        });
+        let body = |dir: &str, ext: &str| root.join(format!("bodies/{dir}/s0_rest.{ext}"));
+        let mesh = symcorr_mesh::io::read(body("meshes", "ply")).unwrap().mesh;
+        let joints = crate::io::read_skeleton(&body("joints", "json"), None).unwrap();
+        let template = pipeline.prepare(mesh, &joints).unwrap();
+        // (frame 15's corrections, its posed template)
+        let run = |forge: bool, sides_memory: Option<f64>| {
+            let options = TrackOptions {
+                joint_offset_s: 0.04,
+                sides_memory,
+                ..TrackOptions::default()
+            };
+            let track = JointTrack::new(log.clone(), 0.0).unwrap();
+            let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);
+            let mut last = None;
+            for k in 10..=15 {
+                let depth = rec.frame(k).unwrap();
+                let (observer, fitter) = tracker.parts();
+                let mut o = observer.observe(rec.time(k).unwrap(), &depth).unwrap();
+                if forge && k == 15 {
+                    let true_sides = o.target.attachment.diagnostics.mirror.clone();
+                    assert!(!true_sides.swapped && true_sides.evidence() > 0.45);
+                    let mut forged = pipeline.prepare_sides_exchanged(&o.target).unwrap();
+                    let negate = |e: Option<f64>| e.map(|e| -e);
+                    forged.attachment.diagnostics.mirror = symcorr_attach::MirrorCheck {
+                        skeleton_evidence: negate(true_sides.skeleton_evidence),
+                        mesh_evidence: negate(true_sides.mesh_evidence),
+                        knee_evidence: negate(true_sides.knee_evidence),
+                        swapped: true,
+                        ..true_sides
+                    };
+                    o.tables =
+                        scan_tables(&pipeline, (&template, &observer.template.1), &forged).unwrap();
+                    o.target = forged;
+                }
+                match fitter.fit(o) {
+                    FrameOutcome::Matched(m) => last = Some((m.corrections, m.posed.unwrap())),
+                    FrameOutcome::Skipped(r) => panic!("frame {k} skipped: {r}"),
+                }
+            }
+            last.unwrap()
+        };
+        let mean_distance = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+            let d = a.iter().zip(b).map(|(p, q)| {
+                (0..3)
+                    .map(|c| f64::from(p[c] - q[c]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            });
+            d.sum::<f64>() / a.len() as f64
+        };
+        let (corrections, truth) = run(false, Some(SIDES_MEMORY));
+        assert!(
+            !corrections.contains(&Correction::SidesContinued),
+            "{corrections:?}"
+        );
+        let (corrections, continued) = run(true, Some(SIDES_MEMORY));
+        assert!(
+            corrections.contains(&Correction::SidesContinued),
+            "{corrections:?}"
+        );
+        assert!(
+            !corrections.contains(&Correction::SidesSwapped),
+            "{corrections:?}"
+        );
+        let (corrections, alone) = run(true, None);
+        assert!(
+            corrections.contains(&Correction::SidesSwapped),
+            "{corrections:?}"
+        );
+        let (kept, mirrored) = (
+            mean_distance(&continued, &truth),
+            mean_distance(&alone, &truth),
+        );
+        assert!(
+            kept < 0.02 && mirrored > 0.05,
+            "{kept} m, each frame alone {mirrored} m"
+        );
+    }
 
     #[test]
     fn the_fitter_spreads_wide_while_the_observer_is_light_with_a_dead_band() {

@@ -121,6 +121,10 @@ struct Args {
     /// tracker's; 0 turns it off: each frame's own refinement)
     #[arg(long)]
     refinement_cutoff: Option<f64>,
+    /// Share of the fused sides evidence carried to the next frame (default: the tracker's; 0
+    /// turns it off: each frame's handedness check decides alone).
+    #[arg(long)]
+    sides_memory: Option<f64>,
     /// Per frame, also print the flips and jumps per template segment and how far that
     /// segment's posed template sits from where the frame shows it (median, metres).
     #[arg(long)]
@@ -226,6 +230,11 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
             Some(c) if c > 0.0 => Some(symcorr_kinect::JointMoveFilter::new(c)?),
             Some(_) => None,
         },
+        sides_memory: args
+            .sides_memory
+            .map_or(Some(symcorr::track::SIDES_MEMORY), |m| {
+                (m > 0.0).then_some(m)
+            }),
         ..TrackOptions::default()
     };
     let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);

@@ -31,16 +31,18 @@ pub(super) struct FrameDigest {
     pub mean_confidence: Option<f64>,
     /// Wall seconds from reading the frame to writing its rows.
     pub seconds: Option<f64>,
-    /// Legs, arms and whole-skeleton swaps fixed, and a skeleton turned back.
-    pub fixed: [bool; 4],
+    /// Legs, arms and whole-skeleton swaps fixed, a skeleton turned back, and sides continued
+    /// from the previous frames.
+    pub fixed: [bool; 5],
 }
 
 /// The corrections the summary counts, in [`FrameDigest::fixed`]'s order.
-const FIXES: [&str; 4] = [
+const FIXES: [&str; 5] = [
     "legs_swap_fixed",
     "arms_swap_fixed",
     "sides_swap_fixed",
     "skeleton_turn_fixed",
+    "sides_continued",
 ];
 
 impl FrameDigest {
@@ -86,6 +88,7 @@ pub(super) fn summary(done: &[FrameDigest], total: usize) -> Value {
         "arms_swap_fixed": fixed(1),
         "sides_swap_fixed": fixed(2),
         "skeleton_turn_fixed": fixed(3),
+        "sides_continued": fixed(4),
         "mean_coverage": mean(|e| e.coverage),
         "mean_confidence": mean(|e| e.mean_confidence),
     })
