@@ -1,6 +1,7 @@
 //! The joint-log check of `symcorr track` on one recording and log, frame by frame: the
 //! skeleton's fit checks in each sampled frame, the median share of bone points outside the
-//! body the camera sees, and the verdict. Run it on
+//! body the camera sees, the scans' heights against the skeletons' (`height_ratio`), and the
+//! verdict. Run it on
 //! recordings with their own logs and with logs made wrong (mirrored, shifted in time) to see
 //! where [`symcorr::track::log_check::MAX_LOG_OUTSIDE`] sits between them.
 //!
@@ -92,12 +93,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Err(e) => format!("refused: {e}"),
     };
     let seconds = started.elapsed().as_secs_f64();
+    let mut heights = check.heights.clone();
+    heights.sort_by(f64::total_cmp);
+    let median_height = match heights.len() {
+        0 => "-".to_string(),
+        n => format!("{:.3}", heights[n / 2]),
+    };
     println!(
-        "ALL fits {} median_outside {} seconds {seconds:.2} {verdict}",
+        "ALL fits {} median_outside {} median_height_ratio {median_height} (of {:.3?}) seconds {seconds:.2} {verdict}",
         check.outside().len(),
         check
             .median_outside()
             .map_or("-".to_string(), |m| format!("{m:.3}")),
+        heights,
     );
     Ok(())
 }
