@@ -564,6 +564,31 @@ fn scan_and_track_refuse_another_cameras_focal_length() {
     assert!(!out.exists());
 }
 
+/// A focal length 10 % short of the image's (a Kinect v1's colour camera's 525 px read for its
+/// depth camera's 580): every frame passes its own checks and the log its check, but the
+/// scans stand taller than their skeletons and the matches err twice as far. `track` runs and
+/// warns naming the focal length; read with its own intrinsics, it does not warn.
+#[test]
+fn track_warns_of_a_focal_length_a_little_short() {
+    let dir = tempfile::tempdir().unwrap();
+    let (rec, log) = sequence_recording_and_log(dir.path());
+    let own = track_output(&rec, &[], &log, &dir.path().join("own"));
+    assert!(own.status.success());
+    assert!(!String::from_utf8_lossy(&own.stderr).contains("warning"));
+    let mut k = read_json(&rec.join("intrinsics.json"));
+    let f = k["fx"].as_f64().unwrap() * 0.9;
+    k["fx"] = f.into();
+    k["fy"] = (k["fy"].as_f64().unwrap() * 0.9).into();
+    std::fs::write(rec.join("intrinsics.json"), k.to_string()).unwrap();
+    let short = track_output(&rec, &[], &log, &dir.path().join("short"));
+    let stderr = String::from_utf8_lossy(&short.stderr);
+    assert!(short.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning") && stderr.contains(&format!("fx {f} px")),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn scan_target_reports_template_points_without_counterpart() {
     let dir = tempfile::tempdir().unwrap();

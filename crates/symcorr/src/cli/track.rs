@@ -578,6 +578,9 @@ pub fn run(args: TrackArgs, max_input_bytes: u64) -> Result<(), CliError> {
                 args.joints.display()
             ))
         })?;
+        for w in check.warnings() {
+            eprintln!("symcorr: warning: {}: {w}", args.joints.display());
+        }
     }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::with(args.out.display(), e))?;
     let (corr_path, conf_path) = (

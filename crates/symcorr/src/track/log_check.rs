@@ -40,6 +40,38 @@ pub const MAX_LOG_OUTSIDE: f64 = 0.15;
 /// Fewer frames with a skeleton fit than this give no verdict: each frame's own guards decide.
 pub const MIN_LOG_CHECK_FITS: usize = 3;
 
+/// A median [`height_ratio`] above this (up to [`MAX_HEIGHT_RATIO`], which refuses) passes the
+/// log with a warning ([`LogCheck::warnings`]). Recordings read with their own camera's
+/// intrinsics measured medians of 1.04–1.05 (eight synthetic recordings, three bodies, 2.5–3.8
+/// m; 1.00–1.09 on 14 recordings before); the fixture read with a focal length 10 % short (a
+/// Kinect v1's colour camera's 525 px for its depth camera's 580) measured 1.12, and its
+/// matches erred twice as far (mean error 0.0178 → 0.0365), every frame passing its own
+/// checks. (docs/decisions/2026-12-06-focal-length-warning.md.)
+pub const WARN_HEIGHT_RATIO: f64 = 1.10;
+
+/// What a log that passes [`LogCheck::verdict`] may still do to every frame's matches
+/// ([`LogCheck::warnings`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LogWarning {
+    /// The frames' scans are taller than the log's skeletons along the spine, though not so
+    /// much that the log is refused ([`LogMismatch::Scale`]).
+    #[error(
+        "the depth frames' scans are a median {median:.2}× as tall as the joint log's skeletons \
+         along the spine on {frames} frames spread over the run (frames read with their own \
+         camera's intrinsics measure 1.00–1.09×; a focal length 10 % short gives about 1.12×): \
+         if fx {fx} px is not the depth camera's own (a colour camera's, another resolution's), \
+         correct the intrinsics — a focal length 10 % short doubled the matches' error"
+    )]
+    TallScans {
+        /// Sampled frames with a scan and a skeleton.
+        frames: usize,
+        /// Their median [`height_ratio`].
+        median: f64,
+        /// The focal length the frames were read with, pixels.
+        fx: f64,
+    },
+}
+
 /// The median of `v` (the mean of the middle two for an even count), `None` when empty.
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
@@ -244,6 +276,40 @@ impl LogCheck {
     }
 }
 
+impl LogCheck {
+    /// What the check noticed in a log it passes ([`LogCheck::verdict`]) that may make every
+    /// frame's matches worse: scans a median more than [`WARN_HEIGHT_RATIO`] times as tall as
+    /// their skeletons on at least [`MIN_LOG_CHECK_FITS`] frames ([`LogWarning::TallScans`]: a
+    /// focal length too short for the image). Empty when the check refuses the log.
+    ///
+    /// ```
+    /// use symcorr::track::log_check::{LogCheck, LogWarning};
+    /// let mut check = LogCheck {
+    ///     clocks: None,
+    ///     on_depth: Vec::new(),
+    ///     frames: Vec::new(),
+    ///     heights: vec![1.11, 1.13, 1.12],
+    ///     fx: 525.0,
+    /// };
+    /// assert!(matches!(check.warnings()[..], [LogWarning::TallScans { frames: 3, .. }]));
+    /// check.heights = vec![1.04, 1.05, 1.03];
+    /// assert!(check.warnings().is_empty());
+    /// ```
+    pub fn warnings(&self) -> Vec<LogWarning> {
+        if self.verdict().is_err() || self.heights.len() < MIN_LOG_CHECK_FITS {
+            return Vec::new();
+        }
+        match median(self.heights.clone()) {
+            Some(median) if median > WARN_HEIGHT_RATIO => vec![LogWarning::TallScans {
+                frames: self.heights.len(),
+                median,
+                fx: self.fx,
+            }],
+            _ => Vec::new(),
+        }
+    }
+}
+
 /// Looks for a log frame near each of `frames`' times (indices into `source`); when there is
 /// none for any, records the two clocks ([`LogCheck::clocks`]) and stops. Otherwise takes
 /// `samples` frames of `frames` (spread evenly over the list) and records for each how the
@@ -389,6 +455,26 @@ mod tests {
         assert!(e.to_string().contains("focal length (fx 571.26)"), "{e}");
         c.heights.truncate(2);
         assert!(c.verdict().is_ok(), "two frames are too few");
+    }
+
+    #[test]
+    fn scans_a_little_too_tall_pass_with_a_warning_naming_the_focal_length() {
+        let mut c = check(&[Some(0.0), Some(0.0), Some(0.0)]);
+        c.heights = vec![1.04, 1.05, 1.09];
+        assert!(c.verdict().is_ok() && c.warnings().is_empty());
+        c.heights = vec![1.12, 1.11, 1.3];
+        assert!(c.verdict().is_ok());
+        let w = c.warnings();
+        assert!(
+            matches!(w[..], [LogWarning::TallScans { frames: 3, median, .. }] if median == 1.12),
+            "{w:?}"
+        );
+        assert!(w[0].to_string().contains("fx 571.26 px"), "{}", w[0]);
+        // Too few frames say nothing; a refused log is refused, not warned about.
+        c.heights.truncate(2);
+        assert!(c.warnings().is_empty());
+        c.heights = vec![1.3, 1.4, 1.12];
+        assert!(c.verdict().is_err() && c.warnings().is_empty());
     }
 
     #[test]
