@@ -1038,13 +1038,19 @@ struct SidesEvidence {
 
 /// The handedness check's facing evidence for the sides of `target`'s skeleton as attached
 /// ([`symcorr_attach::MirrorCheck::evidence`] is that of the skeleton before the attachment's
-/// side swap: reversed when it swapped). 0 when the check was not made.
+/// side swap: reversed when it swapped). 0 when the check was not made (or gave no finite
+/// number: the fused evidence stays finite).
 fn sides_evidence(target: &PreparedMesh) -> f64 {
     let m = &target.attachment.diagnostics.mirror;
-    if m.swapped {
+    let e = if m.swapped {
         -m.evidence()
     } else {
         m.evidence()
+    };
+    if e.is_finite() {
+        e
+    } else {
+        0.0
     }
 }
 
@@ -1432,5 +1438,21 @@ mod tests {
         assert_eq!(s.position(Joint::FootRight), sk.position(Joint::FootLeft));
         assert_eq!(s.position(Joint::HandLeft), sk.position(Joint::HandLeft));
         assert_eq!(s.swap_limbs(LimbPair::Legs).positions, sk.positions);
+    }
+
+    #[test]
+    fn sides_are_exchanged_only_when_both_limb_pairs_say_so() {
+        let sk = symcorr_attach::testbody::t_pose(1.0);
+        assert_eq!(sides_exchanged(&sk, &sk), Some(false));
+        assert_eq!(sides_exchanged(&sk, &sk.swap_sides()), Some(true));
+        // One pair alone is the tracker's limb swap, not the sides.
+        assert_eq!(sides_exchanged(&sk, &sk.swap_limbs(LimbPair::Legs)), None);
+        // Legs lost: no verdict.
+        let mut lost = sk.swap_sides();
+        for j in LimbPair::Legs.left_joints() {
+            lost.confidence[j.index()] = 0.0;
+            lost.confidence[j.mirror().index()] = 0.0;
+        }
+        assert_eq!(sides_exchanged(&sk, &lost), None);
     }
 }
