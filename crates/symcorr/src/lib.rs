@@ -97,6 +97,10 @@ pub use symcorr_correspond::{ArticulatedStart, BoneTransforms, ViewHold};
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum OptionError {
+    /// A share of the sides evidence carried over between frames outside [0, 1)
+    /// ([`track::SidesMemory`]).
+    #[error("sides memory {0}: must be a share in [0, 1) (at 1 or more the evidence of the first frames would outweigh every later frame's)")]
+    SidesMemory(f64),
     /// Sparse mode with no template point.
     #[error("sparse mode needs at least one sample")]
     NoSamples,

@@ -133,7 +133,7 @@ pub struct TrackOptions {
     /// back ([`Pipeline::prepare_sides_exchanged`], `sides_continued`). A body does not swap
     /// its sides between two frames, while one frame's feet cue can mislead: at 3.8 m from
     /// a Kinect v1 a frame's noisy feet swapped a correct skeleton, every match mirrored.
-    pub sides_memory: Option<f64>,
+    pub sides_memory: Option<SidesMemory>,
 }
 
 impl Default for TrackOptions {
@@ -154,13 +154,42 @@ impl Default for TrackOptions {
     }
 }
 
+/// The share of the fused sides evidence carried over to the next frame
+/// ([`TrackOptions::sides_memory`]), in [0, 1): at 1 or more the first frames' evidence would
+/// never be outweighed.
+///
+/// ```
+/// use symcorr::track::SidesMemory;
+/// assert_eq!(SidesMemory::new(0.5).unwrap().share(), 0.5);
+/// assert!(SidesMemory::new(1.0).is_err());
+/// assert!(SidesMemory::new(f64::NAN).is_err());
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SidesMemory(f64);
+
+impl SidesMemory {
+    /// A memory of `share`; [`crate::OptionError::SidesMemory`] unless `share` is in [0, 1).
+    pub fn new(share: f64) -> Result<SidesMemory, crate::OptionError> {
+        if (0.0..1.0).contains(&share) {
+            Ok(SidesMemory(share))
+        } else {
+            Err(crate::OptionError::SidesMemory(share))
+        }
+    }
+
+    /// The share carried over.
+    pub fn share(self) -> f64 {
+        self.0
+    }
+}
+
 /// Default [`TrackOptions::sides_memory`]: two thirds of the fused evidence carry over to the
 /// next frame. A kept frame's evidence for its sides is 1–2 with a clear view of the feet and
 /// 0.1–1 with a poor one (the handedness check swaps below −0.45); a steady run then holds
 /// twice its frames' evidence for its sides, so a frame exchanges them at once only on more
 /// than twice that evidence, and two frames of contrary evidence as strong as the run's
 /// exchange them. Measured: docs/decisions/2026-12-06-sides-evidence-over-time.md.
-pub const SIDES_MEMORY: f64 = 2.0 / 3.0;
+pub const SIDES_MEMORY: SidesMemory = SidesMemory(2.0 / 3.0);
 
 /// Default [`TrackOptions::reciprocal_radius`] (√area of the template).
 /// Measured: docs/decisions/2026-12-03-track-flips-and-jumps.md.
@@ -908,7 +937,7 @@ impl Fitter<'_> {
         ) {
             (Some(sides), Some((_, joints)), Some(m)) if sides.turned_back == turned_back => {
                 sides_exchanged(joints, &target.attachment.joints)
-                    .map(|exchanged| (exchanged, m * sides.fused))
+                    .map(|exchanged| (exchanged, m.share() * sides.fused))
             }
             _ => None,
         };
@@ -1236,7 +1265,7 @@ mod tests {
         let joints = crate::io::read_skeleton(&body("joints", "json"), None).unwrap();
         let template = pipeline.prepare(mesh, &joints).unwrap();
         // (frame 15's corrections, its posed template)
-        let run = |forge: bool, sides_memory: Option<f64>| {
+        let run = |forge: bool, sides_memory: Option<SidesMemory>| {
             let options = TrackOptions {
                 joint_offset_s: 0.04,
                 sides_memory,

@@ -95,9 +95,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seconds = started.elapsed().as_secs_f64();
     let mut heights = check.heights.clone();
     heights.sort_by(f64::total_cmp);
+    // As the check's median: the mean of the middle two for an even count.
     let median_height = match heights.len() {
         0 => "-".to_string(),
-        n => format!("{:.3}", heights[n / 2]),
+        n if n % 2 == 1 => format!("{:.3}", heights[n / 2]),
+        n => format!("{:.3}", 0.5 * (heights[n / 2 - 1] + heights[n / 2])),
     };
     println!(
         "ALL fits {} median_outside {} median_height_ratio {median_height} (of {:.3?}) seconds {seconds:.2} {verdict}",

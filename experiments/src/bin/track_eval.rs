@@ -230,11 +230,11 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
             Some(c) if c > 0.0 => Some(symcorr_kinect::JointMoveFilter::new(c)?),
             Some(_) => None,
         },
-        sides_memory: args
-            .sides_memory
-            .map_or(Some(symcorr::track::SIDES_MEMORY), |m| {
-                (m > 0.0).then_some(m)
-            }),
+        sides_memory: match args.sides_memory {
+            None => Some(symcorr::track::SIDES_MEMORY),
+            Some(m) if m > 0.0 => Some(symcorr::track::SidesMemory::new(m)?),
+            Some(_) => None,
+        },
         ..TrackOptions::default()
     };
     let mut tracker = Tracker::new(&pipeline, &template, *rec.intrinsics(), track, options);

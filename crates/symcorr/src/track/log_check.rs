@@ -42,8 +42,8 @@ pub const MIN_LOG_CHECK_FITS: usize = 3;
 
 /// A median [`height_ratio`] above this (up to [`MAX_HEIGHT_RATIO`], which refuses) passes the
 /// log with a warning ([`LogCheck::warnings`]). Recordings read with their own camera's
-/// intrinsics measured medians of 1.04–1.05 (eight synthetic recordings, three bodies, 2.5–3.8
-/// m; 1.00–1.09 on 14 recordings before); the fixture read with a focal length 10 % short (a
+/// intrinsics measured medians of 1.04–1.05 (eight synthetic recordings, 320×240 and 640×480,
+/// 2.5–3.8 m; 1.00–1.09 on 14 recordings before); the fixture read with a focal length 10 % short (a
 /// Kinect v1's colour camera's 525 px for its depth camera's 580) measured 1.12, and its
 /// matches erred twice as far (mean error 0.0178 → 0.0365), every frame passing its own
 /// checks. (docs/decisions/2026-12-06-focal-length-warning.md.)
