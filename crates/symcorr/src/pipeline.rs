@@ -803,11 +803,7 @@ impl Pipeline {
             .attachment
             .joints
             .turned_about_spine(std::f64::consts::PI)?;
-        let turned = self.prepare(target.input_mesh().clone(), &joints).ok()?;
-        Some(match target.viewpoint {
-            Some(eye) => turned.seen_from(eye),
-            None => turned,
-        })
+        self.prepare_again(target, &joints, &self.options.prepare)
     }
 
     /// `target` prepared anew ([`Pipeline::prepare`], from its input mesh) on its joints with
@@ -820,16 +816,27 @@ impl Pipeline {
         let joints = target.attachment.joints.swap_sides();
         let mut options = self.options.prepare.clone();
         options.attach.mirror = symcorr_attach::MirrorPolicy::Ignore;
-        let exchanged = PreparedMesh::new(
+        self.prepare_again(target, &joints, &options)
+    }
+
+    /// `target`'s input mesh prepared anew for this pipeline's method on `joints` with
+    /// `options`, seen from `target`'s viewpoint; `None` when it cannot be prepared.
+    fn prepare_again(
+        &self,
+        target: &PreparedMesh,
+        joints: &Skeleton,
+        options: &PrepareOptions,
+    ) -> Option<PreparedMesh> {
+        let prepared = PreparedMesh::new(
             target.input_mesh().clone(),
-            &joints,
+            joints,
             &[self.options.method],
-            &options,
+            options,
         )
         .ok()?;
         Some(match target.viewpoint {
-            Some(eye) => exchanged.seen_from(eye),
-            None => exchanged,
+            Some(eye) => prepared.seen_from(eye),
+            None => prepared,
         })
     }
 
